@@ -1,0 +1,119 @@
+//! The sparsity pattern of P1 matrices on Γ, built once per connectivity.
+//!
+//! Compressed sparse columns with the full (symmetric) pattern of the one-ring
+//! stencil, plus for every element the positions of its `D × D` local entries in the
+//! value array, so that assembly only refills values.
+
+use faer::sparse::SymbolicSparseColMat;
+
+/// One-ring CSC pattern plus element-to-value scatter positions.
+#[derive(Debug, Clone)]
+pub struct Pattern<const D: usize> {
+    n: usize,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    /// `slots[e][a][b]`: index in the value array of entry `(el[a], el[b])`.
+    slots: Vec<[[usize; D]; D]>,
+    /// Position of the diagonal entry of every column.
+    diag: Vec<usize>,
+    symbolic: SymbolicSparseColMat<usize>,
+}
+
+impl<const D: usize> Pattern<D> {
+    /// Pattern of `n × n` matrices assembled over `elements`.
+    pub fn new(n: usize, elements: &[[usize; D]]) -> Self {
+        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for (i, c) in cols.iter_mut().enumerate() {
+            c.push(i);
+        }
+        for el in elements {
+            for a in 0..D {
+                for b in 0..D {
+                    if a != b {
+                        cols[el[b]].push(el[a]);
+                    }
+                }
+            }
+        }
+        let (col_ptr, row_idx) = compress(cols);
+        let find = |row: usize, col: usize| -> usize {
+            let range = &row_idx[col_ptr[col]..col_ptr[col + 1]];
+            col_ptr[col] + range.binary_search(&row).expect("entry in pattern")
+        };
+        let slots = elements
+            .iter()
+            .map(|el| std::array::from_fn(|a| std::array::from_fn(|b| find(el[a], el[b]))))
+            .collect();
+        let diag = (0..n).map(|i| find(i, i)).collect();
+        let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
+        Pattern { n, col_ptr, row_idx, slots, diag, symbolic }
+    }
+
+    pub fn size(&self) -> usize {
+        self.n
+    }
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+    pub fn col_ptr(&self) -> &[usize] {
+        &self.col_ptr
+    }
+    pub fn row_idx(&self) -> &[usize] {
+        &self.row_idx
+    }
+    pub fn slots(&self) -> &[[[usize; D]; D]] {
+        &self.slots
+    }
+    pub fn diag(&self) -> &[usize] {
+        &self.diag
+    }
+    pub fn symbolic(&self) -> &SymbolicSparseColMat<usize> {
+        &self.symbolic
+    }
+
+    /// `y = A x` for values `a` on this pattern.
+    pub fn mul(&self, a: &[f64], x: &[f64], y: &mut [f64]) {
+        y.iter_mut().for_each(|v| *v = 0.0);
+        for j in 0..self.n {
+            let xj = x[j];
+            for k in self.col_ptr[j]..self.col_ptr[j + 1] {
+                y[self.row_idx[k]] += a[k] * xj;
+            }
+        }
+    }
+
+    /// The pattern of `A·A` (two-ring stencil) in CSC form: `(col_ptr, row_idx)`.
+    pub fn squared(&self) -> (Vec<usize>, Vec<usize>) {
+        let mut mark = vec![usize::MAX; self.n];
+        let mut cols: Vec<Vec<usize>> = Vec::with_capacity(self.n);
+        for k in 0..self.n {
+            let mut c = Vec::new();
+            for p in self.col_ptr[k]..self.col_ptr[k + 1] {
+                let j = self.row_idx[p];
+                for q in self.col_ptr[j]..self.col_ptr[j + 1] {
+                    let i = self.row_idx[q];
+                    if mark[i] != k {
+                        mark[i] = k;
+                        c.push(i);
+                    }
+                }
+            }
+            cols.push(c);
+        }
+        compress(cols)
+    }
+}
+
+/// Sort and deduplicate column lists into CSC arrays.
+pub(crate) fn compress(mut cols: Vec<Vec<usize>>) -> (Vec<usize>, Vec<usize>) {
+    let mut col_ptr = Vec::with_capacity(cols.len() + 1);
+    col_ptr.push(0);
+    let mut row_idx = Vec::new();
+    for c in &mut cols {
+        c.sort_unstable();
+        c.dedup();
+        row_idx.extend_from_slice(c);
+        col_ptr.push(row_idx.len());
+    }
+    (col_ptr, row_idx)
+}

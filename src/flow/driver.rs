@@ -1,0 +1,377 @@
+//! The driver: time-step selection (geometric control, backtracking), stop
+//! criteria, progress, cancellation and checkpoints.
+//!
+//! Each step tries `τ = min(τ_spec, 2 τ_last)` (clipped to the end time), solves for
+//! `V⃗`, and then
+//! 1. *geometric control* (paper §4.1): if `τ max_T |V⃗(z_a) − V⃗(z_b)| / h_T > ε`
+//!    the step is retried with `τ ← 0.9 ε τ / ratio`;
+//! 2. *tangling*: an element that degenerates or flips halves `τ`;
+//! 3. *backtracking* (paper §3.2): while `J(Γ_{n+1}) > J(Γ_n)`, halve `τ`.
+//!
+//! Below `τ_min` the run stops with [`StopReason::TauMin`] on the last good state.
+
+use super::problem::{Problem, SurfaceState};
+use super::step::{SemiImplicitStep, SolverKind};
+use super::system::{LinearSystem, ProductWeights, ScalarProduct};
+use super::FlowError;
+use crate::fem::{Matrices, Pattern, Weight};
+use crate::geometry::{simplex, Mesh, Point};
+use serde::{Deserialize, Serialize};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+pub use super::checkpoint::{Checkpoint, MeshData};
+
+/// Why a run stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    Converged,
+    MaxIterations,
+    EndTime,
+    TauMin,
+    Cancelled,
+}
+
+impl StopReason {
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            StopReason::Converged => "converged",
+            StopReason::MaxIterations => "max_iterations",
+            StopReason::EndTime => "end_time",
+            StopReason::TauMin => "tau_min",
+            StopReason::Cancelled => "cancelled",
+        }
+    }
+}
+
+/// Settings of the flow (the job spec's `flow` section, resolved).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FlowSettings {
+    pub scalar_product: ScalarProduct,
+    pub solver: SolverKind,
+    /// Nominal time step.
+    pub tau: f64,
+    /// Smallest time step before the run stops with `tau_min`.
+    pub tau_min: f64,
+    pub max_iterations: usize,
+    pub end_time: Option<f64>,
+    /// Stop when `|J_{n+1} − J_n| ≤ tolerance·|J_n|` (0 disables).
+    pub tolerance: f64,
+    /// Halve τ until the energy decreases.
+    pub backtracking: bool,
+    /// ε of the geometric time-step control (`None` disables).
+    pub step_control: Option<f64>,
+    /// Constant α, β of the plain `h1` product.
+    pub alpha: f64,
+    pub beta: f64,
+}
+
+impl Default for FlowSettings {
+    fn default() -> Self {
+        FlowSettings {
+            scalar_product: ScalarProduct::L2,
+            solver: SolverKind::Lumped,
+            tau: 1e-3,
+            tau_min: 1e-10,
+            max_iterations: 1000,
+            end_time: None,
+            tolerance: 1e-6,
+            backtracking: true,
+            step_control: Some(0.5),
+            alpha: 1e-2,
+            beta: 1.0,
+        }
+    }
+}
+
+/// Progress after a step (what the callback and the service report).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Progress {
+    pub iteration: usize,
+    pub time: f64,
+    pub tau: f64,
+    pub energy: f64,
+    pub vertices: usize,
+    pub components: usize,
+}
+
+/// What one call of [`Flow::step`] did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepReport {
+    /// `Some` if the run is over (then no step was taken, except for `Converged`,
+    /// which is reported after the step that converged).
+    pub stop: Option<StopReason>,
+    /// Whether a step was accepted.
+    pub accepted: bool,
+    /// Halvings of τ by backtracking (energy increase) in this step.
+    pub backtracks: usize,
+    /// Reductions of τ by the geometric control or tangling in this step.
+    pub reductions: usize,
+}
+
+/// A running gradient flow on a mesh of dimension `D`.
+pub struct Flow<'p, const D: usize> {
+    problem: &'p dyn Problem<D>,
+    settings: FlowSettings,
+    mesh: Mesh<D>,
+    pattern: Pattern<D>,
+    solver: SemiImplicitStep,
+    iteration: usize,
+    time: f64,
+    tau: f64,
+    energy: f64,
+}
+
+impl<'p, const D: usize> Flow<'p, D> {
+    /// Start a flow at iteration 0, time 0.
+    pub fn new(problem: &'p dyn Problem<D>, mesh: Mesh<D>, settings: FlowSettings) -> Result<Self, FlowError> {
+        check_settings(&settings)?;
+        let energy = problem.energy(&mesh).map_err(|e| FlowError::Problem(e.0))?;
+        if !energy.is_finite() {
+            return Err(FlowError::NonFiniteEnergy { value: energy, iteration: 0 });
+        }
+        let tau = settings.tau;
+        Ok(Self::assemble_state(problem, mesh, settings, 0, 0.0, tau, energy))
+    }
+
+    /// Continue from a checkpoint.
+    pub fn resume(problem: &'p dyn Problem<D>, checkpoint: &Checkpoint, settings: FlowSettings) -> Result<Self, FlowError> {
+        check_settings(&settings)?;
+        let mesh = checkpoint.mesh.to_mesh::<D>().map_err(|e| FlowError::Checkpoint(e.to_string()))?;
+        Ok(Self::assemble_state(problem, mesh, settings, checkpoint.iteration, checkpoint.time, checkpoint.tau, checkpoint.energy))
+    }
+
+    fn assemble_state(
+        problem: &'p dyn Problem<D>,
+        mesh: Mesh<D>,
+        settings: FlowSettings,
+        iteration: usize,
+        time: f64,
+        tau: f64,
+        energy: f64,
+    ) -> Self {
+        let pattern = Pattern::new(mesh.num_vertices(), mesh.elements());
+        let solver = SemiImplicitStep::new(settings.solver);
+        Flow { problem, settings, mesh, pattern, solver, iteration, time, tau, energy }
+    }
+
+    pub fn mesh(&self) -> &Mesh<D> {
+        &self.mesh
+    }
+    pub fn settings(&self) -> &FlowSettings {
+        &self.settings
+    }
+    pub fn energy(&self) -> f64 {
+        self.energy
+    }
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+    pub fn iteration(&self) -> usize {
+        self.iteration
+    }
+
+    pub fn progress(&self) -> Progress {
+        Progress {
+            iteration: self.iteration,
+            time: self.time,
+            tau: self.tau,
+            energy: self.energy,
+            vertices: self.mesh.num_vertices(),
+            components: self.mesh.num_components(),
+        }
+    }
+
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            iteration: self.iteration,
+            time: self.time,
+            tau: self.tau,
+            energy: self.energy,
+            mesh: MeshData::from(&self.mesh),
+        }
+    }
+
+    /// Run until a stop reason, calling `on_progress` after every accepted step
+    /// (and once at the start), and checking `cancel` before every step.
+    pub fn run(&mut self, cancel: &AtomicBool, mut on_progress: impl FnMut(&Self)) -> Result<StopReason, FlowError> {
+        on_progress(self);
+        loop {
+            if cancel.load(Ordering::Relaxed) {
+                return Ok(StopReason::Cancelled);
+            }
+            let report = self.step()?;
+            if report.accepted {
+                on_progress(self);
+            }
+            if let Some(stop) = report.stop {
+                return Ok(stop);
+            }
+        }
+    }
+
+    /// Take one step (with its retries), or report why the run is over.
+    pub fn step(&mut self) -> Result<StepReport, FlowError> {
+        let s = &self.settings;
+        let mut report = StepReport { stop: None, accepted: false, backtracks: 0, reductions: 0 };
+        if self.iteration >= s.max_iterations {
+            report.stop = Some(StopReason::MaxIterations);
+            return Ok(report);
+        }
+        let mut tau = s.tau.min(2.0 * self.tau);
+        if let Some(end) = s.end_time {
+            let left = end - self.time;
+            if left <= 1e-12 * end.abs().max(1.0) {
+                report.stop = Some(StopReason::EndTime);
+                return Ok(report);
+            }
+            tau = tau.min(left);
+        }
+        let matrices = Matrices::assemble(&self.mesh, &self.pattern);
+        let ax = matrices.stiffness_times_positions(&self.mesh, &self.pattern);
+        let curvature: Vec<f64> = (0..self.mesh.num_vertices())
+            .map(|i| {
+                let m = matrices.lumped_mass[i];
+                matrices.lumped_normal[i].dot(&ax[i]) / (m * m)
+            })
+            .collect();
+        let normals: Vec<Point<D>> = matrices.lumped_normal.iter().map(|n| n.normalize()).collect();
+        let state = SurfaceState { mesh: &self.mesh, matrices: &matrices, curvature: &curvature, normals: &normals };
+        let grad = self.problem.shape_gradient(&state).map_err(|e| FlowError::Problem(e.0))?;
+        check_values("g", &grad.g, self.mesh.num_vertices())?;
+        check_values("f", &grad.f, self.mesh.num_vertices())?;
+        let product = match s.scalar_product {
+            ScalarProduct::L2 => ProductWeights::L2,
+            ScalarProduct::HMinus1 => ProductWeights::HMinus1,
+            ScalarProduct::H1 => ProductWeights::H1 { alpha: Weight::Constant(s.alpha), beta: Weight::Constant(s.beta) },
+            ScalarProduct::H1Newton => match self.problem.h1_weights(&state, &grad) {
+                Some(w) => {
+                    for (what, weight) in [("alpha", &w.alpha), ("beta", &w.beta)] {
+                        weight.check(&self.mesh).map_err(|r| FlowError::Problem(format!("{what}: {r}")))?;
+                    }
+                    ProductWeights::H1 { alpha: w.alpha, beta: w.beta }
+                }
+                None => ProductWeights::H1 { alpha: Weight::Constant(s.alpha), beta: Weight::Constant(s.beta) },
+            },
+        };
+        loop {
+            if tau < s.tau_min {
+                report.stop = Some(StopReason::TauMin);
+                return Ok(report);
+            }
+            let sys = LinearSystem {
+                mesh: &self.mesh,
+                pattern: &self.pattern,
+                matrices: &matrices,
+                ax: &ax,
+                g: &grad.g,
+                f: &grad.f,
+                product: &product,
+                tau,
+            };
+            let vel = self.solver.velocity(&sys)?;
+            if let Some(eps) = s.step_control {
+                let ratio = tau * relative_motion(&self.mesh, &vel.vector);
+                if ratio > eps {
+                    tau *= (0.9 * eps / ratio).min(0.5);
+                    report.reductions += 1;
+                    continue;
+                }
+            }
+            let positions: Vec<Point<D>> =
+                self.mesh.positions().iter().zip(&vel.vector).map(|(x, v)| x + v * tau).collect();
+            let candidate = self.mesh.with_positions(positions);
+            if let Some(element) = tangled(&self.mesh, &candidate) {
+                tau *= 0.5;
+                report.reductions += 1;
+                if tau < s.tau_min {
+                    return Err(FlowError::Tangled { element, time: self.time });
+                }
+                continue;
+            }
+            let energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
+            if !energy.is_finite() {
+                return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration + 1 });
+            }
+            if s.backtracking && energy > self.energy {
+                tau *= 0.5;
+                report.backtracks += 1;
+                continue;
+            }
+            let previous = self.energy;
+            self.mesh = candidate;
+            self.time += tau;
+            self.tau = tau;
+            self.energy = energy;
+            self.iteration += 1;
+            report.accepted = true;
+            if s.tolerance > 0.0 && (previous - energy).abs() <= s.tolerance * previous.abs() {
+                report.stop = Some(StopReason::Converged);
+            }
+            return Ok(report);
+        }
+    }
+}
+
+fn check_settings(s: &FlowSettings) -> Result<(), FlowError> {
+    let bad = |field: &'static str, reason: &str| Err(FlowError::Settings { field, reason: reason.into() });
+    if !(s.tau.is_finite() && s.tau > 0.0) {
+        return bad("flow.tau", "must be a positive number");
+    }
+    if !(s.tau_min.is_finite() && s.tau_min > 0.0 && s.tau_min <= s.tau) {
+        return bad("flow.tau_min", "must be positive and at most flow.tau");
+    }
+    if !(s.tolerance.is_finite() && s.tolerance >= 0.0) {
+        return bad("flow.tolerance", "must be a nonnegative number");
+    }
+    if let Some(t) = s.end_time {
+        if !(t.is_finite() && t > 0.0) {
+            return bad("flow.end_time", "must be a positive number");
+        }
+    }
+    if let Some(e) = s.step_control {
+        if !(e.is_finite() && e > 0.0) {
+            return bad("flow.step_control", "must be a positive number");
+        }
+    }
+    if !(s.alpha.is_finite() && s.alpha >= 0.0) {
+        return bad("flow.alpha", "must be a nonnegative number");
+    }
+    if !(s.beta.is_finite() && s.beta > 0.0) {
+        return bad("flow.beta", "must be a positive number");
+    }
+    Ok(())
+}
+
+fn check_values(what: &'static str, v: &[f64], n: usize) -> Result<(), FlowError> {
+    if v.len() != n {
+        return Err(FlowError::Problem(format!("{what} has {} values for {n} vertices", v.len())));
+    }
+    match v.iter().position(|x| !x.is_finite()) {
+        Some(index) => Err(FlowError::NonFiniteInput { what, index }),
+        None => Ok(()),
+    }
+}
+
+/// `max_T max_{a,b ∈ T} |V⃗(z_a) − V⃗(z_b)| / h_T`: relative motion per unit time.
+fn relative_motion<const D: usize>(mesh: &Mesh<D>, v: &[Point<D>]) -> f64 {
+    let mut worst: f64 = 0.0;
+    for (e, el) in mesh.elements().iter().enumerate() {
+        let h = simplex::diameter(&mesh.element_points(e));
+        for a in 0..D {
+            for b in a + 1..D {
+                worst = worst.max((v[el[a]] - v[el[b]]).norm() / h);
+            }
+        }
+    }
+    worst
+}
+
+/// First element that degenerated or flipped between `old` and `new`.
+fn tangled<const D: usize>(old: &Mesh<D>, new: &Mesh<D>) -> Option<usize> {
+    (0..old.num_elements()).find(|&e| {
+        let (m0, n0) = old.element_geometry(e);
+        let (m1, n1) = new.element_geometry(e);
+        !(m1 > 1e-12 * m0) || n0.dot(&n1) <= 0.0 || !m1.is_finite()
+    })
+}

@@ -1,0 +1,25 @@
+//! Errors of the flow: numeric failures end a run.
+
+/// A numeric failure of the flow. A run that hits one ends as failed; the state
+/// before the failing step is still available (and checkpointed by the caller).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FlowError {
+    #[error("the problem returned a non-finite {what} at index {index}")]
+    NonFiniteInput { what: &'static str, index: usize },
+    #[error("sparse factorization of the Schur complement failed: {0}")]
+    Factorization(String),
+    #[error("iterative Schur solve did not converge: residual {residual:e} after {iterations} iterations")]
+    NoConvergence { residual: f64, iterations: usize },
+    #[error("the velocity is not finite at vertex {vertex}")]
+    NonFiniteVelocity { vertex: usize },
+    #[error("the mesh tangled: element {element} degenerated or flipped at time {time}")]
+    Tangled { element: usize, time: f64 },
+    #[error("the energy is not finite ({value}) at iteration {iteration}")]
+    NonFiniteEnergy { value: f64, iteration: usize },
+    #[error("problem error: {0}")]
+    Problem(String),
+    #[error("invalid settings: {field}: {reason}")]
+    Settings { field: &'static str, reason: String },
+    #[error("checkpoint does not fit: {0}")]
+    Checkpoint(String),
+}

@@ -1,0 +1,22 @@
+//! The gradient flow: scalar products, the semi-implicit step of the paper (eqs.
+//! 62–65) solved through the Schur complement for the scalar normal velocity `V`,
+//! geometric time-step control, backtracking and the driver loop.
+
+mod checkpoint;
+mod consistent;
+mod driver;
+mod error;
+mod gmres;
+mod lumped;
+mod problem;
+mod step;
+mod system;
+
+pub use consistent::ConsistentSolver;
+pub use driver::{Checkpoint, Flow, FlowSettings, MeshData, Progress, StepReport, StopReason};
+pub use error::FlowError;
+pub use gmres::{gmres, GmresOutcome};
+pub use lumped::{Factor, LumpedSolver};
+pub use problem::{H1Weights, Problem, ProblemError, ShapeGradient, SurfaceState};
+pub use step::{SemiImplicitStep, SolverKind, Velocity};
+pub use system::{LinearSystem, ScalarProduct, ProductWeights};

@@ -1,0 +1,56 @@
+//! The interface between the flow and an application (implemented in `problems`).
+
+use crate::fem::{Matrices, Weight};
+use crate::geometry::{Mesh, Point};
+
+use super::ScalarProduct;
+
+/// The shape gradient `G = g κ + f` (paper eq. 13) at the vertices of `Γ`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShapeGradient {
+    pub g: Vec<f64>,
+    pub f: Vec<f64>,
+}
+
+/// Weights of the weighted H1 product `b(V, W) = ∫ α ∇V·∇W + β V W`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct H1Weights {
+    pub alpha: Weight,
+    pub beta: Weight,
+}
+
+/// What a problem may look at on `Γ_n`: the mesh, its P1 matrices, the discrete
+/// curvature `κ_i = N⃗_i·(A X)_i / m_i²` and unit vertex normals.
+pub struct SurfaceState<'a, const D: usize> {
+    pub mesh: &'a Mesh<D>,
+    pub matrices: &'a Matrices<D>,
+    pub curvature: &'a [f64],
+    pub normals: &'a [Point<D>],
+}
+
+/// An error raised by a problem (bad data met during a run).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct ProblemError(pub String);
+
+/// A shape functional `J(Ω)` with shape derivative `dJ(Ω; V) = ∫_Γ (g κ + f) V`.
+pub trait Problem<const D: usize>: Send {
+    /// Name as in the job spec (`problem.type`).
+    fn name(&self) -> &'static str;
+    /// `J(Γ)`.
+    fn energy(&self, mesh: &Mesh<D>) -> Result<f64, ProblemError>;
+    /// `g` and `f` at the vertices of `Γ_n`.
+    fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError>;
+    /// α and β of the problem's own weighted H1 product (`h1_newton`), if it has one.
+    fn h1_weights(&self, _state: &SurfaceState<'_, D>, _grad: &ShapeGradient) -> Option<H1Weights> {
+        None
+    }
+    /// The scalar product used when the spec does not name one.
+    fn default_scalar_product(&self) -> ScalarProduct {
+        ScalarProduct::L2
+    }
+    /// Physical flows (surface diffusion) follow time accurately: no backtracking by default.
+    fn is_physical(&self) -> bool {
+        false
+    }
+}

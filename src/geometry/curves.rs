@@ -1,0 +1,146 @@
+//! Built-in closed curves (`Mesh<2>`): circle, ellipse, rectangle, polygon, union.
+//! Every builder takes a resolution (number of vertices) and returns a validated
+//! mesh whose components run counter-clockwise.
+
+use super::{CurveMesh, Mesh, MeshError, Point};
+use std::f64::consts::PI;
+
+/// Build a curve mesh from closed polylines, one per component, each listed once
+/// (the closing segment is implied). Orientation is taken as given.
+pub(crate) fn from_polylines(parts: Vec<Vec<Point<2>>>) -> Result<CurveMesh, MeshError> {
+    let mut positions = Vec::new();
+    let mut elements = Vec::new();
+    for part in parts {
+        let base = positions.len();
+        let n = part.len();
+        positions.extend(part);
+        for k in 0..n {
+            elements.push([base + k, base + (k + 1) % n]);
+        }
+    }
+    Mesh::new(positions, elements)
+}
+
+/// Circle of the given centre and radius with `n` equally spaced vertices.
+pub fn circle(center: [f64; 2], radius: f64, n: usize) -> Result<CurveMesh, MeshError> {
+    ellipse(center, [radius, radius], 0.0, n)
+}
+
+/// Ellipse with semi-axes `(a, b)`, rotated by `rotation` radians, with `n` vertices
+/// equally spaced in arclength.
+pub fn ellipse(center: [f64; 2], semi_axes: [f64; 2], rotation: f64, n: usize) -> Result<CurveMesh, MeshError> {
+    let [a, b] = semi_axes;
+    let at = |th: f64| Point::<2>::new(a * th.cos(), b * th.sin());
+    let fine = 64 * n.max(3);
+    let mut s = vec![0.0; fine + 1];
+    for k in 0..fine {
+        let th0 = 2.0 * PI * k as f64 / fine as f64;
+        let th1 = 2.0 * PI * (k + 1) as f64 / fine as f64;
+        s[k + 1] = s[k] + (at(th1) - at(th0)).norm();
+    }
+    let total = s[fine];
+    let (c, r) = (rotation.cos(), rotation.sin());
+    let mut pts = Vec::with_capacity(n);
+    let mut j = 0;
+    for k in 0..n {
+        let target = total * k as f64 / n as f64;
+        while s[j + 1] < target {
+            j += 1;
+        }
+        let f = if s[j + 1] > s[j] { (target - s[j]) / (s[j + 1] - s[j]) } else { 0.0 };
+        let th = 2.0 * PI * (j as f64 + f) / fine as f64;
+        let p = at(th);
+        pts.push(Point::<2>::new(center[0] + c * p.x - r * p.y, center[1] + r * p.x + c * p.y));
+    }
+    from_polylines(vec![pts])
+}
+
+/// Axis-aligned rectangle of the given centre and side lengths with about `n`
+/// vertices spread evenly along the perimeter (corners always included).
+pub fn rectangle(center: [f64; 2], size: [f64; 2], n: usize) -> Result<CurveMesh, MeshError> {
+    let [w, h] = size;
+    let corners = vec![
+        Point::<2>::new(center[0] - 0.5 * w, center[1] - 0.5 * h),
+        Point::<2>::new(center[0] + 0.5 * w, center[1] - 0.5 * h),
+        Point::<2>::new(center[0] + 0.5 * w, center[1] + 0.5 * h),
+        Point::<2>::new(center[0] - 0.5 * w, center[1] + 0.5 * h),
+    ];
+    polygon(&corners, Some(n))
+}
+
+/// Closed polygon through `points` (either orientation; returned counter-clockwise).
+/// With `Some(n)`, the edges are subdivided so that the result has about `n` vertices
+/// evenly spaced in arclength, the given corners kept.
+pub fn polygon(points: &[Point<2>], n: Option<usize>) -> Result<CurveMesh, MeshError> {
+    let mut pts: Vec<Point<2>> = points.to_vec();
+    let area: f64 = (0..pts.len())
+        .map(|k| {
+            let (p, q) = (pts[k], pts[(k + 1) % pts.len()]);
+            0.5 * (p.x * q.y - q.x * p.y)
+        })
+        .sum();
+    if area < 0.0 {
+        pts.reverse();
+    }
+    if let Some(n) = n {
+        let m = pts.len();
+        let lens: Vec<f64> = (0..m).map(|k| (pts[(k + 1) % m] - pts[k]).norm()).collect();
+        let total: f64 = lens.iter().sum();
+        let spacing = total / n.max(m) as f64;
+        let mut out = Vec::with_capacity(n);
+        for k in 0..m {
+            let pieces = ((lens[k] / spacing).round() as usize).max(1);
+            for j in 0..pieces {
+                let f = j as f64 / pieces as f64;
+                out.push(pts[k] + (pts[(k + 1) % m] - pts[k]) * f);
+            }
+        }
+        pts = out;
+    }
+    from_polylines(vec![pts])
+}
+
+/// Several curves as one mesh (the components keep their own orientation). The
+/// parts must not intersect each other (checked by the mesh constructor).
+pub fn union(parts: &[CurveMesh]) -> Result<CurveMesh, MeshError> {
+    let mut polylines = Vec::new();
+    for part in parts {
+        for cyc in part.cycles() {
+            polylines.push(cyc.iter().map(|&v| part.positions()[v]).collect());
+        }
+    }
+    from_polylines(polylines)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn circle_measures() {
+        let c = circle([0.0, 0.0], 2.0, 512).unwrap();
+        assert!((c.enclosed_measure() - PI * 4.0).abs() < 1e-3);
+        assert!((c.boundary_measure() - 4.0 * PI).abs() < 1e-3);
+        assert_eq!(c.num_components(), 1);
+    }
+
+    #[test]
+    fn clockwise_polygon_is_reoriented_and_bowtie_rejected() {
+        let sq = [[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]].map(|p| Point::<2>::new(p[0], p[1]));
+        let m = polygon(&sq, Some(40)).unwrap();
+        assert!((m.enclosed_measure() - 1.0).abs() < 1e-12);
+        assert_eq!(m.num_vertices(), 40);
+        let bow = [[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]].map(|p| Point::<2>::new(p[0], p[1]));
+        assert!(matches!(polygon(&bow, None), Err(MeshError::SelfIntersection { .. })));
+    }
+
+    #[test]
+    fn union_counts_components_and_rejects_overlap() {
+        let a = circle([0.0, 0.0], 1.0, 64).unwrap();
+        let b = circle([3.0, 0.0], 1.0, 64).unwrap();
+        let u = union(&[a.clone(), b]).unwrap();
+        assert_eq!(u.num_components(), 2);
+        let c = circle([1.5, 0.0], 1.0, 64).unwrap();
+        assert!(matches!(union(&[a, c]), Err(MeshError::SelfIntersection { .. })));
+    }
+}

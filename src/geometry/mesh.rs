@@ -1,0 +1,178 @@
+//! The mesh type: vertex positions plus an element list.
+
+use super::{simplex, validate, Point};
+
+/// Errors of the validated mesh constructors. Every variant names the offending
+/// vertex, element or edge by its index.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MeshError {
+    #[error("mesh has no elements")]
+    Empty,
+    #[error("vertex {vertex} has a non-finite coordinate")]
+    NonFinite { vertex: usize },
+    #[error("element {element} refers to vertex {index}, but there are only {count} vertices")]
+    IndexOutOfRange { element: usize, index: usize, count: usize },
+    #[error("element {element} repeats a vertex")]
+    RepeatedVertex { element: usize },
+    #[error("element {element} is degenerate (zero length or area)")]
+    Degenerate { element: usize },
+    #[error("element {element} duplicates element {other}")]
+    Duplicate { element: usize, other: usize },
+    #[error("vertex {vertex} is used by no element")]
+    UnusedVertex { vertex: usize },
+    #[error("curve vertex {vertex} starts {outgoing} and ends {incoming} segments; closed curves need one of each")]
+    CurveVertexDegree { vertex: usize, incoming: usize, outgoing: usize },
+    #[error("curve component through vertex {vertex} has only {len} vertices; at least 3 are needed")]
+    ShortComponent { vertex: usize, len: usize },
+    #[error("edge ({a}, {b}) is used {count} times in the same direction: non-manifold or inconsistently oriented surface")]
+    InconsistentEdge { a: usize, b: usize, count: usize },
+    #[error("edge ({a}, {b}) has no opposite half-edge: the surface is not closed")]
+    OpenEdge { a: usize, b: usize },
+    #[error("vertex {vertex} is non-manifold: its triangles do not form a single fan")]
+    NonManifoldVertex { vertex: usize },
+    #[error("enclosed {what} is {value:e} <= 0: elements are oriented inward (expected counter-clockwise curves / outward-facing triangles)")]
+    InwardOrientation { what: &'static str, value: f64 },
+    #[error("segments {a} and {b} intersect")]
+    SelfIntersection { a: usize, b: usize },
+}
+
+/// A closed mesh of dimension `D - 1` in `R^D`: for `D = 2` a set of closed polygons
+/// (elements are segments `[a, b]`, oriented so that the interior lies to the left),
+/// for `D = 3` a closed oriented triangle surface (elements `[a, b, c]`
+/// counter-clockwise seen from outside).
+///
+/// Built by [`Mesh::new`], which validates; afterwards the connectivity is trusted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mesh<const D: usize> {
+    positions: Vec<Point<D>>,
+    elements: Vec<[usize; D]>,
+}
+
+/// Closed curves in the plane.
+pub type CurveMesh = Mesh<2>;
+/// Closed triangle surfaces in space.
+pub type SurfaceMesh = Mesh<3>;
+
+impl<const D: usize> Mesh<D> {
+    /// Validated constructor: finite coordinates, indices in range, no repeated
+    /// vertex in an element, no degenerate or duplicate element, every vertex used;
+    /// curves: every vertex starts one and ends one segment, components of at least
+    /// three vertices; surfaces: every edge shared by exactly two triangles with
+    /// opposite orientation and every vertex star a single fan. Finally the enclosed
+    /// area/volume must be positive (outward orientation).
+    pub fn new(positions: Vec<Point<D>>, elements: Vec<[usize; D]>) -> Result<Self, MeshError> {
+        validate::validate(&positions, &elements)?;
+        Ok(Mesh { positions, elements })
+    }
+
+    /// Same connectivity, new positions (the flow's update `X_{n+1} = X_n + τ V⃗`).
+    /// Panics if the number of positions changes.
+    pub fn with_positions(&self, positions: Vec<Point<D>>) -> Self {
+        assert_eq!(positions.len(), self.positions.len());
+        Mesh { positions, elements: self.elements.clone() }
+    }
+
+    /// Replace the positions in place (same count).
+    pub fn set_positions(&mut self, positions: Vec<Point<D>>) {
+        assert_eq!(positions.len(), self.positions.len());
+        self.positions = positions;
+    }
+
+    pub fn positions(&self) -> &[Point<D>] {
+        &self.positions
+    }
+
+    pub fn elements(&self) -> &[[usize; D]] {
+        &self.elements
+    }
+
+    pub fn num_vertices(&self) -> usize {
+        self.positions.len()
+    }
+
+    pub fn num_elements(&self) -> usize {
+        self.elements.len()
+    }
+
+    /// The `D` vertex positions of element `e`.
+    #[inline]
+    pub fn element_points(&self, e: usize) -> [Point<D>; D] {
+        let el = &self.elements[e];
+        std::array::from_fn(|k| self.positions[el[k]])
+    }
+
+    /// Measure (length or area) and unit outward normal of element `e`.
+    #[inline]
+    pub fn element_geometry(&self, e: usize) -> (f64, Point<D>) {
+        simplex::measure_and_normal(&self.element_points(e))
+    }
+
+    /// Number of connected components (curves: closed polygons; surfaces: connected
+    /// triangle sets), by union–find over the elements.
+    pub fn num_components(&self) -> usize {
+        self.component_labels().1
+    }
+
+    /// Component label of every vertex and the number of components.
+    pub fn component_labels(&self) -> (Vec<usize>, usize) {
+        let n = self.positions.len();
+        let mut parent: Vec<usize> = (0..n).collect();
+        fn find(p: &mut [usize], mut x: usize) -> usize {
+            while p[x] != x {
+                p[x] = p[p[x]];
+                x = p[x];
+            }
+            x
+        }
+        for el in &self.elements {
+            let r0 = find(&mut parent, el[0]);
+            for &v in &el[1..] {
+                let r = find(&mut parent, v);
+                if r != r0 {
+                    parent[r] = r0;
+                }
+            }
+        }
+        let mut label = vec![usize::MAX; n];
+        let mut count = 0;
+        let mut out = vec![0; n];
+        for v in 0..n {
+            let r = find(&mut parent, v);
+            if label[r] == usize::MAX {
+                label[r] = count;
+                count += 1;
+            }
+            out[v] = label[r];
+        }
+        (out, count)
+    }
+}
+
+impl Mesh<2> {
+    /// The closed polygons of a curve mesh as vertex index cycles, each in the
+    /// direction of its segments (counter-clockwise for outer boundaries), ordered by
+    /// their smallest vertex index.
+    pub fn cycles(&self) -> Vec<Vec<usize>> {
+        let n = self.positions.len();
+        let mut next = vec![usize::MAX; n];
+        for el in &self.elements {
+            next[el[0]] = el[1];
+        }
+        let mut seen = vec![false; n];
+        let mut out = Vec::new();
+        for start in 0..n {
+            if seen[start] || next[start] == usize::MAX {
+                continue;
+            }
+            let mut cyc = Vec::new();
+            let mut v = start;
+            while !seen[v] {
+                seen[v] = true;
+                cyc.push(v);
+                v = next[v];
+            }
+            out.push(cyc);
+        }
+        out
+    }
+}

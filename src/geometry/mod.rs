@@ -1,0 +1,20 @@
+//! Geometry: meshes of closed curves (`D = 2`) and closed surfaces (`D = 3`), their
+//! validated constructors, built-in shapes and measures. Topology (the element list)
+//! is kept apart from positions; derived quantities are computed on request.
+
+mod curves;
+mod intersect;
+mod measures;
+mod mesh;
+pub mod simplex;
+mod surfaces;
+mod validate;
+
+pub use curves::{circle, ellipse, polygon, rectangle, union};
+pub use intersect::{find_segment_intersections, SegmentHit};
+pub use measures::MeshQuality;
+pub use mesh::{CurveMesh, Mesh, MeshError, SurfaceMesh};
+pub use surfaces::{box_surface, ellipsoid, icosphere, torus};
+
+/// A point of `R^D`.
+pub type Point<const D: usize> = nalgebra::SVector<f64, D>;

@@ -1,0 +1,181 @@
+//! Validation of a mesh at construction (see [`super::Mesh::new`]).
+
+use super::{simplex, MeshError, Point};
+use std::collections::HashMap;
+
+pub(super) fn validate<const D: usize>(
+    positions: &[Point<D>],
+    elements: &[[usize; D]],
+) -> Result<(), MeshError> {
+    if elements.is_empty() {
+        return Err(MeshError::Empty);
+    }
+    let n = positions.len();
+    for (vertex, p) in positions.iter().enumerate() {
+        if p.iter().any(|c| !c.is_finite()) {
+            return Err(MeshError::NonFinite { vertex });
+        }
+    }
+    let scale = bounding_diameter(positions).max(f64::MIN_POSITIVE);
+    let tiny = 1e-13 * scale.powi(D as i32 - 1);
+    let mut used = vec![false; n];
+    for (e, el) in elements.iter().enumerate() {
+        for &index in el {
+            if index >= n {
+                return Err(MeshError::IndexOutOfRange { element: e, index, count: n });
+            }
+            used[index] = true;
+        }
+        for a in 0..D {
+            for b in a + 1..D {
+                if el[a] == el[b] {
+                    return Err(MeshError::RepeatedVertex { element: e });
+                }
+            }
+        }
+        let p: [Point<D>; D] = std::array::from_fn(|k| positions[el[k]]);
+        let (m, _) = simplex::measure_and_normal(&p);
+        if m <= tiny {
+            return Err(MeshError::Degenerate { element: e });
+        }
+    }
+    if let Some(vertex) = used.iter().position(|u| !u) {
+        return Err(MeshError::UnusedVertex { vertex });
+    }
+    let mut seen: HashMap<[usize; D], usize> = HashMap::with_capacity(elements.len());
+    for (e, el) in elements.iter().enumerate() {
+        let mut key = *el;
+        key.sort_unstable();
+        if let Some(&other) = seen.get(&key) {
+            return Err(MeshError::Duplicate { element: e, other });
+        }
+        seen.insert(key, e);
+    }
+    match D {
+        2 => {
+            validate_curve(n, elements)?;
+            let pts: Vec<Point<2>> = positions.iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
+            let segs: Vec<[usize; 2]> = elements.iter().map(|e| [e[0], e[1]]).collect();
+            if let Some(h) = super::find_segment_intersections(&pts, &segs).first() {
+                return Err(MeshError::SelfIntersection { a: h.a, b: h.b });
+            }
+        }
+        3 => validate_surface(n, elements)?,
+        _ => unreachable!(),
+    }
+    let enclosed: f64 = elements
+        .iter()
+        .map(|el| simplex::enclosed_contribution(&std::array::from_fn(|k| positions[el[k]])))
+        .sum();
+    if enclosed <= 0.0 {
+        let what = if D == 2 { "area" } else { "volume" };
+        return Err(MeshError::InwardOrientation { what, value: enclosed });
+    }
+    Ok(())
+}
+
+fn bounding_diameter<const D: usize>(positions: &[Point<D>]) -> f64 {
+    let mut lo = Point::<D>::repeat(f64::INFINITY);
+    let mut hi = Point::<D>::repeat(f64::NEG_INFINITY);
+    for p in positions {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    (hi - lo).norm()
+}
+
+fn validate_curve<const D: usize>(n: usize, elements: &[[usize; D]]) -> Result<(), MeshError> {
+    let mut outgoing = vec![0usize; n];
+    let mut incoming = vec![0usize; n];
+    let mut next = vec![usize::MAX; n];
+    for el in elements {
+        outgoing[el[0]] += 1;
+        incoming[el[1]] += 1;
+        next[el[0]] = el[1];
+    }
+    for v in 0..n {
+        if outgoing[v] != 1 || incoming[v] != 1 {
+            return Err(MeshError::CurveVertexDegree {
+                vertex: v,
+                incoming: incoming[v],
+                outgoing: outgoing[v],
+            });
+        }
+    }
+    let mut seen = vec![false; n];
+    for start in 0..n {
+        if seen[start] {
+            continue;
+        }
+        let mut len = 0;
+        let mut v = start;
+        while !seen[v] {
+            seen[v] = true;
+            len += 1;
+            v = next[v];
+        }
+        if len < 3 {
+            return Err(MeshError::ShortComponent { vertex: start, len });
+        }
+    }
+    Ok(())
+}
+
+fn validate_surface<const D: usize>(n: usize, elements: &[[usize; D]]) -> Result<(), MeshError> {
+    let mut half: HashMap<(usize, usize), usize> = HashMap::with_capacity(3 * elements.len());
+    for el in elements {
+        for k in 0..3 {
+            *half.entry((el[k], el[(k + 1) % 3])).or_insert(0) += 1;
+        }
+    }
+    let mut keys: Vec<_> = half.iter().map(|(&k, &c)| (k, c)).collect();
+    keys.sort_unstable();
+    for &((a, b), count) in &keys {
+        if count > 1 {
+            return Err(MeshError::InconsistentEdge { a, b, count });
+        }
+        if !half.contains_key(&(b, a)) {
+            return Err(MeshError::OpenEdge { a, b });
+        }
+    }
+    // Vertex stars: the links (a -> b for triangle (v, a, b)) must form one cycle.
+    let mut star_start = vec![0usize; n + 1];
+    for el in elements {
+        for &v in el {
+            star_start[v + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        star_start[v + 1] += star_start[v];
+    }
+    let mut fill = star_start.clone();
+    let mut links = vec![(0usize, 0usize); star_start[n]];
+    for el in elements {
+        for k in 0..3 {
+            let v = el[k];
+            links[fill[v]] = (el[(k + 1) % 3], el[(k + 2) % 3]);
+            fill[v] += 1;
+        }
+    }
+    for v in 0..n {
+        let star = &links[star_start[v]..star_start[v + 1]];
+        let next: HashMap<usize, usize> = star.iter().copied().collect();
+        let (first, _) = star[0];
+        let mut a = first;
+        let mut steps = 0;
+        loop {
+            a = match next.get(&a) {
+                Some(&b) => b,
+                None => return Err(MeshError::NonManifoldVertex { vertex: v }),
+            };
+            steps += 1;
+            if a == first || steps > star.len() {
+                break;
+            }
+        }
+        if steps != star.len() {
+            return Err(MeshError::NonManifoldVertex { vertex: v });
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,7 @@
+//! The applications, one module each, behind the [`crate::flow::Problem`] trait.
+
+mod curvature_flow;
+mod surface_diffusion;
+
+pub use curvature_flow::CurvatureFlow;
+pub use surface_diffusion::SurfaceDiffusion;
