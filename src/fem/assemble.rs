@@ -73,6 +73,8 @@ pub struct Matrices<const D: usize> {
     pub lumped_mass: Vec<f64>,
     /// Lumped normal `N⃗_i = ∫_Γ φ_i ν` (area-weighted vertex normal, not unit).
     pub lumped_normal: Vec<Point<D>>,
+    /// Lumped mass of the scalar rows, `m̂_i = |N⃗_i|² / m_i` (see `flow::LumpedSolver`).
+    pub scalar_mass: Vec<f64>,
     /// Stiffness `A` (values on the pattern).
     pub stiffness: Vec<f64>,
     /// Consistent mass `M` (values on the pattern).
@@ -90,6 +92,7 @@ impl<const D: usize> Matrices<D> {
             local_stiffness: Vec::with_capacity(ne),
             lumped_mass: vec![0.0; nv],
             lumped_normal: vec![Point::<D>::zeros(); nv],
+            scalar_mass: Vec::new(),
             stiffness: vec![0.0; pattern.nnz()],
             mass: vec![0.0; pattern.nnz()],
         };
@@ -108,6 +111,7 @@ impl<const D: usize> Matrices<D> {
             out.normal.push(d.normal);
             out.local_stiffness.push(d.stiffness);
         }
+        out.scalar_mass = out.lumped_normal.iter().zip(&out.lumped_mass).map(|(n, m)| n.norm_squared() / m).collect();
         out
     }
 

@@ -11,4 +11,4 @@ pub mod element;
 mod pattern;
 
 pub use assemble::{Matrices, Weight};
-pub use pattern::Pattern;
+pub use pattern::{csc_mul, Pattern};

@@ -73,13 +73,7 @@ impl<const D: usize> Pattern<D> {
 
     /// `y = A x` for values `a` on this pattern.
     pub fn mul(&self, a: &[f64], x: &[f64], y: &mut [f64]) {
-        y.iter_mut().for_each(|v| *v = 0.0);
-        for j in 0..self.n {
-            let xj = x[j];
-            for k in self.col_ptr[j]..self.col_ptr[j + 1] {
-                y[self.row_idx[k]] += a[k] * xj;
-            }
-        }
+        csc_mul(&self.col_ptr, &self.row_idx, a, x, y);
     }
 
     /// The pattern of `A·A` (two-ring stencil) in CSC form: `(col_ptr, row_idx)`.
@@ -101,6 +95,16 @@ impl<const D: usize> Pattern<D> {
             cols.push(c);
         }
         compress(cols)
+    }
+}
+
+/// `y = A x` for a CSC matrix `(col_ptr, row_idx, values)`.
+pub fn csc_mul(col_ptr: &[usize], row_idx: &[usize], values: &[f64], x: &[f64], y: &mut [f64]) {
+    y.iter_mut().for_each(|v| *v = 0.0);
+    for (j, &xj) in x.iter().enumerate() {
+        for k in col_ptr[j]..col_ptr[j + 1] {
+            y[row_idx[k]] += values[k] * xj;
+        }
     }
 }
 

@@ -231,8 +231,8 @@ impl<'p, const D: usize> Flow<'p, D> {
         let ax = matrices.stiffness_times_positions(&self.mesh, &self.pattern);
         let curvature: Vec<f64> = (0..self.mesh.num_vertices())
             .map(|i| {
-                let m = matrices.lumped_mass[i];
-                matrices.lumped_normal[i].dot(&ax[i]) / (m * m)
+                let n = &matrices.lumped_normal[i];
+                n.dot(&ax[i]) / n.norm_squared()
             })
             .collect();
         let normals: Vec<Point<D>> = matrices.lumped_normal.iter().map(|n| n.normalize()).collect();

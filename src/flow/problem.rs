@@ -20,7 +20,7 @@ pub struct H1Weights {
 }
 
 /// What a problem may look at on `Γ_n`: the mesh, its P1 matrices, the discrete
-/// curvature `κ_i = N⃗_i·(A X)_i / m_i²` and unit vertex normals.
+/// curvature `κ_i = N⃗_i·(A X)_i / |N⃗_i|²` and unit vertex normals.
 pub struct SurfaceState<'a, const D: usize> {
     pub mesh: &'a Mesh<D>,
     pub matrices: &'a Matrices<D>,
