@@ -1,6 +1,6 @@
 //! Exact solutions, convergence orders and conserved quantities of the engine.
 
-use shapeflow::flow::{Flow, FlowSettings, ScalarProduct, SolverKind, StopReason};
+use shapeflow::flow::{Flow, FlowSettings, Problem, ProblemError, ScalarProduct, ShapeGradient, SolverKind, StopReason, SurfaceState};
 use shapeflow::geometry::{circle, ellipse, ellipsoid, icosphere, Mesh};
 use shapeflow::problems::{CurvatureFlow, SurfaceDiffusion};
 use std::sync::atomic::AtomicBool;
@@ -142,4 +142,86 @@ fn surface_diffusion_of_ellipsoid_becomes_sphere() {
     let dev = out.positions().iter().map(|p| ((p - c).norm() - r_eq).abs()).fold(0.0, f64::max) / r_eq;
     eprintln!("ellipsoid -> sphere: max radius deviation {dev:e}");
     assert!(dev < 0.01, "radius deviation {dev}");
+}
+
+/// A functional with a minimizer: `J = (|Ω| − A₀)² + ε|Γ|`, `G = εκ + 2(|Ω| − A₀)`.
+/// Its area term is explicit in the semi-implicit step, so a large τ overshoots A₀.
+struct AreaTarget {
+    target: f64,
+    eps: f64,
+}
+
+impl<const D: usize> Problem<D> for AreaTarget {
+    fn name(&self) -> &'static str {
+        "area_target"
+    }
+    fn energy(&self, mesh: &Mesh<D>) -> Result<f64, ProblemError> {
+        Ok((mesh.enclosed_measure() - self.target).powi(2) + self.eps * mesh.boundary_measure())
+    }
+    fn shape_gradient(&self, s: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
+        let n = s.mesh.num_vertices();
+        let f = 2.0 * (s.mesh.enclosed_measure() - self.target);
+        Ok(ShapeGradient { g: vec![self.eps; n], f: vec![f; n] })
+    }
+}
+
+#[test]
+fn backtracking_keeps_a_too_large_step_monotone() {
+    let problem = AreaTarget { target: 2.0 * std::f64::consts::PI, eps: 0.1 };
+    let run = |backtracking: bool, iterations: usize| {
+        let settings = FlowSettings { tau: 1.0, max_iterations: iterations, tolerance: 0.0, backtracking, ..FlowSettings::default() };
+        let mut flow = Flow::new(&problem, circle([0.0, 0.0], 1.0, 128).unwrap(), settings).unwrap();
+        let mut energies = vec![flow.energy()];
+        let mut backtracks = 0;
+        loop {
+            let r = flow.step().unwrap();
+            backtracks += r.backtracks;
+            if r.accepted {
+                energies.push(flow.energy());
+            }
+            if r.stop.is_some() {
+                break;
+            }
+        }
+        (energies, backtracks, flow.mesh().enclosed_measure())
+    };
+    let (energies, backtracks, area) = run(true, 30);
+    eprintln!("backtracks {backtracks}, energies {:?}, final area {area}", &energies[..5]);
+    assert!(backtracks > 0, "the test must exercise backtracking");
+    assert!(energies.windows(2).all(|w| w[1] <= w[0]), "energy history not monotone: {energies:?}");
+    assert!((area - problem.target).abs() < 0.05 * problem.target, "converges near the target area: {area}");
+    // the same τ without backtracking raises the energy
+    let (energies, _, _) = run(false, 3);
+    assert!(energies.windows(2).any(|w| w[1] > w[0]), "without backtracking τ = 1 overshoots: {energies:?}");
+}
+
+#[test]
+fn resuming_from_a_checkpoint_reproduces_the_uninterrupted_run() {
+    let problem = CurvatureFlow { gamma: 1.0, lambda: 0.5 };
+    let settings = FlowSettings { tau: 2e-3, max_iterations: 60, tolerance: 0.0, ..FlowSettings::default() };
+    let start = || ellipse([0.1, 0.2], [1.0, 0.7], 0.3, 96).unwrap();
+    let history = |flow: &mut Flow<'_, 2>, out: &mut Vec<(usize, f64, f64, f64)>| {
+        flow.run(&AtomicBool::new(false), |f| {
+            let p = f.progress();
+            out.push((p.iteration, p.time, p.tau, p.energy));
+        })
+        .unwrap()
+    };
+    let mut full = Vec::new();
+    let mut flow = Flow::new(&problem, start(), settings.clone()).unwrap();
+    assert_eq!(history(&mut flow, &mut full), StopReason::MaxIterations);
+    let final_full = flow.mesh().clone();
+
+    let mut first = Vec::new();
+    let mut flow = Flow::new(&problem, start(), FlowSettings { max_iterations: 25, ..settings.clone() }).unwrap();
+    history(&mut flow, &mut first);
+    // through JSON, as stored
+    let json = serde_json::to_string(&flow.checkpoint()).unwrap();
+    let cp: shapeflow::flow::Checkpoint = serde_json::from_str(&json).unwrap();
+    let mut second = Vec::new();
+    let mut resumed = Flow::resume(&problem, &cp, settings).unwrap();
+    history(&mut resumed, &mut second);
+    first.extend_from_slice(&second[1..]); // the resumed run reports its start again
+    assert_eq!(first, full, "histories differ");
+    assert_eq!(resumed.mesh(), &final_full, "final meshes differ");
 }
