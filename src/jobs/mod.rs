@@ -1,1 +1,14 @@
+//! Jobs: the job spec of DESIGN.md §3 (serde, validated with errors naming the
+//! field), its translation into a mesh, a problem and flow settings, and the run of
+//! a prepared job with progress and checkpoint callbacks. No I/O: input files arrive
+//! as bytes.
 
+mod build;
+mod mesh_io;
+mod run;
+mod spec;
+
+pub use build::{prepare, AnyMesh, PreparedJob, ProblemKind};
+pub use mesh_io::{read_mesh_file, MeshFileError};
+pub use run::{run_prepared, JobFailure, JobOutcome, RunEvents};
+pub use spec::{parse_spec, FlowSpec, InitialSpec, JobSpec, MeshSpec, OutputSpec, ProblemSpec, SpecError};

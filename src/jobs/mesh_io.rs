@@ -1,0 +1,251 @@
+//! Readers for uploaded meshes (bytes in, validated mesh out): Wavefront OBJ
+//! (`v`/`f` surfaces, or `v`/`l` closed polylines in the plane z = 0), OFF, and
+//! STL (ASCII or binary; coincident vertices merged).
+
+use super::build::{AnyMesh, MAX_VERTICES};
+use crate::geometry::{Mesh, MeshError, Point};
+use std::collections::HashMap;
+
+/// A mesh file that could not be read; names the input and, for text formats, the line.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MeshFileError {
+    #[error("input {name:?}: not a recognised mesh file (OBJ, OFF or STL)")]
+    UnknownFormat { name: String },
+    #[error("input {name:?}, line {line}: {message}")]
+    Parse { name: String, line: usize, message: String },
+    #[error("input {name:?}: {message}")]
+    Content { name: String, message: String },
+    #[error("input {name:?}: invalid mesh: {error}")]
+    Mesh { name: String, error: MeshError },
+}
+
+/// Read a mesh from the bytes of an uploaded file named `name`.
+pub fn read_mesh_file(name: &str, bytes: &[u8]) -> Result<AnyMesh, MeshFileError> {
+    let is_binary_stl = bytes.len() >= 84 && {
+        let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
+        bytes.len() == 84 + 50 * n
+    };
+    if is_binary_stl && !bytes.starts_with(b"solid") {
+        return read_binary_stl(name, bytes);
+    }
+    let text = std::str::from_utf8(bytes).map_err(|_| {
+        if is_binary_stl {
+            MeshFileError::UnknownFormat { name: name.into() }
+        } else {
+            MeshFileError::Content { name: name.into(), message: "not UTF-8 text and not binary STL".into() }
+        }
+    })?;
+    let head = text.trim_start();
+    if head.starts_with("OFF") {
+        read_off(name, text)
+    } else if head.starts_with("solid") && text.contains("facet") {
+        read_ascii_stl(name, text)
+    } else if text.lines().any(|l| l.trim_start().starts_with("v ")) {
+        read_obj(name, text)
+    } else if is_binary_stl {
+        read_binary_stl(name, bytes)
+    } else {
+        Err(MeshFileError::UnknownFormat { name: name.into() })
+    }
+}
+
+fn parse_err(name: &str, line: usize, message: impl Into<String>) -> MeshFileError {
+    MeshFileError::Parse { name: name.into(), line, message: message.into() }
+}
+
+fn nums<T: std::str::FromStr>(name: &str, line: usize, parts: &[&str]) -> Result<Vec<T>, MeshFileError> {
+    parts
+        .iter()
+        .map(|p| p.parse::<T>().map_err(|_| parse_err(name, line, format!("cannot read number {p:?}"))))
+        .collect()
+}
+
+fn surface(name: &str, positions: Vec<Point<3>>, tris: Vec<[usize; 3]>) -> Result<AnyMesh, MeshFileError> {
+    if positions.len() > MAX_VERTICES {
+        return Err(MeshFileError::Content { name: name.into(), message: format!("more than {MAX_VERTICES} vertices") });
+    }
+    Mesh::new(positions, tris).map(AnyMesh::Surface).map_err(|error| MeshFileError::Mesh { name: name.into(), error })
+}
+
+fn read_obj(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
+    let mut verts: Vec<Point<3>> = Vec::new();
+    let mut tris = Vec::new();
+    let mut loops: Vec<Vec<usize>> = Vec::new();
+    for (k, raw) in text.lines().enumerate() {
+        let line = k + 1;
+        let parts: Vec<&str> = raw.split_whitespace().collect();
+        let Some((&tag, rest)) = parts.split_first() else { continue };
+        let index = |tok: &str| -> Result<usize, MeshFileError> {
+            let first = tok.split('/').next().unwrap_or("");
+            let i: i64 = first.parse().map_err(|_| parse_err(name, line, format!("bad index {tok:?}")))?;
+            let n = verts.len() as i64;
+            let idx = if i < 0 { n + i } else { i - 1 };
+            if idx < 0 || idx >= n {
+                return Err(parse_err(name, line, format!("index {i} out of range (1..={n})")));
+            }
+            Ok(idx as usize)
+        };
+        match tag {
+            "v" => {
+                if rest.len() < 3 {
+                    return Err(parse_err(name, line, "vertex needs x y z"));
+                }
+                let c: Vec<f64> = nums(name, line, &rest[..3])?;
+                verts.push(Point::<3>::new(c[0], c[1], c[2]));
+            }
+            "f" => {
+                let ids = rest.iter().map(|t| index(t)).collect::<Result<Vec<_>, _>>()?;
+                if ids.len() < 3 {
+                    return Err(parse_err(name, line, "face needs at least 3 vertices"));
+                }
+                for j in 1..ids.len() - 1 {
+                    tris.push([ids[0], ids[j], ids[j + 1]]);
+                }
+            }
+            "l" => {
+                let mut ids = rest.iter().map(|t| index(t)).collect::<Result<Vec<_>, _>>()?;
+                if ids.len() > 1 && ids.first() == ids.last() {
+                    ids.pop();
+                }
+                loops.push(ids);
+            }
+            _ => {}
+        }
+    }
+    if tris.is_empty() && !loops.is_empty() {
+        if let Some(i) = verts.iter().position(|p| p.z != 0.0) {
+            return Err(MeshFileError::Content { name: name.into(), message: format!("curve vertex {} is not in the plane z = 0", i + 1) });
+        }
+        let mut positions = Vec::new();
+        let mut elements = Vec::new();
+        let mut map = HashMap::new();
+        for l in &loops {
+            let local: Vec<usize> = l
+                .iter()
+                .map(|&v| {
+                    *map.entry(v).or_insert_with(|| {
+                        positions.push(Point::<2>::new(verts[v].x, verts[v].y));
+                        positions.len() - 1
+                    })
+                })
+                .collect();
+            for j in 0..local.len() {
+                elements.push([local[j], local[(j + 1) % local.len()]]);
+            }
+        }
+        return Mesh::new(positions, elements).map(AnyMesh::Curve).map_err(|error| MeshFileError::Mesh { name: name.into(), error });
+    }
+    surface(name, verts, tris)
+}
+
+fn read_off(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
+    let mut lines = text.lines().enumerate().filter(|(_, l)| {
+        let t = l.trim();
+        !t.is_empty() && !t.starts_with('#')
+    });
+    let (_, first) = lines.next().ok_or_else(|| parse_err(name, 1, "empty file"))?;
+    let mut header: Vec<&str> = first.split_whitespace().skip(1).collect();
+    let mut line_no = 1;
+    if header.is_empty() {
+        let (k, l) = lines.next().ok_or_else(|| parse_err(name, 2, "missing counts"))?;
+        header = l.split_whitespace().collect();
+        line_no = k + 1;
+    }
+    if header.len() < 2 {
+        return Err(parse_err(name, line_no, "expected vertex and face counts"));
+    }
+    let counts: Vec<usize> = nums(name, line_no, &header[..2])?;
+    let (nv, nf) = (counts[0], counts[1]);
+    if nv > MAX_VERTICES {
+        return Err(MeshFileError::Content { name: name.into(), message: format!("more than {MAX_VERTICES} vertices") });
+    }
+    let mut verts = Vec::with_capacity(nv);
+    let mut tris = Vec::with_capacity(nf);
+    for _ in 0..nv {
+        let (k, l) = lines.next().ok_or_else(|| parse_err(name, 0, "file ends inside the vertex list"))?;
+        let p: Vec<&str> = l.split_whitespace().collect();
+        if p.len() < 3 {
+            return Err(parse_err(name, k + 1, "vertex needs x y z"));
+        }
+        let c: Vec<f64> = nums(name, k + 1, &p[..3])?;
+        verts.push(Point::<3>::new(c[0], c[1], c[2]));
+    }
+    for _ in 0..nf {
+        let (k, l) = lines.next().ok_or_else(|| parse_err(name, 0, "file ends inside the face list"))?;
+        let p: Vec<&str> = l.split_whitespace().collect();
+        let ids: Vec<usize> = nums(name, k + 1, &p)?;
+        let Some((&cnt, rest)) = ids.split_first() else { continue };
+        if cnt < 3 || rest.len() < cnt {
+            return Err(parse_err(name, k + 1, "face needs a count and that many indices (at least 3)"));
+        }
+        if let Some(bad) = rest[..cnt].iter().find(|&&i| i >= nv) {
+            return Err(parse_err(name, k + 1, format!("index {bad} out of range (0..{nv})")));
+        }
+        for j in 1..cnt - 1 {
+            tris.push([rest[0], rest[j], rest[j + 1]]);
+        }
+    }
+    surface(name, verts, tris)
+}
+
+/// Triangles given by coordinates; merge bit-identical vertices.
+fn from_soup(name: &str, soup: Vec<[Point<3>; 3]>) -> Result<AnyMesh, MeshFileError> {
+    let mut map: HashMap<[u64; 3], usize> = HashMap::new();
+    let mut positions = Vec::new();
+    let mut tris = Vec::with_capacity(soup.len());
+    for t in soup {
+        let ids = t.map(|p| {
+            let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+            *map.entry(key).or_insert_with(|| {
+                positions.push(p);
+                positions.len() - 1
+            })
+        });
+        tris.push(ids);
+    }
+    surface(name, positions, tris)
+}
+
+fn read_ascii_stl(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
+    let mut soup = Vec::new();
+    let mut cur: Vec<Point<3>> = Vec::new();
+    for (k, l) in text.lines().enumerate() {
+        let p: Vec<&str> = l.split_whitespace().collect();
+        match p.first() {
+            Some(&"vertex") => {
+                if p.len() < 4 {
+                    return Err(parse_err(name, k + 1, "vertex needs x y z"));
+                }
+                let c: Vec<f64> = nums(name, k + 1, &p[1..4])?;
+                cur.push(Point::<3>::new(c[0], c[1], c[2]));
+            }
+            Some(&"endfacet") => {
+                if cur.len() != 3 {
+                    return Err(parse_err(name, k + 1, "facet must have 3 vertices"));
+                }
+                soup.push([cur[0], cur[1], cur[2]]);
+                cur.clear();
+            }
+            _ => {}
+        }
+    }
+    from_soup(name, soup)
+}
+
+fn read_binary_stl(name: &str, bytes: &[u8]) -> Result<AnyMesh, MeshFileError> {
+    let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
+    if n > 3 * MAX_VERTICES {
+        return Err(MeshFileError::Content { name: name.into(), message: format!("{n} triangles is too many") });
+    }
+    let f = |o: usize| f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]) as f64;
+    let soup = (0..n)
+        .map(|t| {
+            let base = 84 + 50 * t + 12;
+            std::array::from_fn(|v| {
+                let o = base + 12 * v;
+                Point::<3>::new(f(o), f(o + 4), f(o + 8))
+            })
+        })
+        .collect();
+    from_soup(name, soup)
+}

@@ -1,0 +1,216 @@
+//! The job spec (DESIGN.md §3). Unknown fields are rejected; every error names the
+//! field by its path (`flow.tau`, `initial.parts[1].radius`).
+
+use crate::flow::{ScalarProduct, SolverKind};
+use serde::{Deserialize, Serialize};
+
+/// A spec error: the offending field's path and what is wrong with it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{field}: {message}")]
+pub struct SpecError {
+    pub field: String,
+    pub message: String,
+}
+
+impl SpecError {
+    pub fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
+        SpecError { field: field.into(), message: message.into() }
+    }
+}
+
+/// A whole job.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JobSpec {
+    pub problem: ProblemSpec,
+    pub initial: InitialSpec,
+    #[serde(default)]
+    pub flow: FlowSpec,
+    #[serde(default)]
+    pub mesh: MeshSpec,
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// `problem`: the functional to minimize.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ProblemSpec {
+    /// `J = γ|Γ| + λ|Ω|`.
+    CurvatureFlow {
+        #[serde(default = "one")]
+        gamma: f64,
+        #[serde(default)]
+        lambda: f64,
+    },
+    /// `J = γ|Γ|` under the `H^{-1}` product.
+    SurfaceDiffusion {
+        #[serde(default = "one")]
+        gamma: f64,
+    },
+}
+
+fn origin2() -> [f64; 2] {
+    [0.0, 0.0]
+}
+fn origin3() -> [f64; 3] {
+    [0.0, 0.0, 0.0]
+}
+fn curve_resolution() -> usize {
+    128
+}
+fn sphere_resolution() -> u32 {
+    4
+}
+fn box_resolution() -> f64 {
+    8.0
+}
+fn torus_resolution() -> usize {
+    64
+}
+
+/// `initial`: the starting shape. `resolution` means: curves, the number of
+/// vertices; sphere/ellipsoid, the icosphere subdivision level; box, grid cells per
+/// unit length; torus, segments around the axis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "shape", rename_all = "snake_case", deny_unknown_fields)]
+pub enum InitialSpec {
+    Circle {
+        #[serde(default = "origin2")]
+        center: [f64; 2],
+        radius: f64,
+        #[serde(default = "curve_resolution")]
+        resolution: usize,
+    },
+    Ellipse {
+        #[serde(default = "origin2")]
+        center: [f64; 2],
+        semi_axes: [f64; 2],
+        #[serde(default)]
+        rotation: f64,
+        #[serde(default = "curve_resolution")]
+        resolution: usize,
+    },
+    Rectangle {
+        #[serde(default = "origin2")]
+        center: [f64; 2],
+        size: [f64; 2],
+        #[serde(default = "curve_resolution")]
+        resolution: usize,
+    },
+    Polygon {
+        points: Vec<[f64; 2]>,
+        #[serde(default)]
+        resolution: Option<usize>,
+    },
+    Union {
+        parts: Vec<InitialSpec>,
+    },
+    Sphere {
+        #[serde(default = "origin3")]
+        center: [f64; 3],
+        radius: f64,
+        #[serde(default = "sphere_resolution")]
+        resolution: u32,
+    },
+    Ellipsoid {
+        #[serde(default = "origin3")]
+        center: [f64; 3],
+        semi_axes: [f64; 3],
+        #[serde(default = "sphere_resolution")]
+        resolution: u32,
+    },
+    Box {
+        #[serde(default = "origin3")]
+        center: [f64; 3],
+        size: [f64; 3],
+        #[serde(default = "box_resolution")]
+        resolution: f64,
+    },
+    Torus {
+        #[serde(default = "origin3")]
+        center: [f64; 3],
+        major_radius: f64,
+        minor_radius: f64,
+        #[serde(default = "torus_resolution")]
+        resolution: usize,
+    },
+    /// An uploaded mesh: `"input:NAME"` (OBJ, OFF or STL; closed curves as OBJ `l`
+    /// polylines in the plane).
+    Mesh { file: String },
+}
+
+/// `flow`: time stepping and the descent direction. Every field is optional.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlowSpec {
+    /// `l2`, `h1`, `h1_newton` or `h_minus_1`; default: the problem's own.
+    pub scalar_product: Option<ScalarProduct>,
+    /// `lumped` (default) or `consistent`.
+    pub solver: Option<SolverKind>,
+    pub tau: Option<f64>,
+    pub tau_min: Option<f64>,
+    pub max_iterations: Option<usize>,
+    pub end_time: Option<f64>,
+    pub tolerance: Option<f64>,
+    pub backtracking: Option<bool>,
+    /// ε of the geometric time-step control; 0 switches it off.
+    pub step_control: Option<f64>,
+    pub alpha: Option<f64>,
+    pub beta: Option<f64>,
+}
+
+/// `mesh`: mesh management switches (paper §4.1).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MeshSpec {
+    pub regularize: bool,
+    pub adapt: bool,
+    pub topology_changes: bool,
+}
+
+impl Default for MeshSpec {
+    fn default() -> Self {
+        MeshSpec { regularize: true, adapt: true, topology_changes: true }
+    }
+}
+
+/// `output`: what is kept.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputSpec {
+    /// Keep a checkpoint every this many iterations (and at the end); at least 1.
+    pub checkpoint_every: usize,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        OutputSpec { checkpoint_every: 10 }
+    }
+}
+
+const PLANNED: [(&str, &str); 2] = [
+    ("segmentation", "image segmentation is not available yet in this version"),
+    ("shape_design", "optimal shape design is not available yet in this version"),
+];
+
+/// Parse a spec from JSON text. Errors name the field path.
+pub fn parse_spec(text: &str) -> Result<JobSpec, SpecError> {
+    let value: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| SpecError::new("(document)", format!("malformed JSON: {e}")))?;
+    if let Some(t) = value.pointer("/problem/type").and_then(|t| t.as_str()) {
+        if let Some((_, msg)) = PLANNED.iter().find(|(name, _)| *name == t) {
+            return Err(SpecError::new("problem.type", format!("`{t}`: {msg}")));
+        }
+    }
+    let spec: JobSpec = serde_path_to_error::deserialize(value).map_err(|e| {
+        let path = e.path().to_string();
+        let field = if path == "." || path.is_empty() { "(document)".to_string() } else { path };
+        SpecError::new(field, e.into_inner().to_string())
+    })?;
+    Ok(spec)
+}
