@@ -1,0 +1,103 @@
+//! The `shapeflow run` command end to end.
+
+use std::process::Command;
+
+fn shapeflow() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_shapeflow"))
+}
+
+#[test]
+fn run_writes_shape_and_history_and_reports_the_stop_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = shapeflow()
+        .args(["run", "examples/circle.json", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout} {}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("stopped: end_time after 2500 iterations"), "{stdout}");
+    let shape: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("shape.json")).unwrap()).unwrap();
+    assert_eq!(shape["dimension"], 2);
+    assert_eq!(shape["iteration"], 2500);
+    let verts = shape["components"][0]["vertices"].as_array().unwrap();
+    assert_eq!(verts.len(), 256);
+    let exact = 0.5f64.sqrt();
+    for v in verts {
+        let r = (v[0].as_f64().unwrap().powi(2) + v[1].as_f64().unwrap().powi(2)).sqrt();
+        assert!((r - exact).abs() < 1e-3, "radius {r}");
+    }
+    let csv = std::fs::read_to_string(dir.path().join("energy.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert!(rows[0].starts_with("iteration,time,tau,energy,vertices"));
+    assert_eq!(rows.len(), 1 + 2501);
+    let energies: Vec<f64> = rows[1..].iter().map(|r| r.split(',').nth(3).unwrap().parse().unwrap()).collect();
+    assert!(energies.windows(2).all(|w| w[1] < w[0]));
+    // perimeter of the final circle
+    assert!((energies[2500] - 2.0 * std::f64::consts::PI * exact).abs() < 1e-2);
+
+    // resume from the written checkpoint with a later end time
+    let spec = dir.path().join("longer.json");
+    std::fs::write(&spec, std::fs::read_to_string("examples/circle.json").unwrap().replace("\"end_time\": 0.25", "\"end_time\": 0.3")).unwrap();
+    let out2 = shapeflow()
+        .arg("run")
+        .arg(&spec)
+        .arg("--out")
+        .arg(dir.path().join("more"))
+        .arg("--resume")
+        .arg(dir.path().join("checkpoint.json"))
+        .output()
+        .unwrap();
+    let stdout2 = String::from_utf8_lossy(&out2.stdout);
+    assert!(stdout2.contains("stopped: end_time after 3000 iterations"), "{stdout2}");
+}
+
+#[test]
+fn bad_spec_exits_nonzero_naming_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = dir.path().join("bad.json");
+    std::fs::write(&spec, r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1}, "flow": {"tau": -0.5}}"#).unwrap();
+    let out = shapeflow().arg("run").arg(&spec).arg("--out").arg(dir.path().join("o")).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("flow.tau: must be a positive number"), "{err}");
+    assert!(err.contains("bad.json"), "{err}");
+    let out = shapeflow().args(["run", "does-not-exist.json", "--out"]).arg(dir.path()).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("does-not-exist.json"));
+    let out = shapeflow().args(["run", "examples/circle.json", "--input", "nonsense", "--out"]).arg(dir.path()).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("NAME=PATH"));
+}
+
+#[test]
+fn uploaded_mesh_runs_through_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("cube.obj");
+    // unit cube, outward faces
+    let mut s = String::new();
+    for z in [0.0, 1.0] {
+        for y in [0.0, 1.0] {
+            for x in [0.0, 1.0] {
+                s += &format!("v {x} {y} {z}\n");
+            }
+        }
+    }
+    s += "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+    std::fs::write(&obj, s).unwrap();
+    let spec = dir.path().join("spec.json");
+    std::fs::write(&spec, r#"{"problem": {"type": "surface_diffusion"}, "initial": {"shape": "mesh", "file": "input:cube"}, "flow": {"tau": 1e-4, "max_iterations": 5}}"#).unwrap();
+    let out = shapeflow()
+        .arg("run")
+        .arg(&spec)
+        .arg("--out")
+        .arg(dir.path().join("o"))
+        .arg("--input")
+        .arg(format!("cube={}", obj.display()))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let shape: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("o/shape.json")).unwrap()).unwrap();
+    assert_eq!(shape["dimension"], 3);
+    assert_eq!(shape["triangles"].as_array().unwrap().len(), 12);
+}
