@@ -37,7 +37,9 @@ impl Weight {
                         out[v] += w[e] * m.measure[e] / D as f64;
                     }
                 }
-                out.iter_mut().zip(&m.lumped_mass).for_each(|(o, mi)| *o /= mi);
+                out.iter_mut()
+                    .zip(&m.lumped_mass)
+                    .for_each(|(o, mi)| *o /= mi);
                 out
             }
         }
@@ -51,7 +53,12 @@ impl Weight {
             Weight::Vertex(w) => (w, mesh.num_vertices(), "vertices"),
         };
         if vals.len() != need {
-            return Err(format!("weight has {} values for {} {}", vals.len(), need, what));
+            return Err(format!(
+                "weight has {} values for {} {}",
+                vals.len(),
+                need,
+                what
+            ));
         }
         if let Some(i) = vals.iter().position(|v| !v.is_finite()) {
             return Err(format!("weight value {i} is not finite"));
@@ -77,46 +84,89 @@ pub struct Matrices<const D: usize> {
     pub scalar_mass: Vec<f64>,
     /// Stiffness `A` (values on the pattern).
     pub stiffness: Vec<f64>,
-    /// Consistent mass `M` (values on the pattern).
+    /// Consistent mass `M` (values on the pattern); empty unless assembled with
+    /// [`Matrices::assemble_into`]`(.., true)`.
     pub mass: Vec<f64>,
 }
 
 impl<const D: usize> Matrices<D> {
     /// Assemble `A`, `M`, lumped `m` and `N⃗` for `mesh` on `pattern`.
     pub fn assemble(mesh: &Mesh<D>, pattern: &Pattern<D>) -> Self {
-        let ne = mesh.num_elements();
-        let nv = mesh.num_vertices();
         let mut out = Matrices {
-            measure: Vec::with_capacity(ne),
-            normal: Vec::with_capacity(ne),
-            local_stiffness: Vec::with_capacity(ne),
-            lumped_mass: vec![0.0; nv],
-            lumped_normal: vec![Point::<D>::zeros(); nv],
+            measure: Vec::new(),
+            normal: Vec::new(),
+            local_stiffness: Vec::new(),
+            lumped_mass: Vec::new(),
+            lumped_normal: Vec::new(),
             scalar_mass: Vec::new(),
-            stiffness: vec![0.0; pattern.nnz()],
-            mass: vec![0.0; pattern.nnz()],
+            stiffness: Vec::new(),
+            mass: Vec::new(),
         };
-        for (e, el) in mesh.elements().iter().enumerate() {
-            let d = element_data(&mesh.element_points(e));
-            let slots = &pattern.slots()[e];
-            for a in 0..D {
-                out.lumped_mass[el[a]] += d.measure / D as f64;
-                out.lumped_normal[el[a]] += d.normal * (d.measure / D as f64);
-                for b in 0..D {
-                    out.stiffness[slots[a][b]] += d.stiffness[(a, b)];
-                    out.mass[slots[a][b]] += mass_entry::<D>(d.measure, a, b);
-                }
-            }
-            out.measure.push(d.measure);
-            out.normal.push(d.normal);
-            out.local_stiffness.push(d.stiffness);
-        }
-        out.scalar_mass = out.lumped_normal.iter().zip(&out.lumped_mass).map(|(n, m)| n.norm_squared() / m).collect();
+        out.assemble_into(mesh, pattern, true);
         out
     }
 
+    /// Refill `self` for `mesh` on `pattern`, reusing the allocations; the
+    /// consistent mass only if `consistent_mass` (the lumped path does not need it).
+    pub fn assemble_into(&mut self, mesh: &Mesh<D>, pattern: &Pattern<D>, consistent_mass: bool) {
+        let nv = mesh.num_vertices();
+        let reset = |v: &mut Vec<f64>, n: usize| {
+            v.clear();
+            v.resize(n, 0.0);
+        };
+        self.measure.clear();
+        self.normal.clear();
+        self.local_stiffness.clear();
+        reset(&mut self.lumped_mass, nv);
+        reset(&mut self.stiffness, pattern.nnz());
+        reset(
+            &mut self.mass,
+            if consistent_mass { pattern.nnz() } else { 0 },
+        );
+        self.lumped_normal.clear();
+        self.lumped_normal.resize(nv, Point::<D>::zeros());
+        let off = 1.0 / (D * (D + 1)) as f64;
+        for (e, el) in mesh.elements().iter().enumerate() {
+            let d = element_data(&mesh.element_points(e));
+            let slots = &pattern.slots()[e];
+            let share = d.measure / D as f64;
+            let weighted_normal = d.normal * share;
+            for a in 0..D {
+                self.lumped_mass[el[a]] += share;
+                self.lumped_normal[el[a]] += weighted_normal;
+                for b in 0..D {
+                    self.stiffness[slots[a][b]] += d.stiffness[(a, b)];
+                }
+                if consistent_mass {
+                    for b in 0..D {
+                        self.mass[slots[a][b]] += if a == b {
+                            2.0 * off * d.measure
+                        } else {
+                            off * d.measure
+                        };
+                    }
+                }
+            }
+            self.measure.push(d.measure);
+            self.normal.push(d.normal);
+            self.local_stiffness.push(d.stiffness);
+        }
+        self.scalar_mass.clear();
+        self.scalar_mass.extend(
+            self.lumped_normal
+                .iter()
+                .zip(&self.lumped_mass)
+                .map(|(n, m)| n.norm_squared() / m),
+        );
+    }
+
     /// `A_α = Σ_T α_T K_T` on the pattern.
-    pub fn weighted_stiffness(&self, mesh: &Mesh<D>, pattern: &Pattern<D>, alpha: &Weight) -> Vec<f64> {
+    pub fn weighted_stiffness(
+        &self,
+        mesh: &Mesh<D>,
+        pattern: &Pattern<D>,
+        alpha: &Weight,
+    ) -> Vec<f64> {
         let mut v = vec![0.0; pattern.nnz()];
         for (e, el) in mesh.elements().iter().enumerate() {
             let w = alpha.on_element(e, el);

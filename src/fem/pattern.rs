@@ -45,8 +45,16 @@ impl<const D: usize> Pattern<D> {
             .map(|el| std::array::from_fn(|a| std::array::from_fn(|b| find(el[a], el[b]))))
             .collect();
         let diag = (0..n).map(|i| find(i, i)).collect();
-        let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
-        Pattern { n, col_ptr, row_idx, slots, diag, symbolic }
+        let symbolic =
+            SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
+        Pattern {
+            n,
+            col_ptr,
+            row_idx,
+            slots,
+            diag,
+            symbolic,
+        }
     }
 
     pub fn size(&self) -> usize {

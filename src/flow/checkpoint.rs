@@ -16,7 +16,11 @@ impl<const D: usize> From<&Mesh<D>> for MeshData {
     fn from(m: &Mesh<D>) -> Self {
         MeshData {
             dimension: D,
-            positions: m.positions().iter().map(|p| p.iter().copied().collect()).collect(),
+            positions: m
+                .positions()
+                .iter()
+                .map(|p| p.iter().copied().collect())
+                .collect(),
             elements: m.elements().iter().map(|e| e.to_vec()).collect(),
         }
     }
@@ -41,7 +45,8 @@ impl MeshData {
             .iter()
             .enumerate()
             .map(|(element, e)| {
-                <[usize; D]>::try_from(e.as_slice()).map_err(|_| MeshError::RepeatedVertex { element })
+                <[usize; D]>::try_from(e.as_slice())
+                    .map_err(|_| MeshError::RepeatedVertex { element })
             })
             .collect::<Result<Vec<_>, _>>()?;
         Mesh::new(positions, elements)

@@ -11,21 +11,18 @@
 //!
 //! where `N_c` is the `c`-th component of `N⃗_ij = ∫ φ_i φ_j ν` (symmetric).
 
+use super::cholesky::SparseCholesky;
 use super::gmres::{gmres, GmresOutcome};
 use super::system::{LinearSystem, ProductWeights};
 use super::{FlowError, LumpedSolver};
 use crate::fem::Weight;
 use crate::geometry::Point;
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
-use faer::sparse::SparseColMatRef;
-use faer::{MatMut, Side};
 
 /// Stateful consistent-mass solver (keeps the symbolic factorizations).
 #[derive(Default)]
 pub struct ConsistentSolver {
     lumped: LumpedSolver,
-    mass: Option<SymbolicLlt<usize>>,
+    mass: Option<SparseCholesky>,
     /// Outcome of the last GMRES solve.
     pub last: Option<GmresOutcome>,
 }
@@ -40,22 +37,22 @@ impl ConsistentSolver {
     }
 
     /// Solve for `V` and `V⃗`.
-    pub fn solve<const D: usize>(&mut self, sys: &LinearSystem<'_, D>) -> Result<(Vec<f64>, Vec<Point<D>>), FlowError> {
+    pub fn solve<const D: usize>(
+        &mut self,
+        sys: &LinearSystem<'_, D>,
+    ) -> Result<(Vec<f64>, Vec<Point<D>>), FlowError> {
         let p = sys.pattern;
         let mx = sys.matrices;
         let n = p.size();
-        let ferr = |e: String| FlowError::Factorization(e);
-        let sym = p.symbolic();
+        let sym = p.symbolic().as_ref();
         if self.mass.is_none() {
-            self.mass = Some(SymbolicLlt::try_new(sym.as_ref(), Side::Lower).map_err(|e| ferr(format!("{e:?}")))?);
+            self.mass = Some(SparseCholesky::new(sym).map_err(FlowError::Factorization)?);
         }
-        let mfac = Llt::try_new_with_symbolic(
-            self.mass.clone().unwrap(),
-            SparseColMatRef::new(sym.as_ref(), &mx.mass),
-            Side::Lower,
-        )
-        .map_err(|e| ferr(format!("mass matrix: {e:?}")))?;
-        let msolve = |x: &mut [f64]| mfac.solve_in_place(MatMut::from_column_major_slice_mut(x, n, 1));
+        let mfac = self.mass.as_mut().unwrap();
+        mfac.factorize(sym, &mx.mass)
+            .map_err(|e| FlowError::Factorization(format!("mass matrix: {e}")))?;
+        let mfac = self.mass.as_ref().unwrap();
+        let msolve = |x: &mut [f64]| mfac.solve_in_place(x);
         let normal = mx.consistent_normal(sys.mesh, p);
         let mut tmp = vec![0.0; n];
         let mut tmp2 = vec![0.0; n];
@@ -83,7 +80,8 @@ impl ConsistentSolver {
         }
         msolve(&mut k0);
 
-        let (_, factor) = self.lumped.solve(sys)?;
+        let lumped_v = self.lumped.solve(sys)?;
+        let lumped = &self.lumped;
         let mut rhs = vec![0.0; n];
         let mut cv = vec![0.0; n];
         let mut t3 = vec![0.0; n];
@@ -96,14 +94,23 @@ impl ConsistentSolver {
                 rhs.iter_mut().for_each(|r| *r = -*r);
                 let apply = |x: &[f64], out: &mut [f64]| {
                     curvature_op(x, &mut cv);
-                    cv.iter_mut().zip(sys.g).for_each(|(c, g)| *c *= sys.tau * g);
+                    cv.iter_mut()
+                        .zip(sys.g)
+                        .for_each(|(c, g)| *c *= sys.tau * g);
                     p.mul(&mx.stiffness, &cv, out);
                     p.mul(&mx.mass, x, &mut t3);
                     out.iter_mut().zip(&t3).for_each(|(o, t)| *o += t);
                 };
-                v = rhs.clone();
-                factor.solve_in_place(&mut v);
-                outcome = gmres(apply, |x| factor.solve_in_place(x), &rhs, &mut v, 1e-10, 50, 500);
+                v = lumped_v;
+                outcome = gmres(
+                    apply,
+                    |x| lumped.apply_last_factor(x),
+                    &rhs,
+                    &mut v,
+                    1e-10,
+                    50,
+                    500,
+                );
             }
             _ => {
                 let b = match sys.product {
@@ -124,16 +131,28 @@ impl ConsistentSolver {
                     curvature_op(x, &mut cv);
                     p.mul(&mg, &cv, out);
                     p.mul(&b, x, &mut t4);
-                    out.iter_mut().zip(&t4).for_each(|(o, t)| *o = sys.tau * *o + t);
+                    out.iter_mut()
+                        .zip(&t4)
+                        .for_each(|(o, t)| *o = sys.tau * *o + t);
                 };
-                v = rhs.clone();
-                factor.solve_in_place(&mut v);
-                outcome = gmres(apply, |x| factor.solve_in_place(x), &rhs, &mut v, 1e-10, 50, 500);
+                v = lumped_v;
+                outcome = gmres(
+                    apply,
+                    |x| lumped.apply_last_factor(x),
+                    &rhs,
+                    &mut v,
+                    1e-10,
+                    50,
+                    500,
+                );
             }
         }
         self.last = Some(outcome);
         if !outcome.converged {
-            return Err(FlowError::NoConvergence { residual: outcome.relative_residual, iterations: outcome.iterations });
+            return Err(FlowError::NoConvergence {
+                residual: outcome.relative_residual,
+                iterations: outcome.iterations,
+            });
         }
         let mut vector = vec![Point::<D>::zeros(); n];
         for (c, nc) in normal.iter().enumerate() {

@@ -116,6 +116,8 @@ pub struct Flow<'p, const D: usize> {
     mesh: Mesh<D>,
     pattern: Pattern<D>,
     solver: SemiImplicitStep,
+    /// Workspace: the P1 matrices of the current mesh (allocations reused).
+    matrices: Matrices<D>,
     iteration: usize,
     time: f64,
     tau: f64,
@@ -124,21 +126,45 @@ pub struct Flow<'p, const D: usize> {
 
 impl<'p, const D: usize> Flow<'p, D> {
     /// Start a flow at iteration 0, time 0.
-    pub fn new(problem: &'p dyn Problem<D>, mesh: Mesh<D>, settings: FlowSettings) -> Result<Self, FlowError> {
+    pub fn new(
+        problem: &'p dyn Problem<D>,
+        mesh: Mesh<D>,
+        settings: FlowSettings,
+    ) -> Result<Self, FlowError> {
         check_settings(&settings)?;
         let energy = problem.energy(&mesh).map_err(|e| FlowError::Problem(e.0))?;
         if !energy.is_finite() {
-            return Err(FlowError::NonFiniteEnergy { value: energy, iteration: 0 });
+            return Err(FlowError::NonFiniteEnergy {
+                value: energy,
+                iteration: 0,
+            });
         }
         let tau = settings.tau;
-        Ok(Self::assemble_state(problem, mesh, settings, 0, 0.0, tau, energy))
+        Ok(Self::assemble_state(
+            problem, mesh, settings, 0, 0.0, tau, energy,
+        ))
     }
 
     /// Continue from a checkpoint.
-    pub fn resume(problem: &'p dyn Problem<D>, checkpoint: &Checkpoint, settings: FlowSettings) -> Result<Self, FlowError> {
+    pub fn resume(
+        problem: &'p dyn Problem<D>,
+        checkpoint: &Checkpoint,
+        settings: FlowSettings,
+    ) -> Result<Self, FlowError> {
         check_settings(&settings)?;
-        let mesh = checkpoint.mesh.to_mesh::<D>().map_err(|e| FlowError::Checkpoint(e.to_string()))?;
-        Ok(Self::assemble_state(problem, mesh, settings, checkpoint.iteration, checkpoint.time, checkpoint.tau, checkpoint.energy))
+        let mesh = checkpoint
+            .mesh
+            .to_mesh::<D>()
+            .map_err(|e| FlowError::Checkpoint(e.to_string()))?;
+        Ok(Self::assemble_state(
+            problem,
+            mesh,
+            settings,
+            checkpoint.iteration,
+            checkpoint.time,
+            checkpoint.tau,
+            checkpoint.energy,
+        ))
     }
 
     fn assemble_state(
@@ -152,7 +178,19 @@ impl<'p, const D: usize> Flow<'p, D> {
     ) -> Self {
         let pattern = Pattern::new(mesh.num_vertices(), mesh.elements());
         let solver = SemiImplicitStep::new(settings.solver);
-        Flow { problem, settings, mesh, pattern, solver, iteration, time, tau, energy }
+        let matrices = Matrices::assemble(&mesh, &pattern);
+        Flow {
+            problem,
+            settings,
+            mesh,
+            pattern,
+            solver,
+            matrices,
+            iteration,
+            time,
+            tau,
+            energy,
+        }
     }
 
     pub fn mesh(&self) -> &Mesh<D> {
@@ -194,7 +232,11 @@ impl<'p, const D: usize> Flow<'p, D> {
 
     /// Run until a stop reason, calling `on_progress` after every accepted step
     /// (and once at the start), and checking `cancel` before every step.
-    pub fn run(&mut self, cancel: &AtomicBool, mut on_progress: impl FnMut(&Self)) -> Result<StopReason, FlowError> {
+    pub fn run(
+        &mut self,
+        cancel: &AtomicBool,
+        mut on_progress: impl FnMut(&Self),
+    ) -> Result<StopReason, FlowError> {
         on_progress(self);
         loop {
             if cancel.load(Ordering::Relaxed) {
@@ -213,7 +255,12 @@ impl<'p, const D: usize> Flow<'p, D> {
     /// Take one step (with its retries), or report why the run is over.
     pub fn step(&mut self) -> Result<StepReport, FlowError> {
         let s = &self.settings;
-        let mut report = StepReport { stop: None, accepted: false, backtracks: 0, reductions: 0 };
+        let mut report = StepReport {
+            stop: None,
+            accepted: false,
+            backtracks: 0,
+            reductions: 0,
+        };
         if self.iteration >= s.max_iterations {
             report.stop = Some(StopReason::MaxIterations);
             return Ok(report);
@@ -227,7 +274,12 @@ impl<'p, const D: usize> Flow<'p, D> {
             }
             tau = tau.min(left);
         }
-        let matrices = Matrices::assemble(&self.mesh, &self.pattern);
+        self.matrices.assemble_into(
+            &self.mesh,
+            &self.pattern,
+            self.settings.solver == SolverKind::Consistent,
+        );
+        let matrices = &self.matrices;
         let ax = matrices.stiffness_times_positions(&self.mesh, &self.pattern);
         let curvature: Vec<f64> = (0..self.mesh.num_vertices())
             .map(|i| {
@@ -235,23 +287,46 @@ impl<'p, const D: usize> Flow<'p, D> {
                 n.dot(&ax[i]) / n.norm_squared()
             })
             .collect();
-        let normals: Vec<Point<D>> = matrices.lumped_normal.iter().map(|n| n.normalize()).collect();
-        let state = SurfaceState { mesh: &self.mesh, matrices: &matrices, curvature: &curvature, normals: &normals };
-        let grad = self.problem.shape_gradient(&state).map_err(|e| FlowError::Problem(e.0))?;
+        let normals: Vec<Point<D>> = matrices
+            .lumped_normal
+            .iter()
+            .map(|n| n.normalize())
+            .collect();
+        let state = SurfaceState {
+            mesh: &self.mesh,
+            matrices,
+            curvature: &curvature,
+            normals: &normals,
+        };
+        let grad = self
+            .problem
+            .shape_gradient(&state)
+            .map_err(|e| FlowError::Problem(e.0))?;
         check_values("g", &grad.g, self.mesh.num_vertices())?;
         check_values("f", &grad.f, self.mesh.num_vertices())?;
         let product = match s.scalar_product {
             ScalarProduct::L2 => ProductWeights::L2,
             ScalarProduct::HMinus1 => ProductWeights::HMinus1,
-            ScalarProduct::H1 => ProductWeights::H1 { alpha: Weight::Constant(s.alpha), beta: Weight::Constant(s.beta) },
+            ScalarProduct::H1 => ProductWeights::H1 {
+                alpha: Weight::Constant(s.alpha),
+                beta: Weight::Constant(s.beta),
+            },
             ScalarProduct::H1Newton => match self.problem.h1_weights(&state, &grad) {
                 Some(w) => {
                     for (what, weight) in [("alpha", &w.alpha), ("beta", &w.beta)] {
-                        weight.check(&self.mesh).map_err(|r| FlowError::Problem(format!("{what}: {r}")))?;
+                        weight
+                            .check(&self.mesh)
+                            .map_err(|r| FlowError::Problem(format!("{what}: {r}")))?;
                     }
-                    ProductWeights::H1 { alpha: w.alpha, beta: w.beta }
+                    ProductWeights::H1 {
+                        alpha: w.alpha,
+                        beta: w.beta,
+                    }
                 }
-                None => ProductWeights::H1 { alpha: Weight::Constant(s.alpha), beta: Weight::Constant(s.beta) },
+                None => ProductWeights::H1 {
+                    alpha: Weight::Constant(s.alpha),
+                    beta: Weight::Constant(s.beta),
+                },
             },
         };
         loop {
@@ -262,7 +337,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             let sys = LinearSystem {
                 mesh: &self.mesh,
                 pattern: &self.pattern,
-                matrices: &matrices,
+                matrices,
                 ax: &ax,
                 g: &grad.g,
                 f: &grad.f,
@@ -278,20 +353,34 @@ impl<'p, const D: usize> Flow<'p, D> {
                     continue;
                 }
             }
-            let positions: Vec<Point<D>> =
-                self.mesh.positions().iter().zip(&vel.vector).map(|(x, v)| x + v * tau).collect();
+            let positions: Vec<Point<D>> = self
+                .mesh
+                .positions()
+                .iter()
+                .zip(&vel.vector)
+                .map(|(x, v)| x + v * tau)
+                .collect();
             let candidate = self.mesh.with_positions(positions);
             if let Some(element) = tangled(&self.mesh, &candidate) {
                 tau *= 0.5;
                 report.reductions += 1;
                 if tau < s.tau_min {
-                    return Err(FlowError::Tangled { element, time: self.time });
+                    return Err(FlowError::Tangled {
+                        element,
+                        time: self.time,
+                    });
                 }
                 continue;
             }
-            let energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
+            let energy = self
+                .problem
+                .energy(&candidate)
+                .map_err(|e| FlowError::Problem(e.0))?;
             if !energy.is_finite() {
-                return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration + 1 });
+                return Err(FlowError::NonFiniteEnergy {
+                    value: energy,
+                    iteration: self.iteration + 1,
+                });
             }
             if s.backtracking && energy > self.energy {
                 tau *= 0.5;
@@ -314,7 +403,12 @@ impl<'p, const D: usize> Flow<'p, D> {
 }
 
 fn check_settings(s: &FlowSettings) -> Result<(), FlowError> {
-    let bad = |field: &'static str, reason: &str| Err(FlowError::Settings { field, reason: reason.into() });
+    let bad = |field: &'static str, reason: &str| {
+        Err(FlowError::Settings {
+            field,
+            reason: reason.into(),
+        })
+    };
     if !(s.tau.is_finite() && s.tau > 0.0) {
         return bad("flow.tau", "must be a positive number");
     }
@@ -345,7 +439,10 @@ fn check_settings(s: &FlowSettings) -> Result<(), FlowError> {
 
 fn check_values(what: &'static str, v: &[f64], n: usize) -> Result<(), FlowError> {
     if v.len() != n {
-        return Err(FlowError::Problem(format!("{what} has {} values for {n} vertices", v.len())));
+        return Err(FlowError::Problem(format!(
+            "{what} has {} values for {n} vertices",
+            v.len()
+        )));
     }
     match v.iter().position(|x| !x.is_finite()) {
         Some(index) => Err(FlowError::NonFiniteInput { what, index }),

@@ -35,7 +35,11 @@ pub fn gmres(
         r.iter_mut().zip(b).for_each(|(ri, bi)| *ri = bi - *ri);
         let beta = dot(&r, &r).sqrt();
         if beta / bnorm <= tol || iterations >= max_iterations {
-            return GmresOutcome { iterations, relative_residual: beta / bnorm, converged: beta / bnorm <= tol };
+            return GmresOutcome {
+                iterations,
+                relative_residual: beta / bnorm,
+                converged: beta / bnorm <= tol,
+            };
         }
         let m = restart.max(1);
         let mut v: Vec<Vec<f64>> = vec![r.iter().map(|ri| ri / beta).collect()];
@@ -101,7 +105,9 @@ mod tests {
         let n = 50;
         let apply = |v: &[f64], out: &mut [f64]| {
             for i in 0..n {
-                out[i] = 4.0 * v[i] - if i > 0 { 1.5 * v[i - 1] } else { 0.0 } - if i + 1 < n { 0.5 * v[i + 1] } else { 0.0 };
+                out[i] = 4.0 * v[i]
+                    - if i > 0 { 1.5 * v[i - 1] } else { 0.0 }
+                    - if i + 1 < n { 0.5 * v[i + 1] } else { 0.0 };
             }
         };
         let xs: Vec<f64> = (0..n).map(|i| (i as f64).sin()).collect();

@@ -35,32 +35,16 @@
 //! pattern, `ḡ` the mean of `|g|`), which converges in a few iterations to 1e-12;
 //! sparse LU of `S` is the fallback.
 
-use super::system::{LinearSystem, ProductWeights};
+use super::cholesky::SparseCholesky;
+use super::cyclic::{solve_cyclic_tridiagonal, CyclicComponent};
 use super::gmres::gmres;
+use super::system::{LinearSystem, ProductWeights};
 use super::FlowError;
-use crate::fem::csc_mul;
+use crate::fem::{csc_mul, Pattern};
 use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{MatMut, Side};
-
-/// A numeric factorization of a Schur complement.
-pub enum Factor {
-    Llt(Llt<usize, f64>),
-    Lu(Lu<usize, f64>),
-}
-
-impl Factor {
-    /// Solve `S x = b` in place.
-    pub fn solve_in_place(&self, x: &mut [f64]) {
-        let n = x.len();
-        let m = MatMut::from_column_major_slice_mut(x, n, 1);
-        match self {
-            Factor::Llt(f) => f.solve_in_place(m),
-            Factor::Lu(f) => f.solve_in_place(m),
-        }
-    }
-}
+use faer::MatMut;
 
 /// The two-ring pattern used by the `H^{-1}` Schur complement.
 struct TwoRing {
@@ -68,16 +52,40 @@ struct TwoRing {
     row_idx: Vec<usize>,
     symbolic: SymbolicSparseColMat<usize>,
     lu: Option<SymbolicLu<usize>>,
-    llt: Option<SymbolicLlt<usize>>,
+    chol: Option<SparseCholesky>,
 }
 
-/// Stateful lumped Schur solver: keeps the symbolic factorizations for one
-/// connectivity. Call [`LumpedSolver::reset`] when the connectivity changes.
-#[derive(Default)]
+/// Which factorization the last solve used.
+enum Last {
+    None,
+    OneRingCholesky,
+    TwoRingCholesky,
+    Lu(Box<Lu<usize, f64>>),
+    /// The curve complement's three diagonals per component (re-solved per use).
+    Cyclic(Vec<[Vec<f64>; 3]>),
+}
+
+/// Stateful lumped Schur solver: keeps the symbolic factorizations (and numeric
+/// workspaces) for one connectivity. Call [`LumpedSolver::reset`] when the
+/// connectivity changes.
 pub struct LumpedSolver {
-    llt: Option<SymbolicLlt<usize>>,
+    cycles: Option<Vec<CyclicComponent>>,
+    chol: Option<SparseCholesky>,
     lu: Option<SymbolicLu<usize>>,
     two_ring: Option<TwoRing>,
+    last: Last,
+}
+
+impl Default for LumpedSolver {
+    fn default() -> Self {
+        LumpedSolver {
+            cycles: None,
+            chol: None,
+            lu: None,
+            two_ring: None,
+            last: Last::None,
+        }
+    }
 }
 
 /// Assembled lumped Schur complement: values on a pattern plus right-hand side.
@@ -87,7 +95,6 @@ pub(crate) struct SchurMatrix {
     pub precond: Option<Vec<f64>>,
     pub rhs: Vec<f64>,
     pub symmetric: bool,
-    pub two_ring: bool,
 }
 
 impl LumpedSolver {
@@ -100,76 +107,180 @@ impl LumpedSolver {
         *self = Self::default();
     }
 
-    /// Solve for the scalar normal velocity `V`; returns `V` and the factorization.
-    pub fn solve<const D: usize>(&mut self, sys: &LinearSystem<'_, D>) -> Result<(Vec<f64>, Factor), FlowError> {
-        let s = self.assemble(sys);
+    /// Solve for the scalar normal velocity `V`.
+    pub fn solve<const D: usize>(
+        &mut self,
+        sys: &LinearSystem<'_, D>,
+    ) -> Result<Vec<f64>, FlowError> {
+        let s = match sys.product {
+            ProductWeights::HMinus1 => self.assemble_h_minus_1(sys),
+            _ => assemble_l2_h1(sys),
+        };
         if let Some(p) = &s.precond {
-            if let Some(done) = self.solve_preconditioned(&s, p)? {
-                return Ok(done);
+            if let Some(v) = self.solve_preconditioned(sys, &s, p)? {
+                return Ok(v);
+            }
+            return self.solve_lu(s);
+        }
+        if D == 2 {
+            if let Some(v) = self.solve_cyclic(sys, &s) {
+                return Ok(v);
             }
         }
-        let factor = self.factorize(sys, &s)?;
+        if s.symmetric {
+            let sym = sys.pattern.symbolic().as_ref();
+            if self.chol.is_none() {
+                self.chol = Some(SparseCholesky::new(sym).map_err(FlowError::Factorization)?);
+            }
+            let chol = self.chol.as_mut().unwrap();
+            if chol.factorize(sym, &s.values).is_ok() {
+                let mut v = s.rhs;
+                chol.solve_in_place(&mut v);
+                self.last = Last::OneRingCholesky;
+                return Ok(v);
+            }
+            // not positive definite: fall back to LU
+        }
+        let sym = sys.pattern.symbolic().clone();
+        if self.lu.is_none() {
+            self.lu = Some(
+                SymbolicLu::try_new(sym.as_ref())
+                    .map_err(|e| FlowError::Factorization(format!("{e:?}")))?,
+            );
+        }
+        let lu = Lu::try_new_with_symbolic(
+            self.lu.clone().unwrap(),
+            SparseColMatRef::new(sym.as_ref(), &s.values),
+        )
+        .map_err(|e| FlowError::Factorization(format!("{e:?}")))?;
         let mut v = s.rhs;
-        factor.solve_in_place(&mut v);
-        Ok((v, factor))
+        let n = v.len();
+        lu.solve_in_place(MatMut::from_column_major_slice_mut(&mut v, n, 1));
+        self.last = Last::Lu(Box::new(lu));
+        Ok(v)
+    }
+
+    /// Apply the inverse of the last factorized matrix (the Schur complement, or its
+    /// SPD approximation `P` in the `H^{-1}` case) to `x`: a preconditioner.
+    pub fn apply_last_factor(&self, x: &mut [f64]) {
+        match &self.last {
+            Last::None => {}
+            Last::OneRingCholesky => self.chol.as_ref().unwrap().solve_in_place(x),
+            Last::TwoRingCholesky => self
+                .two_ring
+                .as_ref()
+                .unwrap()
+                .chol
+                .as_ref()
+                .unwrap()
+                .solve_in_place(x),
+            Last::Lu(lu) => {
+                let n = x.len();
+                lu.solve_in_place(MatMut::from_column_major_slice_mut(x, n, 1));
+            }
+            Last::Cyclic(diags) => {
+                let comps = self.cycles.as_ref().unwrap();
+                for (comp, [a, b, c]) in comps.iter().zip(diags) {
+                    let r: Vec<f64> = comp.vertices.iter().map(|&v| x[v]).collect();
+                    if let Some(y) = solve_cyclic_tridiagonal(a, b, c, &r) {
+                        comp.vertices.iter().zip(y).for_each(|(&v, yi)| x[v] = yi);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Curves (L2/H1): one cyclic tridiagonal solve per component; `None` on a zero
+    /// pivot (then the sparse factorizations take over).
+    fn solve_cyclic<const D: usize>(
+        &mut self,
+        sys: &LinearSystem<'_, D>,
+        s: &SchurMatrix,
+    ) -> Option<Vec<f64>> {
+        let comps = self.cycles.get_or_insert_with(|| cyclic_components(sys));
+        let mut v = vec![0.0; s.rhs.len()];
+        let mut diags = Vec::with_capacity(comps.len());
+        for comp in comps.iter() {
+            let pick = |j: usize| {
+                comp.positions
+                    .iter()
+                    .map(|p| s.values[p[j]])
+                    .collect::<Vec<f64>>()
+            };
+            let (a, b, c) = (pick(0), pick(1), pick(2));
+            let r: Vec<f64> = comp.vertices.iter().map(|&k| s.rhs[k]).collect();
+            let x = solve_cyclic_tridiagonal(&a, &b, &c, &r)?;
+            comp.vertices.iter().zip(x).for_each(|(&k, xi)| v[k] = xi);
+            diags.push([a, b, c]);
+        }
+        self.last = Last::Cyclic(diags);
+        Some(v)
+    }
+
+    /// Sparse LU of the two-ring `S` (fallback of the `H^{-1}` path).
+    fn solve_lu(&mut self, s: SchurMatrix) -> Result<Vec<f64>, FlowError> {
+        let tr = self
+            .two_ring
+            .as_mut()
+            .expect("two-ring pattern built in assemble");
+        if tr.lu.is_none() {
+            tr.lu = Some(
+                SymbolicLu::try_new(tr.symbolic.as_ref())
+                    .map_err(|e| FlowError::Factorization(format!("{e:?}")))?,
+            );
+        }
+        let lu = Lu::try_new_with_symbolic(
+            tr.lu.clone().unwrap(),
+            SparseColMatRef::new(tr.symbolic.as_ref(), &s.values),
+        )
+        .map_err(|e| FlowError::Factorization(format!("{e:?}")))?;
+        let mut v = s.rhs;
+        let n = v.len();
+        lu.solve_in_place(MatMut::from_column_major_slice_mut(&mut v, n, 1));
+        self.last = Last::Lu(Box::new(lu));
+        Ok(v)
     }
 
     /// GMRES on the two-ring `S` with the Cholesky factorization of `P`; `None` if
     /// `P` is not positive definite or GMRES stalls (then LU takes over).
-    fn solve_preconditioned(&mut self, s: &SchurMatrix, p: &[f64]) -> Result<Option<(Vec<f64>, Factor)>, FlowError> {
-        let tr = self.two_ring.as_mut().expect("two-ring pattern built in assemble");
-        if tr.llt.is_none() {
-            let sym = SymbolicLlt::try_new(tr.symbolic.as_ref(), Side::Lower)
-                .map_err(|e| FlowError::Factorization(format!("{e:?}")))?;
-            tr.llt = Some(sym);
+    fn solve_preconditioned<const D: usize>(
+        &mut self,
+        _sys: &LinearSystem<'_, D>,
+        s: &SchurMatrix,
+        p: &[f64],
+    ) -> Result<Option<Vec<f64>>, FlowError> {
+        let tr = self
+            .two_ring
+            .as_mut()
+            .expect("two-ring pattern built in assemble");
+        if tr.chol.is_none() {
+            tr.chol =
+                Some(SparseCholesky::new(tr.symbolic.as_ref()).map_err(FlowError::Factorization)?);
         }
-        let mat = SparseColMatRef::new(tr.symbolic.as_ref(), p);
-        let Ok(llt) = Llt::try_new_with_symbolic(tr.llt.clone().unwrap(), mat, Side::Lower) else {
+        let chol = tr.chol.as_mut().unwrap();
+        if chol.factorize(tr.symbolic.as_ref(), p).is_err() {
             return Ok(None);
-        };
-        let factor = Factor::Llt(llt);
+        }
+        let chol = tr.chol.as_ref().unwrap();
         let mut v = s.rhs.clone();
-        factor.solve_in_place(&mut v);
+        chol.solve_in_place(&mut v);
         let (cp, ri) = (&tr.col_ptr, &tr.row_idx);
         let apply = |x: &[f64], y: &mut [f64]| csc_mul(cp, ri, &s.values, x, y);
-        let out = gmres(apply, |x| factor.solve_in_place(x), &s.rhs, &mut v, 1e-12, 30, 120);
-        Ok(out.converged.then_some((v, factor)))
-    }
-
-    pub(crate) fn assemble<const D: usize>(&mut self, sys: &LinearSystem<'_, D>) -> SchurMatrix {
-        match sys.product {
-            ProductWeights::HMinus1 => self.assemble_h_minus_1(sys),
-            _ => assemble_l2_h1(sys),
+        let out = gmres(
+            apply,
+            |x| chol.solve_in_place(x),
+            &s.rhs,
+            &mut v,
+            1e-12,
+            30,
+            120,
+        );
+        if out.converged {
+            self.last = Last::TwoRingCholesky;
+            Ok(Some(v))
+        } else {
+            Ok(None)
         }
-    }
-
-    pub(crate) fn factorize<const D: usize>(&mut self, sys: &LinearSystem<'_, D>, s: &SchurMatrix) -> Result<Factor, FlowError> {
-        let err = |e: String| FlowError::Factorization(e);
-        if s.two_ring {
-            let tr = self.two_ring.as_mut().expect("two-ring pattern built in assemble");
-            let mat = SparseColMatRef::new(tr.symbolic.as_ref(), &s.values);
-            if tr.lu.is_none() {
-                tr.lu = Some(SymbolicLu::try_new(tr.symbolic.as_ref()).map_err(|e| err(format!("{e:?}")))?);
-            }
-            let lu = Lu::try_new_with_symbolic(tr.lu.clone().unwrap(), mat).map_err(|e| err(format!("{e:?}")))?;
-            return Ok(Factor::Lu(lu));
-        }
-        let sym = sys.pattern.symbolic();
-        let mat = SparseColMatRef::new(sym.as_ref(), &s.values);
-        if s.symmetric {
-            if self.llt.is_none() {
-                self.llt = Some(SymbolicLlt::try_new(sym.as_ref(), Side::Lower).map_err(|e| err(format!("{e:?}")))?);
-            }
-            if let Ok(f) = Llt::try_new_with_symbolic(self.llt.clone().unwrap(), mat, Side::Lower) {
-                return Ok(Factor::Llt(f));
-            }
-            // not positive definite (e.g. τ too large with g < 0): fall back to LU
-        }
-        if self.lu.is_none() {
-            self.lu = Some(SymbolicLu::try_new(sym.as_ref()).map_err(|e| err(format!("{e:?}")))?);
-        }
-        let lu = Lu::try_new_with_symbolic(self.lu.clone().unwrap(), mat).map_err(|e| err(format!("{e:?}")))?;
-        Ok(Factor::Lu(lu))
     }
 
     fn assemble_h_minus_1<const D: usize>(&mut self, sys: &LinearSystem<'_, D>) -> SchurMatrix {
@@ -177,8 +288,15 @@ impl LumpedSolver {
         let n = p.size();
         if self.two_ring.is_none() {
             let (col_ptr, row_idx) = p.squared();
-            let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
-            self.two_ring = Some(TwoRing { col_ptr, row_idx, symbolic, lu: None, llt: None });
+            let symbolic =
+                SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
+            self.two_ring = Some(TwoRing {
+                col_ptr,
+                row_idx,
+                symbolic,
+                lu: None,
+                chol: None,
+            });
         }
         let tr = self.two_ring.as_ref().unwrap();
         let m = &sys.matrices.lumped_mass;
@@ -213,15 +331,70 @@ impl LumpedSolver {
         let mut rhs = vec![0.0; n];
         p.mul(a, &w, &mut rhs);
         rhs.iter_mut().for_each(|r| *r = -*r);
-        SchurMatrix { values, precond: Some(precond), rhs, symmetric: false, two_ring: true }
+        SchurMatrix {
+            values,
+            precond: Some(precond),
+            rhs,
+            symmetric: false,
+        }
     }
+}
+
+/// Cycle order and value positions of every curve component (`D = 2`).
+fn cyclic_components<const D: usize>(sys: &LinearSystem<'_, D>) -> Vec<CyclicComponent> {
+    let p: &Pattern<D> = sys.pattern;
+    let n = p.size();
+    let mut next = vec![usize::MAX; n];
+    for e in sys.mesh.elements() {
+        next[e[0]] = e[1];
+    }
+    // value position of entry (row, col)
+    let at = |row: usize, col: usize| {
+        let r = &p.row_idx()[p.col_ptr()[col]..p.col_ptr()[col + 1]];
+        p.col_ptr()[col] + r.binary_search(&row).expect("neighbour entry in pattern")
+    };
+    let mut seen = vec![false; n];
+    let mut out = Vec::new();
+    for start in 0..n {
+        if seen[start] {
+            continue;
+        }
+        let mut vertices = Vec::new();
+        let mut v = start;
+        while !seen[v] {
+            seen[v] = true;
+            vertices.push(v);
+            v = next[v];
+        }
+        let m = vertices.len();
+        let positions = (0..m)
+            .map(|k| {
+                let (prev, cur, nxt) = (
+                    vertices[(k + m - 1) % m],
+                    vertices[k],
+                    vertices[(k + 1) % m],
+                );
+                [at(cur, prev), p.diag()[cur], at(cur, nxt)]
+            })
+            .collect();
+        out.push(CyclicComponent {
+            vertices,
+            positions,
+        });
+    }
+    out
 }
 
 fn assemble_l2_h1<const D: usize>(sys: &LinearSystem<'_, D>) -> SchurMatrix {
     let p = sys.pattern;
     let mx = sys.matrices;
     let n = p.size();
-    let (m, mh, nn, a) = (&mx.lumped_mass, &mx.scalar_mass, &mx.lumped_normal, &mx.stiffness);
+    let (m, mh, nn, a) = (
+        &mx.lumped_mass,
+        &mx.scalar_mass,
+        &mx.lumped_normal,
+        &mx.stiffness,
+    );
     let (mut values, beta) = match sys.product {
         ProductWeights::H1 { alpha, beta } => (
             mx.weighted_stiffness(sys.mesh, p, alpha),
@@ -229,15 +402,26 @@ fn assemble_l2_h1<const D: usize>(sys: &LinearSystem<'_, D>) -> SchurMatrix {
         ),
         _ => (vec![0.0; p.nnz()], vec![1.0; n]),
     };
+    // u_i = N⃗_i / m_i, so that S_ij += τ g_i (u_i·u_j) A_ij
+    let u: Vec<_> = nn.iter().zip(m).map(|(ni, mi)| ni / *mi).collect();
+    let tg: Vec<f64> = sys.g.iter().map(|g| sys.tau * g).collect();
     for j in 0..n {
         values[p.diag()[j]] += beta[j] * mh[j];
+        let uj = u[j];
         for k in p.col_ptr()[j]..p.col_ptr()[j + 1] {
             let i = p.row_idx()[k];
-            values[k] += sys.tau * sys.g[i] * nn[i].dot(&nn[j]) * a[k] / (m[i] * m[j]);
+            values[k] += tg[i] * u[i].dot(&uj) * a[k];
         }
     }
-    let rhs = (0..n).map(|i| -mh[i] * sys.f[i] - sys.g[i] * nn[i].dot(&sys.ax[i]) / m[i]).collect();
+    let rhs = (0..n)
+        .map(|i| -mh[i] * sys.f[i] - sys.g[i] * u[i].dot(&sys.ax[i]))
+        .collect();
     let g0 = sys.g[0];
     let symmetric = g0 >= 0.0 && sys.g.iter().all(|&g| g == g0);
-    SchurMatrix { values, precond: None, rhs, symmetric, two_ring: false }
+    SchurMatrix {
+        values,
+        precond: None,
+        rhs,
+        symmetric,
+    }
 }

@@ -3,7 +3,9 @@
 //! geometric time-step control, backtracking and the driver loop.
 
 mod checkpoint;
+mod cholesky;
 mod consistent;
+mod cyclic;
 mod driver;
 mod error;
 mod gmres;
@@ -12,11 +14,13 @@ mod problem;
 mod step;
 mod system;
 
+pub use cholesky::SparseCholesky;
 pub use consistent::ConsistentSolver;
+pub use cyclic::solve_cyclic_tridiagonal;
 pub use driver::{Checkpoint, Flow, FlowSettings, MeshData, Progress, StepReport, StopReason};
 pub use error::FlowError;
 pub use gmres::{gmres, GmresOutcome};
-pub use lumped::{Factor, LumpedSolver};
+pub use lumped::LumpedSolver;
 pub use problem::{H1Weights, Problem, ProblemError, ShapeGradient, SurfaceState};
 pub use step::{SemiImplicitStep, SolverKind, Velocity};
-pub use system::{LinearSystem, ScalarProduct, ProductWeights};
+pub use system::{LinearSystem, ProductWeights, ScalarProduct};

@@ -33,7 +33,11 @@ pub struct SemiImplicitStep {
 
 impl SemiImplicitStep {
     pub fn new(kind: SolverKind) -> Self {
-        SemiImplicitStep { kind, lumped: LumpedSolver::new(), consistent: ConsistentSolver::new() }
+        SemiImplicitStep {
+            kind,
+            lumped: LumpedSolver::new(),
+            consistent: ConsistentSolver::new(),
+        }
     }
 
     pub fn kind(&self) -> SolverKind {
@@ -47,10 +51,13 @@ impl SemiImplicitStep {
     }
 
     /// Solve the linearized system (74) for `V` and `V⃗`.
-    pub fn velocity<const D: usize>(&mut self, sys: &LinearSystem<'_, D>) -> Result<Velocity<D>, FlowError> {
+    pub fn velocity<const D: usize>(
+        &mut self,
+        sys: &LinearSystem<'_, D>,
+    ) -> Result<Velocity<D>, FlowError> {
         let (normal, vector) = match self.kind {
             SolverKind::Lumped => {
-                let (v, _) = self.lumped.solve(sys)?;
+                let v = self.lumped.solve(sys)?;
                 let m = &sys.matrices.lumped_mass;
                 let nn = &sys.matrices.lumped_normal;
                 let vec = (0..v.len()).map(|i| nn[i] * (v[i] / m[i])).collect();

@@ -27,12 +27,16 @@ impl<const D: usize> Mesh<D> {
 
     /// Measure of Γ itself: perimeter (2D) or surface area (3D), `Σ_T |T|`.
     pub fn boundary_measure(&self) -> f64 {
-        (0..self.num_elements()).map(|e| self.element_geometry(e).0).sum()
+        (0..self.num_elements())
+            .map(|e| self.element_geometry(e).0)
+            .sum()
     }
 
     /// Unit outward normal `ν_T` of every element (`#E × D`).
     pub fn element_normals(&self) -> Vec<Point<D>> {
-        (0..self.num_elements()).map(|e| self.element_geometry(e).1).collect()
+        (0..self.num_elements())
+            .map(|e| self.element_geometry(e).1)
+            .collect()
     }
 
     /// Unit vertex normals: the normalized lumped `N⃗_i = ∫_Γ φ_i ν = Σ_{T∋i} |T| ν_T / D`.

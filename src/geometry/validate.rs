@@ -22,7 +22,11 @@ pub(super) fn validate<const D: usize>(
     for (e, el) in elements.iter().enumerate() {
         for &index in el {
             if index >= n {
-                return Err(MeshError::IndexOutOfRange { element: e, index, count: n });
+                return Err(MeshError::IndexOutOfRange {
+                    element: e,
+                    index,
+                    count: n,
+                });
             }
             used[index] = true;
         }
@@ -54,7 +58,10 @@ pub(super) fn validate<const D: usize>(
     match D {
         2 => {
             validate_curve(n, elements)?;
-            let pts: Vec<Point<2>> = positions.iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
+            let pts: Vec<Point<2>> = positions
+                .iter()
+                .map(|p| Point::<2>::new(p[0], p[1]))
+                .collect();
             let segs: Vec<[usize; 2]> = elements.iter().map(|e| [e[0], e[1]]).collect();
             if let Some(h) = super::find_segment_intersections(&pts, &segs).first() {
                 return Err(MeshError::SelfIntersection { a: h.a, b: h.b });
@@ -69,7 +76,10 @@ pub(super) fn validate<const D: usize>(
         .sum();
     if enclosed <= 0.0 {
         let what = if D == 2 { "area" } else { "volume" };
-        return Err(MeshError::InwardOrientation { what, value: enclosed });
+        return Err(MeshError::InwardOrientation {
+            what,
+            value: enclosed,
+        });
     }
     Ok(())
 }

@@ -14,7 +14,10 @@ pub struct SpecError {
 
 impl SpecError {
     pub fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
-        SpecError { field: field.into(), message: message.into() }
+        SpecError {
+            field: field.into(),
+            message: message.into(),
+        }
     }
 }
 
@@ -141,7 +144,9 @@ pub enum InitialSpec {
     },
     /// An uploaded mesh: `"input:NAME"` (OBJ, OFF or STL; closed curves as OBJ `l`
     /// polylines in the plane).
-    Mesh { file: String },
+    Mesh {
+        file: String,
+    },
 }
 
 /// `flow`: time stepping and the descent direction. Every field is optional.
@@ -175,7 +180,11 @@ pub struct MeshSpec {
 
 impl Default for MeshSpec {
     fn default() -> Self {
-        MeshSpec { regularize: true, adapt: true, topology_changes: true }
+        MeshSpec {
+            regularize: true,
+            adapt: true,
+            topology_changes: true,
+        }
     }
 }
 
@@ -189,19 +198,27 @@ pub struct OutputSpec {
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        OutputSpec { checkpoint_every: 10 }
+        OutputSpec {
+            checkpoint_every: 10,
+        }
     }
 }
 
 const PLANNED: [(&str, &str); 2] = [
-    ("segmentation", "image segmentation is not available yet in this version"),
-    ("shape_design", "optimal shape design is not available yet in this version"),
+    (
+        "segmentation",
+        "image segmentation is not available yet in this version",
+    ),
+    (
+        "shape_design",
+        "optimal shape design is not available yet in this version",
+    ),
 ];
 
 /// Parse a spec from JSON text. Errors name the field path.
 pub fn parse_spec(text: &str) -> Result<JobSpec, SpecError> {
-    let value: serde_json::Value =
-        serde_json::from_str(text).map_err(|e| SpecError::new("(document)", format!("malformed JSON: {e}")))?;
+    let value: serde_json::Value = serde_json::from_str(text)
+        .map_err(|e| SpecError::new("(document)", format!("malformed JSON: {e}")))?;
     if let Some(t) = value.pointer("/problem/type").and_then(|t| t.as_str()) {
         if let Some((_, msg)) = PLANNED.iter().find(|(name, _)| *name == t) {
             return Err(SpecError::new("problem.type", format!("`{t}`: {msg}")));
@@ -209,7 +226,11 @@ pub fn parse_spec(text: &str) -> Result<JobSpec, SpecError> {
     }
     let spec: JobSpec = serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
-        let field = if path == "." || path.is_empty() { "(document)".to_string() } else { path };
+        let field = if path == "." || path.is_empty() {
+            "(document)".to_string()
+        } else {
+            path
+        };
         SpecError::new(field, e.into_inner().to_string())
     })?;
     Ok(spec)
