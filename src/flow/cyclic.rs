@@ -11,6 +11,28 @@ pub(crate) struct CyclicComponent {
     pub positions: Vec<[usize; 3]>,
 }
 
+/// `x ← T⁻¹ x` per component; false on a zero pivot (then `x` is unspecified).
+pub(crate) fn cyclic_solve_checked(
+    comps: &[CyclicComponent],
+    diags: &[[Vec<f64>; 3]],
+    x: &mut [f64],
+) -> bool {
+    for (comp, [a, b, c]) in comps.iter().zip(diags) {
+        let r: Vec<f64> = comp.vertices.iter().map(|&v| x[v]).collect();
+        match solve_cyclic_tridiagonal(a, b, c, &r) {
+            Some(y) => comp.vertices.iter().zip(y).for_each(|(&v, yi)| x[v] = yi),
+            None => return false,
+        }
+    }
+    true
+}
+
+/// [`cyclic_solve_checked`] for a preconditioner (a zero pivot cannot occur for a
+/// matrix that was solved before).
+pub(crate) fn cyclic_solve(comps: &[CyclicComponent], diags: &[[Vec<f64>; 3]], x: &mut [f64]) {
+    cyclic_solve_checked(comps, diags, x);
+}
+
 /// Solve `T x = r` for the cyclic tridiagonal `T` with sub-diagonal `a` (`a_k` at
 /// column `k−1 mod n`), diagonal `b` and super-diagonal `c` (`c_k` at `k+1 mod n`).
 /// Returns `None` on a (near) zero pivot; `n ≥ 3`.

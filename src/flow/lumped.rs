@@ -29,18 +29,15 @@
 //! Finally `V⃗_i = N⃗_i V_i / m_i`. `S` is symmetric positive definite when `g` is a
 //! nonnegative constant in the L2/H1 case (Cholesky); otherwise LU is used.
 //!
-//! The `H^{-1}` complement is not symmetric (`Q ≠ A`), but `Q = A + E` with `E`
-//! of the size of `κ² M`: it is solved by GMRES right-preconditioned with the
-//! Cholesky factorization of the symmetric `P = M̂ + τ ḡ A M̂⁻¹ A` (same two-ring
-//! pattern, `ḡ` the mean of `|g|`), which converges in a few iterations to 1e-12;
-//! sparse LU of `S` is the fallback.
+//! The `H^{-1}` complement has a two-ring stencil and is not symmetric; see
+//! [`super::h_minus_1`] for its preconditioned iterative solve (sparse LU of the
+//! assembled `S` is the fallback).
 
 use super::cholesky::SparseCholesky;
-use super::cyclic::{solve_cyclic_tridiagonal, CyclicComponent};
-use super::gmres::gmres;
+use super::cyclic::{cyclic_solve, cyclic_solve_checked, CyclicComponent};
 use super::system::{LinearSystem, ProductWeights};
 use super::FlowError;
-use crate::fem::{csc_mul, Pattern};
+use crate::fem::Pattern;
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
@@ -52,28 +49,32 @@ struct TwoRing {
     row_idx: Vec<usize>,
     symbolic: SymbolicSparseColMat<usize>,
     lu: Option<SymbolicLu<usize>>,
-    chol: Option<SparseCholesky>,
 }
 
 /// Which factorization the last solve used.
-enum Last {
+pub(super) enum Last {
     None,
     OneRingCholesky,
-    TwoRingCholesky,
     Lu(Box<Lu<usize, f64>>),
     /// The curve complement's three diagonals per component (re-solved per use).
     Cyclic(Vec<[Vec<f64>; 3]>),
+    /// `H^{-1}`: `P̃⁻¹ = B⁻¹ M̂ B⁻¹` with `B = M̂ + sA` factorized (one-ring
+    /// Cholesky, or cyclic diagonals on curves).
+    HMinus1 {
+        scalar_mass: Vec<f64>,
+        cyclic: Option<Vec<[Vec<f64>; 3]>>,
+    },
 }
 
 /// Stateful lumped Schur solver: keeps the symbolic factorizations (and numeric
 /// workspaces) for one connectivity. Call [`LumpedSolver::reset`] when the
 /// connectivity changes.
 pub struct LumpedSolver {
-    cycles: Option<Vec<CyclicComponent>>,
-    chol: Option<SparseCholesky>,
+    pub(super) cycles: Option<Vec<CyclicComponent>>,
+    pub(super) chol: Option<SparseCholesky>,
     lu: Option<SymbolicLu<usize>>,
     two_ring: Option<TwoRing>,
-    last: Last,
+    pub(super) last: Last,
 }
 
 impl Default for LumpedSolver {
@@ -91,8 +92,6 @@ impl Default for LumpedSolver {
 /// Assembled lumped Schur complement: values on a pattern plus right-hand side.
 pub(crate) struct SchurMatrix {
     pub values: Vec<f64>,
-    /// Values of the SPD preconditioner `P` (two-ring case only).
-    pub precond: Option<Vec<f64>>,
     pub rhs: Vec<f64>,
     pub symmetric: bool,
 }
@@ -112,16 +111,14 @@ impl LumpedSolver {
         &mut self,
         sys: &LinearSystem<'_, D>,
     ) -> Result<Vec<f64>, FlowError> {
-        let s = match sys.product {
-            ProductWeights::HMinus1 => self.assemble_h_minus_1(sys),
-            _ => assemble_l2_h1(sys),
-        };
-        if let Some(p) = &s.precond {
-            if let Some(v) = self.solve_preconditioned(sys, &s, p)? {
+        if let ProductWeights::HMinus1 = sys.product {
+            if let Some(v) = self.solve_h_minus_1(sys)? {
                 return Ok(v);
             }
+            let s = self.assemble_h_minus_1(sys);
             return self.solve_lu(s);
         }
+        let s = assemble_l2_h1(sys);
         if D == 2 {
             if let Some(v) = self.solve_cyclic(sys, &s) {
                 return Ok(v);
@@ -166,27 +163,27 @@ impl LumpedSolver {
         match &self.last {
             Last::None => {}
             Last::OneRingCholesky => self.chol.as_ref().unwrap().solve_in_place(x),
-            Last::TwoRingCholesky => self
-                .two_ring
-                .as_ref()
-                .unwrap()
-                .chol
-                .as_ref()
-                .unwrap()
-                .solve_in_place(x),
+            Last::HMinus1 {
+                scalar_mass,
+                cyclic,
+            } => {
+                self.solve_b(cyclic.as_deref(), x);
+                x.iter_mut().zip(scalar_mass).for_each(|(xi, m)| *xi *= m);
+                self.solve_b(cyclic.as_deref(), x);
+            }
             Last::Lu(lu) => {
                 let n = x.len();
                 lu.solve_in_place(MatMut::from_column_major_slice_mut(x, n, 1));
             }
-            Last::Cyclic(diags) => {
-                let comps = self.cycles.as_ref().unwrap();
-                for (comp, [a, b, c]) in comps.iter().zip(diags) {
-                    let r: Vec<f64> = comp.vertices.iter().map(|&v| x[v]).collect();
-                    if let Some(y) = solve_cyclic_tridiagonal(a, b, c, &r) {
-                        comp.vertices.iter().zip(y).for_each(|(&v, yi)| x[v] = yi);
-                    }
-                }
-            }
+            Last::Cyclic(diags) => cyclic_solve(self.cycles.as_ref().unwrap(), diags, x),
+        }
+    }
+
+    /// `x ← B⁻¹ x` for the factorized one-ring `B` (cyclic diagonals or Cholesky).
+    pub(super) fn solve_b(&self, cyclic: Option<&[[Vec<f64>; 3]]>, x: &mut [f64]) {
+        match cyclic {
+            Some(diags) => cyclic_solve(self.cycles.as_ref().unwrap(), diags, x),
+            None => self.chol.as_ref().unwrap().solve_in_place(x),
         }
     }
 
@@ -197,24 +194,29 @@ impl LumpedSolver {
         sys: &LinearSystem<'_, D>,
         s: &SchurMatrix,
     ) -> Option<Vec<f64>> {
-        let comps = self.cycles.get_or_insert_with(|| cyclic_components(sys));
-        let mut v = vec![0.0; s.rhs.len()];
-        let mut diags = Vec::with_capacity(comps.len());
-        for comp in comps.iter() {
-            let pick = |j: usize| {
-                comp.positions
-                    .iter()
-                    .map(|p| s.values[p[j]])
-                    .collect::<Vec<f64>>()
-            };
-            let (a, b, c) = (pick(0), pick(1), pick(2));
-            let r: Vec<f64> = comp.vertices.iter().map(|&k| s.rhs[k]).collect();
-            let x = solve_cyclic_tridiagonal(&a, &b, &c, &r)?;
-            comp.vertices.iter().zip(x).for_each(|(&k, xi)| v[k] = xi);
-            diags.push([a, b, c]);
+        let diags = self.cyclic_diagonals(sys, &s.values);
+        let mut v = s.rhs.clone();
+        if !cyclic_solve_checked(self.cycles.as_ref().unwrap(), &diags, &mut v) {
+            return None;
         }
         self.last = Last::Cyclic(diags);
         Some(v)
+    }
+
+    /// The three diagonals, per curve component, of a matrix with `values` on the
+    /// one-ring pattern.
+    pub(super) fn cyclic_diagonals<const D: usize>(
+        &mut self,
+        sys: &LinearSystem<'_, D>,
+        values: &[f64],
+    ) -> Vec<[Vec<f64>; 3]> {
+        let comps = self.cycles.get_or_insert_with(|| cyclic_components(sys));
+        comps
+            .iter()
+            .map(|comp| {
+                std::array::from_fn(|j| comp.positions.iter().map(|p| values[p[j]]).collect())
+            })
+            .collect()
     }
 
     /// Sparse LU of the two-ring `S` (fallback of the `H^{-1}` path).
@@ -241,48 +243,6 @@ impl LumpedSolver {
         Ok(v)
     }
 
-    /// GMRES on the two-ring `S` with the Cholesky factorization of `P`; `None` if
-    /// `P` is not positive definite or GMRES stalls (then LU takes over).
-    fn solve_preconditioned<const D: usize>(
-        &mut self,
-        _sys: &LinearSystem<'_, D>,
-        s: &SchurMatrix,
-        p: &[f64],
-    ) -> Result<Option<Vec<f64>>, FlowError> {
-        let tr = self
-            .two_ring
-            .as_mut()
-            .expect("two-ring pattern built in assemble");
-        if tr.chol.is_none() {
-            tr.chol =
-                Some(SparseCholesky::new(tr.symbolic.as_ref()).map_err(FlowError::Factorization)?);
-        }
-        let chol = tr.chol.as_mut().unwrap();
-        if chol.factorize(tr.symbolic.as_ref(), p).is_err() {
-            return Ok(None);
-        }
-        let chol = tr.chol.as_ref().unwrap();
-        let mut v = s.rhs.clone();
-        chol.solve_in_place(&mut v);
-        let (cp, ri) = (&tr.col_ptr, &tr.row_idx);
-        let apply = |x: &[f64], y: &mut [f64]| csc_mul(cp, ri, &s.values, x, y);
-        let out = gmres(
-            apply,
-            |x| chol.solve_in_place(x),
-            &s.rhs,
-            &mut v,
-            1e-12,
-            30,
-            120,
-        );
-        if out.converged {
-            self.last = Last::TwoRingCholesky;
-            Ok(Some(v))
-        } else {
-            Ok(None)
-        }
-    }
-
     fn assemble_h_minus_1<const D: usize>(&mut self, sys: &LinearSystem<'_, D>) -> SchurMatrix {
         let p = sys.pattern;
         let n = p.size();
@@ -295,7 +255,6 @@ impl LumpedSolver {
                 row_idx,
                 symbolic,
                 lu: None,
-                chol: None,
             });
         }
         let tr = self.two_ring.as_ref().unwrap();
@@ -305,23 +264,18 @@ impl LumpedSolver {
         let a = &sys.matrices.stiffness;
         let (cp, ri) = (p.col_ptr(), p.row_idx());
         let mut values = vec![0.0; tr.row_idx.len()];
-        let mut precond = vec![0.0; tr.row_idx.len()];
-        let gbar = sys.g.iter().map(|g| g.abs()).sum::<f64>() / n as f64;
         let mut pos = vec![usize::MAX; n];
         for k in 0..n {
             for q in tr.col_ptr[k]..tr.col_ptr[k + 1] {
                 pos[tr.row_idx[q]] = q;
             }
             values[pos[k]] += mh[k];
-            precond[pos[k]] += mh[k];
             for pj in cp[k]..cp[k + 1] {
                 let j = ri[pj];
                 // τ (g_j / m̂_j) Q_jk
                 let qjk = sys.tau * sys.g[j] / mh[j] * a[pj] * nn[j].dot(&nn[k]) / (m[j] * m[k]);
-                let pjk = sys.tau * gbar / mh[j] * a[pj];
                 for pi in cp[j]..cp[j + 1] {
                     values[pos[ri[pi]]] += a[pi] * qjk;
-                    precond[pos[ri[pi]]] += a[pi] * pjk;
                 }
             }
         }
@@ -333,7 +287,6 @@ impl LumpedSolver {
         rhs.iter_mut().for_each(|r| *r = -*r);
         SchurMatrix {
             values,
-            precond: Some(precond),
             rhs,
             symmetric: false,
         }
@@ -420,7 +373,6 @@ fn assemble_l2_h1<const D: usize>(sys: &LinearSystem<'_, D>) -> SchurMatrix {
     let symmetric = g0 >= 0.0 && sys.g.iter().all(|&g| g == g0);
     SchurMatrix {
         values,
-        precond: None,
         rhs,
         symmetric,
     }

@@ -9,6 +9,7 @@ mod cyclic;
 mod driver;
 mod error;
 mod gmres;
+mod h_minus_1;
 mod lumped;
 mod problem;
 mod step;

@@ -1,0 +1,104 @@
+//! The lumped `H^{-1}` step (surface diffusion) solved without assembling its
+//! two-ring Schur complement.
+//!
+//! With `s = √(τ ḡ)` (`ḡ` the mean of `|g|`) and `B = M̂ + s A` (one-ring, SPD), the
+//! matrix `P̃ = B M̂⁻¹ B = M̂ + 2sA + s² A M̂⁻¹ A` is spectrally equivalent to
+//! `S = M̂ + τ A diag(g/m̂) Q` up to a factor 2 (for each eigenmode of `M̂⁻¹A` with
+//! eigenvalue λ, `(1 + sλ)² / (1 + s²λ²) ∈ [1, 2]`), and `Q = A + O(κ² M)`. GMRES
+//! on `S`, applied matrix-free as `S v = m̂ ∘ v + τ A ((g/m̂) ∘ (Q v))`, with the
+//! right preconditioner `P̃⁻¹ = B⁻¹ M̂ B⁻¹` therefore converges in a few iterations,
+//! at the cost of one one-ring factorization of `B` per step (a cyclic tridiagonal
+//! solve on curves): the same order of work as an L2 step.
+
+use super::cyclic::cyclic_solve_checked;
+use super::gmres::gmres;
+use super::lumped::{Last, LumpedSolver};
+use super::system::LinearSystem;
+use super::{FlowError, SparseCholesky};
+
+impl LumpedSolver {
+    /// `Some(V)`, or `None` if `B` could not be factorized or GMRES stalled (the
+    /// caller then factorizes the assembled two-ring `S` by sparse LU).
+    pub(super) fn solve_h_minus_1<const D: usize>(
+        &mut self,
+        sys: &LinearSystem<'_, D>,
+    ) -> Result<Option<Vec<f64>>, FlowError> {
+        let p = sys.pattern;
+        let mx = sys.matrices;
+        let n = p.size();
+        let (m, mh, nn, a) = (
+            &mx.lumped_mass,
+            &mx.scalar_mass,
+            &mx.lumped_normal,
+            &mx.stiffness,
+        );
+        let u: Vec<_> = nn.iter().zip(m).map(|(ni, mi)| ni / *mi).collect();
+        // Q on the one-ring pattern, and B = M̂ + sA
+        let gbar = sys.g.iter().map(|g| g.abs()).sum::<f64>() / n as f64;
+        let s = (sys.tau * gbar).sqrt();
+        let mut q = vec![0.0; p.nnz()];
+        let mut b: Vec<f64> = a.iter().map(|x| s * x).collect();
+        for j in 0..n {
+            b[p.diag()[j]] += mh[j];
+            for k in p.col_ptr()[j]..p.col_ptr()[j + 1] {
+                q[k] = a[k] * u[p.row_idx()[k]].dot(&u[j]);
+            }
+        }
+        let cyclic = if D == 2 {
+            Some(self.cyclic_diagonals(sys, &b))
+        } else {
+            None
+        };
+        if cyclic.is_none() {
+            let sym = p.symbolic().as_ref();
+            if self.chol.is_none() {
+                self.chol = Some(SparseCholesky::new(sym).map_err(FlowError::Factorization)?);
+            }
+            if self.chol.as_mut().unwrap().factorize(sym, &b).is_err() {
+                return Ok(None);
+            }
+        }
+        // right-hand side −A (f + g κ⁰), κ⁰_j = N⃗_j·(A X)_j / |N⃗_j|²
+        let w: Vec<f64> = (0..n)
+            .map(|j| sys.f[j] + sys.g[j] * nn[j].dot(&sys.ax[j]) / nn[j].norm_squared())
+            .collect();
+        let mut rhs = vec![0.0; n];
+        p.mul(a, &w, &mut rhs);
+        rhs.iter_mut().for_each(|r| *r = -*r);
+
+        let scale: Vec<f64> = (0..n).map(|j| sys.tau * sys.g[j] / mh[j]).collect();
+        let mut t = vec![0.0; n];
+        let apply = |v: &[f64], out: &mut [f64]| {
+            p.mul(&q, v, &mut t);
+            t.iter_mut().zip(&scale).for_each(|(ti, sc)| *ti *= sc);
+            p.mul(a, &t, out);
+            out.iter_mut()
+                .zip(mh)
+                .zip(v)
+                .for_each(|((o, mi), vi)| *o += mi * vi);
+        };
+        let comps = self.cycles.clone();
+        let chol = self.chol.as_ref();
+        let mut ok = true;
+        let mut solve_b = |x: &mut [f64]| match &cyclic {
+            Some(d) => ok &= cyclic_solve_checked(comps.as_deref().unwrap(), d, x),
+            None => chol.unwrap().solve_in_place(x),
+        };
+        let mut precondition = |x: &mut [f64]| {
+            solve_b(x);
+            x.iter_mut().zip(mh).for_each(|(xi, mi)| *xi *= mi);
+            solve_b(x);
+        };
+        let mut v = rhs.clone();
+        precondition(&mut v);
+        let out = gmres(apply, &mut precondition, &rhs, &mut v, 1e-10, 40, 400);
+        if !(out.converged && ok) {
+            return Ok(None);
+        }
+        self.last = Last::HMinus1 {
+            scalar_mass: mh.clone(),
+            cyclic,
+        };
+        Ok(Some(v))
+    }
+}
