@@ -321,16 +321,32 @@ fn resuming_from_a_checkpoint_reproduces_the_uninterrupted_run() {
 
 #[test]
 fn stop_reasons_converged_cancelled_and_tau_min() {
-    let problem = AreaTarget { target: 2.0 * std::f64::consts::PI, eps: 0.1 };
+    let problem = AreaTarget {
+        target: 2.0 * std::f64::consts::PI,
+        eps: 0.1,
+    };
     let start = || circle([0.0, 0.0], 1.0, 64).unwrap();
     // converged: relative energy change below the tolerance
-    let s = FlowSettings { tau: 0.05, tolerance: 1e-9, max_iterations: 5000, ..FlowSettings::default() };
+    let s = FlowSettings {
+        tau: 0.05,
+        tolerance: 1e-9,
+        max_iterations: 5000,
+        ..FlowSettings::default()
+    };
     let mut flow = Flow::new(&problem, start(), s).unwrap();
-    assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::Converged);
+    assert_eq!(
+        flow.run(&AtomicBool::new(false), |_| {}).unwrap(),
+        StopReason::Converged
+    );
     assert!(flow.iteration() < 5000);
     // cancelled: the flag is checked before every step
     let cancel = AtomicBool::new(false);
-    let s = FlowSettings { tau: 1e-3, tolerance: 0.0, max_iterations: 100, ..FlowSettings::default() };
+    let s = FlowSettings {
+        tau: 1e-3,
+        tolerance: 0.0,
+        max_iterations: 100,
+        ..FlowSettings::default()
+    };
     let mut flow = Flow::new(&problem, start(), s).unwrap();
     let stop = flow
         .run(&cancel, |f| {
@@ -341,13 +357,29 @@ fn stop_reasons_converged_cancelled_and_tau_min() {
         .unwrap();
     assert_eq!((stop, flow.iteration()), (StopReason::Cancelled, 5));
     // tau_min: every admissible τ overshoots
-    let s = FlowSettings { tau: 1.0, tau_min: 0.5, tolerance: 0.0, ..FlowSettings::default() };
+    let s = FlowSettings {
+        tau: 1.0,
+        tau_min: 0.5,
+        tolerance: 0.0,
+        ..FlowSettings::default()
+    };
     let mut flow = Flow::new(&problem, start(), s).unwrap();
-    assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::TauMin);
+    assert_eq!(
+        flow.run(&AtomicBool::new(false), |_| {}).unwrap(),
+        StopReason::TauMin
+    );
     assert_eq!(flow.iteration(), 0);
     // max_iterations
-    let s = FlowSettings { tau: 1e-3, tolerance: 0.0, max_iterations: 7, ..FlowSettings::default() };
+    let s = FlowSettings {
+        tau: 1e-3,
+        tolerance: 0.0,
+        max_iterations: 7,
+        ..FlowSettings::default()
+    };
     let mut flow = Flow::new(&problem, start(), s).unwrap();
-    assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::MaxIterations);
+    assert_eq!(
+        flow.run(&AtomicBool::new(false), |_| {}).unwrap(),
+        StopReason::MaxIterations
+    );
     assert_eq!(flow.iteration(), 7);
 }

@@ -9,16 +9,18 @@ use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Par, Side};
 
-/// `L Lᵀ` of a symmetric positive definite matrix with a fixed pattern.
-pub struct SparseCholesky {
+/// `L Lᵀ` of a symmetric positive definite matrix with a fixed pattern, in `f64`
+/// (or `f32`, for preconditioners: half the memory traffic).
+pub struct SparseCholesky<T = f64> {
     symbolic: SymbolicCholesky<usize>,
-    values: Vec<f64>,
+    values: Vec<T>,
     scratch: MemBuffer,
 }
 
-impl SparseCholesky {
+impl<T: ComplexField + Copy> SparseCholesky<T> {
     /// Symbolic factorization of the pattern (lower triangle is read).
     pub fn new(pattern: SymbolicSparseColMatRef<'_, usize>) -> Result<Self, String> {
         let symbolic = factorize_symbolic_cholesky(
@@ -29,10 +31,10 @@ impl SparseCholesky {
         )
         .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
         let req = symbolic
-            .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
-            .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+            .factorize_numeric_llt_scratch::<T>(Par::Seq, Default::default())
+            .or(symbolic.solve_in_place_scratch::<T>(1, Par::Seq));
         let scratch = MemBuffer::try_new(req).map_err(|e| format!("{e:?}"))?;
-        let values = vec![0.0; symbolic.len_val()];
+        let values = vec![T::zero_impl(); symbolic.len_val()];
         Ok(SparseCholesky {
             symbolic,
             values,
@@ -49,11 +51,11 @@ impl SparseCholesky {
     pub fn factorize(
         &mut self,
         pattern: SymbolicSparseColMatRef<'_, usize>,
-        values: &[f64],
+        values: &[T],
     ) -> Result<(), String> {
         let a = SparseColMatRef::new(pattern, values);
         self.symbolic
-            .factorize_numeric_llt::<f64>(
+            .factorize_numeric_llt::<T>(
                 &mut self.values,
                 a,
                 Side::Lower,
@@ -67,9 +69,9 @@ impl SparseCholesky {
     }
 
     /// Solve `A x = b` in place (after [`SparseCholesky::factorize`]).
-    pub fn solve_in_place(&self, x: &mut [f64]) {
+    pub fn solve_in_place(&self, x: &mut [T]) {
         let n = x.len();
-        let mut buf = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+        let mut buf = MemBuffer::new(self.symbolic.solve_in_place_scratch::<T>(1, Par::Seq));
         LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
             Conj::No,
             MatMut::from_column_major_slice_mut(x, n, 1),

@@ -72,6 +72,8 @@ pub(super) enum Last {
 pub struct LumpedSolver {
     pub(super) cycles: Option<Vec<CyclicComponent>>,
     pub(super) chol: Option<SparseCholesky>,
+    /// Single-precision factorization of `B` for the `H^{-1}` preconditioner.
+    pub(super) chol32: Option<SparseCholesky<f32>>,
     lu: Option<SymbolicLu<usize>>,
     two_ring: Option<TwoRing>,
     pub(super) last: Last,
@@ -82,6 +84,7 @@ impl Default for LumpedSolver {
         LumpedSolver {
             cycles: None,
             chol: None,
+            chol32: None,
             lu: None,
             two_ring: None,
             last: Last::None,
@@ -183,7 +186,7 @@ impl LumpedSolver {
     pub(super) fn solve_b(&self, cyclic: Option<&[[Vec<f64>; 3]]>, x: &mut [f64]) {
         match cyclic {
             Some(diags) => cyclic_solve(self.cycles.as_ref().unwrap(), diags, x),
-            None => self.chol.as_ref().unwrap().solve_in_place(x),
+            None => solve_f32(self.chol32.as_ref().unwrap(), x),
         }
     }
 
@@ -291,6 +294,14 @@ impl LumpedSolver {
             symmetric: false,
         }
     }
+}
+
+/// `x ← B⁻¹ x` with a single-precision factorization (a preconditioner: the outer
+/// iteration works in double precision).
+pub(super) fn solve_f32(chol: &SparseCholesky<f32>, x: &mut [f64]) {
+    let mut y: Vec<f32> = x.iter().map(|&v| v as f32).collect();
+    chol.solve_in_place(&mut y);
+    x.iter_mut().zip(&y).for_each(|(xi, &yi)| *xi = yi as f64);
 }
 
 /// Cycle order and value positions of every curve component (`D = 2`).
