@@ -2,6 +2,7 @@
 //! validated constructors, built-in shapes and measures. Topology (the element list)
 //! is kept apart from positions; derived quantities are computed on request.
 
+mod curve_remesh;
 mod curves;
 mod intersect;
 mod measures;
@@ -10,6 +11,7 @@ pub mod simplex;
 mod surfaces;
 mod validate;
 
+pub use curve_remesh::{adapt_curve, regularize_curve, resolve_intersections, CurveRemeshSettings};
 pub use curves::{circle, ellipse, polygon, rectangle, union};
 pub use intersect::{find_segment_intersections, SegmentHit};
 pub use measures::MeshQuality;
