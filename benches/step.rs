@@ -39,12 +39,7 @@ fn case<const D: usize>(mesh: &Mesh<D>, product: &str) -> f64 {
     let n = mesh.num_vertices();
     if product == "floor" {
         let m = Matrices::assemble(mesh, &pattern);
-        let vals: Vec<f64> = m
-            .stiffness
-            .iter()
-            .zip(&m.mass)
-            .map(|(a, b)| a + b)
-            .collect();
+        let vals: Vec<f64> = m.stiffness.iter().zip(&m.mass).map(|(a, b)| a + b).collect();
         let sym = pattern.symbolic().as_ref();
         let mut chol = SparseCholesky::new(sym).unwrap();
         return time_it(0.5, || {
@@ -56,10 +51,7 @@ fn case<const D: usize>(mesh: &Mesh<D>, product: &str) -> f64 {
     }
     let weights = match product {
         "l2" => ProductWeights::L2,
-        "h1" => ProductWeights::H1 {
-            alpha: Weight::Constant(1e-2),
-            beta: Weight::Constant(1.0),
-        },
+        "h1" => ProductWeights::H1 { alpha: Weight::Constant(1e-2), beta: Weight::Constant(1.0) },
         "h_minus_1" => ProductWeights::HMinus1,
         _ => unreachable!(),
     };
@@ -71,16 +63,7 @@ fn case<const D: usize>(mesh: &Mesh<D>, product: &str) -> f64 {
     time_it(0.5, || {
         m.assemble_into(mesh, &pattern, false);
         let ax = m.stiffness_times_positions(mesh, &pattern);
-        let sys = LinearSystem {
-            mesh,
-            pattern: &pattern,
-            matrices: &m,
-            ax: &ax,
-            g: &g,
-            f: &f,
-            product: &weights,
-            tau,
-        };
+        let sys = LinearSystem { mesh, pattern: &pattern, matrices: &m, ax: &ax, g: &g, f: &f, product: &weights, tau };
         black_box(step.velocity(&sys).unwrap());
     })
 }
@@ -110,11 +93,7 @@ fn child(kind: &str, size: usize, product: &str) {
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     if let Some(pos) = args.iter().position(|a| a == "--case") {
-        child(
-            &args[pos + 1],
-            args[pos + 2].parse().unwrap(),
-            &args[pos + 3],
-        );
+        child(&args[pos + 1], args[pos + 2].parse().unwrap(), &args[pos + 3]);
         return;
     }
     let quick = args.iter().any(|a| a == "quick");
@@ -125,17 +104,12 @@ fn main() {
             continue;
         }
         for product in PRODUCTS {
-            let out = std::process::Command::new(&exe)
-                .args(["--case", kind, &size.to_string(), product])
-                .output()
-                .unwrap();
+            let out =
+                std::process::Command::new(&exe).args(["--case", kind, &size.to_string(), product]).output().unwrap();
             let line = String::from_utf8_lossy(&out.stdout);
             let p: Vec<&str> = line.split_whitespace().collect();
             if p.len() < 5 {
-                eprintln!(
-                    "case {kind} {size} {product} failed: {}",
-                    String::from_utf8_lossy(&out.stderr)
-                );
+                eprintln!("case {kind} {size} {product} failed: {}", String::from_utf8_lossy(&out.stderr));
                 continue;
             }
             let row = (
@@ -154,11 +128,7 @@ fn main() {
     let mut keys: Vec<(String, usize)> = rows.iter().map(|r| (r.0.clone(), r.1)).collect();
     keys.dedup();
     for (kind, n) in &keys {
-        let get = |p: &str| {
-            rows.iter()
-                .find(|r| &r.0 == kind && r.1 == *n && r.2 == p)
-                .map(|r| (r.3 * 1e3, r.4))
-        };
+        let get = |p: &str| rows.iter().find(|r| &r.0 == kind && r.1 == *n && r.2 == p).map(|r| (r.3 * 1e3, r.4));
         let (fl, l2, h1, hm) = (get("floor"), get("l2"), get("h1"), get("h_minus_1"));
         let ms = |x: Option<(f64, f64)>| x.map_or("–".into(), |v| format!("{:.3}", v.0));
         let ratio = |x: Option<(f64, f64)>| match (x, fl) {
@@ -184,11 +154,8 @@ fn main() {
     println!();
     for kind in ["curve", "icosphere"] {
         for product in PRODUCTS {
-            let pts: Vec<(f64, f64)> = rows
-                .iter()
-                .filter(|r| r.0 == kind && r.2 == product)
-                .map(|r| ((r.1 as f64).ln(), r.3.ln()))
-                .collect();
+            let pts: Vec<(f64, f64)> =
+                rows.iter().filter(|r| r.0 == kind && r.2 == product).map(|r| ((r.1 as f64).ln(), r.3.ln())).collect();
             if pts.len() < 2 {
                 continue;
             }

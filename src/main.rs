@@ -12,11 +12,7 @@ use std::process::ExitCode;
 use std::sync::atomic::AtomicBool;
 
 #[derive(Parser)]
-#[command(
-    name = "shapeflow",
-    version,
-    about = "Shape optimization by discrete gradient flows"
-)]
+#[command(name = "shapeflow", version, about = "Shape optimization by discrete gradient flows")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -50,18 +46,11 @@ enum Command {
 fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_writer(std::io::stderr)
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
-        )
+        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()))
         .init();
     let cli = Cli::parse();
     match cli.command {
-        Command::Run {
-            spec,
-            out,
-            inputs,
-            resume,
-        } => match run(&spec, &out, &inputs, resume.as_deref()) {
+        Command::Run { spec, out, inputs, resume } => match run(&spec, &out, &inputs, resume.as_deref()) {
             Ok(code) => code,
             Err(e) => {
                 eprintln!("error: {e:#}");
@@ -92,61 +81,40 @@ impl RunEvents for Reporter {
             Some(t) => self.bar.set_position((1000.0 * p.time / t).round() as u64),
             None => self.bar.set_position(p.iteration as u64),
         }
-        self.bar.set_message(format!(
-            "J={:.6e} τ={:.2e} t={:.4e} n={}",
-            p.energy, p.tau, p.time, p.vertices
-        ));
+        self.bar.set_message(format!("J={:.6e} τ={:.2e} t={:.4e} n={}", p.energy, p.tau, p.time, p.vertices));
     }
 }
 
 fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -> Result<ExitCode> {
-    let text = std::fs::read_to_string(spec_path)
-        .with_context(|| format!("cannot read spec {}", spec_path.display()))?;
-    let spec =
-        parse_spec(&text).with_context(|| format!("invalid spec {}", spec_path.display()))?;
+    let text =
+        std::fs::read_to_string(spec_path).with_context(|| format!("cannot read spec {}", spec_path.display()))?;
+    let spec = parse_spec(&text).with_context(|| format!("invalid spec {}", spec_path.display()))?;
     let mut files = HashMap::new();
     for item in inputs {
-        let (name, path) = item
-            .split_once('=')
-            .with_context(|| format!("--input {item:?}: expected NAME=PATH"))?;
-        let bytes =
-            std::fs::read(path).with_context(|| format!("--input {name}: cannot read {path}"))?;
+        let (name, path) = item.split_once('=').with_context(|| format!("--input {item:?}: expected NAME=PATH"))?;
+        let bytes = std::fs::read(path).with_context(|| format!("--input {name}: cannot read {path}"))?;
         files.insert(name.to_string(), bytes);
     }
-    let job =
-        prepare(spec, &files).with_context(|| format!("invalid spec {}", spec_path.display()))?;
+    let job = prepare(spec, &files).with_context(|| format!("invalid spec {}", spec_path.display()))?;
     let checkpoint: Option<Checkpoint> = match resume {
         Some(p) => {
-            let t = std::fs::read_to_string(p)
-                .with_context(|| format!("cannot read checkpoint {}", p.display()))?;
-            Some(
-                serde_json::from_str(&t)
-                    .with_context(|| format!("invalid checkpoint {}", p.display()))?,
-            )
+            let t = std::fs::read_to_string(p).with_context(|| format!("cannot read checkpoint {}", p.display()))?;
+            Some(serde_json::from_str(&t).with_context(|| format!("invalid checkpoint {}", p.display()))?)
         }
         None => None,
     };
     let m = &job.spec.mesh;
-    if m.regularize || m.adapt || m.topology_changes {
-        eprintln!("note: mesh management (mesh.regularize/adapt/topology_changes) is not implemented in this version; the mesh keeps its connectivity");
+    if job.mesh.dimension() == 3 && (m.regularize || m.adapt || m.topology_changes) {
+        eprintln!(
+            "note: mesh management of surfaces is not implemented in this version; the surface keeps its connectivity"
+        );
     }
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("cannot create output directory {}", out.display()))?;
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory {}", out.display()))?;
     let s = &job.settings;
-    let len = if s.end_time.is_some() {
-        1000
-    } else {
-        s.max_iterations as u64
-    };
+    let len = if s.end_time.is_some() { 1000 } else { s.max_iterations as u64 };
     let bar = ProgressBar::new(len);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} {msg} [{elapsed}]").expect("template"),
-    );
-    let mut rep = Reporter {
-        bar,
-        history: Vec::new(),
-        end_time: s.end_time,
-    };
+    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} {msg} [{elapsed}]").expect("template"));
+    let mut rep = Reporter { bar, history: Vec::new(), end_time: s.end_time };
     let cancel = AtomicBool::new(false);
     let result = run_prepared(&job, checkpoint.as_ref(), &cancel, &mut rep);
     rep.bar.finish_and_clear();
@@ -170,15 +138,9 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
         let p = out.join(name);
         std::fs::write(&p, data).with_context(|| format!("cannot write {}", p.display()))
     };
-    write(
-        "shape.json",
-        serde_json::to_string_pretty(&shape_json(&last.mesh, last.energy, last.iteration))?,
-    )?;
+    write("shape.json", serde_json::to_string_pretty(&shape_json(&last.mesh, last.energy, last.iteration))?)?;
     write("energy.csv", energy_csv(&rep.history))?;
     write("checkpoint.json", serde_json::to_string(&last)?)?;
-    println!(
-        "wrote {}/shape.json, energy.csv, checkpoint.json",
-        out.display()
-    );
+    println!("wrote {}/shape.json, energy.csv, checkpoint.json", out.display());
     Ok(code)
 }

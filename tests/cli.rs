@@ -9,24 +9,12 @@ fn shapeflow() -> Command {
 #[test]
 fn run_writes_shape_and_history_and_reports_the_stop_reason() {
     let dir = tempfile::tempdir().unwrap();
-    let out = shapeflow()
-        .args(["run", "examples/circle.json", "--out"])
-        .arg(dir.path())
-        .output()
-        .unwrap();
+    let out = shapeflow().args(["run", "examples/circle.json", "--out"]).arg(dir.path()).output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout} {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(
-        stdout.contains("stopped: end_time after 2500 iterations"),
-        "{stdout}"
-    );
+    assert!(out.status.success(), "{stdout} {}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("stopped: end_time after 2500 iterations"), "{stdout}");
     let shape: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("shape.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("shape.json")).unwrap()).unwrap();
     assert_eq!(shape["dimension"], 2);
     assert_eq!(shape["iteration"], 2500);
     let verts = shape["components"][0]["vertices"].as_array().unwrap();
@@ -40,10 +28,7 @@ fn run_writes_shape_and_history_and_reports_the_stop_reason() {
     let rows: Vec<&str> = csv.lines().collect();
     assert!(rows[0].starts_with("iteration,time,tau,energy,vertices"));
     assert_eq!(rows.len(), 1 + 2501);
-    let energies: Vec<f64> = rows[1..]
-        .iter()
-        .map(|r| r.split(',').nth(3).unwrap().parse().unwrap())
-        .collect();
+    let energies: Vec<f64> = rows[1..].iter().map(|r| r.split(',').nth(3).unwrap().parse().unwrap()).collect();
     assert!(energies.windows(2).all(|w| w[1] < w[0]));
     // perimeter of the final circle
     assert!((energies[2500] - 2.0 * std::f64::consts::PI * exact).abs() < 1e-2);
@@ -52,9 +37,7 @@ fn run_writes_shape_and_history_and_reports_the_stop_reason() {
     let spec = dir.path().join("longer.json");
     std::fs::write(
         &spec,
-        std::fs::read_to_string("examples/circle.json")
-            .unwrap()
-            .replace("\"end_time\": 0.25", "\"end_time\": 0.3"),
+        std::fs::read_to_string("examples/circle.json").unwrap().replace("\"end_time\": 0.25", "\"end_time\": 0.3"),
     )
     .unwrap();
     let out2 = shapeflow()
@@ -67,10 +50,7 @@ fn run_writes_shape_and_history_and_reports_the_stop_reason() {
         .output()
         .unwrap();
     let stdout2 = String::from_utf8_lossy(&out2.stdout);
-    assert!(
-        stdout2.contains("stopped: end_time after 3000 iterations"),
-        "{stdout2}"
-    );
+    assert!(stdout2.contains("stopped: end_time after 3000 iterations"), "{stdout2}");
 }
 
 #[test]
@@ -78,32 +58,16 @@ fn bad_spec_exits_nonzero_naming_the_field() {
     let dir = tempfile::tempdir().unwrap();
     let spec = dir.path().join("bad.json");
     std::fs::write(&spec, r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1}, "flow": {"tau": -0.5}}"#).unwrap();
-    let out = shapeflow()
-        .arg("run")
-        .arg(&spec)
-        .arg("--out")
-        .arg(dir.path().join("o"))
-        .output()
-        .unwrap();
+    let out = shapeflow().arg("run").arg(&spec).arg("--out").arg(dir.path().join("o")).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("flow.tau: must be a positive number"), "{err}");
     assert!(err.contains("bad.json"), "{err}");
-    let out = shapeflow()
-        .args(["run", "does-not-exist.json", "--out"])
-        .arg(dir.path())
-        .output()
-        .unwrap();
+    let out = shapeflow().args(["run", "does-not-exist.json", "--out"]).arg(dir.path()).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("does-not-exist.json"));
     let out = shapeflow()
-        .args([
-            "run",
-            "examples/circle.json",
-            "--input",
-            "nonsense",
-            "--out",
-        ])
+        .args(["run", "examples/circle.json", "--input", "nonsense", "--out"])
         .arg(dir.path())
         .output()
         .unwrap();
@@ -137,14 +101,9 @@ fn uploaded_mesh_runs_through_input() {
         .arg(format!("cube={}", obj.display()))
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let shape: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("o/shape.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("o/shape.json")).unwrap()).unwrap();
     assert_eq!(shape["dimension"], 3);
     assert_eq!(shape["triangles"].as_array().unwrap().len(), 12);
 }

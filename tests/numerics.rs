@@ -1,18 +1,14 @@
 //! Exact solutions, convergence orders and conserved quantities of the engine.
 
 use shapeflow::flow::{
-    Flow, FlowSettings, Problem, ProblemError, ScalarProduct, ShapeGradient, SolverKind,
-    StopReason, SurfaceState,
+    Flow, FlowSettings, Problem, ProblemError, ScalarProduct, ShapeGradient, SolverKind, StopReason, SurfaceState,
 };
 use shapeflow::geometry::{circle, ellipse, ellipsoid, icosphere, Mesh};
 use shapeflow::problems::{CurvatureFlow, SurfaceDiffusion};
 use std::sync::atomic::AtomicBool;
 
 fn radius_error<const D: usize>(mesh: &Mesh<D>, exact: f64) -> f64 {
-    mesh.positions()
-        .iter()
-        .map(|p| (p.norm() - exact).abs())
-        .fold(0.0, f64::max)
+    mesh.positions().iter().map(|p| (p.norm() - exact).abs()).fold(0.0, f64::max)
 }
 
 fn mcf_settings(tau: f64, end: f64, solver: SolverKind) -> FlowSettings {
@@ -30,16 +26,9 @@ fn mcf_settings(tau: f64, end: f64, solver: SolverKind) -> FlowSettings {
 
 fn shrink_circle(n: usize, solver: SolverKind) -> f64 {
     let h = 2.0 * std::f64::consts::PI / n as f64;
-    let problem = CurvatureFlow {
-        gamma: 1.0,
-        lambda: 0.0,
-    };
-    let mut flow = Flow::new(
-        &problem,
-        circle([0.0, 0.0], 1.0, n).unwrap(),
-        mcf_settings(0.5 * h * h, 0.25, solver),
-    )
-    .unwrap();
+    let problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
+    let mut flow =
+        Flow::new(&problem, circle([0.0, 0.0], 1.0, n).unwrap(), mcf_settings(0.5 * h * h, 0.25, solver)).unwrap();
     let stop = flow.run(&AtomicBool::new(false), |_| {}).unwrap();
     assert_eq!(stop, StopReason::EndTime);
     assert!((flow.time() - 0.25).abs() < 1e-12);
@@ -52,10 +41,7 @@ fn order(errors: &[f64]) -> Vec<f64> {
 
 #[test]
 fn circle_curve_shortening_exact_solution_and_order() {
-    let errs: Vec<f64> = [32, 64, 128, 256]
-        .iter()
-        .map(|&n| shrink_circle(n, SolverKind::Lumped))
-        .collect();
+    let errs: Vec<f64> = [32, 64, 128, 256].iter().map(|&n| shrink_circle(n, SolverKind::Lumped)).collect();
     let orders = order(&errs);
     eprintln!("circle errors {errs:?} orders {orders:?}");
     assert!(errs[3] < 1e-3, "error {} with 256 vertices", errs[3]);
@@ -63,16 +49,9 @@ fn circle_curve_shortening_exact_solution_and_order() {
 }
 
 fn shrink_sphere(level: u32, tau: f64, solver: SolverKind) -> f64 {
-    let problem = CurvatureFlow {
-        gamma: 1.0,
-        lambda: 0.0,
-    };
-    let mut flow = Flow::new(
-        &problem,
-        icosphere([0.0; 3], 1.0, level).unwrap(),
-        mcf_settings(tau, 0.1, solver),
-    )
-    .unwrap();
+    let problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
+    let mut flow =
+        Flow::new(&problem, icosphere([0.0; 3], 1.0, level).unwrap(), mcf_settings(tau, 0.1, solver)).unwrap();
     let stop = flow.run(&AtomicBool::new(false), |_| {}).unwrap();
     assert_eq!(stop, StopReason::EndTime);
     radius_error(flow.mesh(), (1.0f64 - 4.0 * 0.1).sqrt())
@@ -81,10 +60,8 @@ fn shrink_sphere(level: u32, tau: f64, solver: SolverKind) -> f64 {
 #[test]
 fn sphere_mean_curvature_flow_exact_solution_and_order() {
     // h halves per level; τ ∝ h²
-    let errs: Vec<f64> = [(2, 4e-3), (3, 1e-3), (4, 2.5e-4)]
-        .iter()
-        .map(|&(l, t)| shrink_sphere(l, t, SolverKind::Lumped))
-        .collect();
+    let errs: Vec<f64> =
+        [(2, 4e-3), (3, 1e-3), (4, 2.5e-4)].iter().map(|&(l, t)| shrink_sphere(l, t, SolverKind::Lumped)).collect();
     let orders = order(&errs);
     eprintln!("sphere errors {errs:?} orders {orders:?}");
     assert!(errs[2] < 5e-3, "error {} on 2562 vertices", errs[2]);
@@ -103,10 +80,7 @@ fn lumped_and_consistent_paths_agree_to_discretization_error() {
         assert!(b < 4.0 * a.max(1e-4), "consistent error {b} vs lumped {a}");
         diffs.push(b);
     }
-    assert!(
-        diffs[1] < diffs[0] / 3.0,
-        "consistent path converges: {diffs:?}"
-    );
+    assert!(diffs[1] < diffs[0] / 3.0, "consistent path converges: {diffs:?}");
     let a = shrink_sphere(3, 1e-3, SolverKind::Lumped);
     let b = shrink_sphere(3, 1e-3, SolverKind::Consistent);
     eprintln!("sphere level 3: lumped {a:e} consistent {b:e}");
@@ -115,12 +89,7 @@ fn lumped_and_consistent_paths_agree_to_discretization_error() {
 
 /// Runs surface diffusion to `end`, checking at every step that the enclosed measure
 /// drifts less than 0.1 % and that the boundary measure never increases.
-fn surface_diffusion_run<const D: usize>(
-    mesh: Mesh<D>,
-    tau: f64,
-    end: f64,
-    solver: SolverKind,
-) -> Mesh<D> {
+fn surface_diffusion_run<const D: usize>(mesh: Mesh<D>, tau: f64, end: f64, solver: SolverKind) -> Mesh<D> {
     let problem = SurfaceDiffusion { gamma: 1.0 };
     let settings = FlowSettings {
         scalar_product: ScalarProduct::HMinus1,
@@ -169,12 +138,7 @@ fn surface_diffusion_of_ellipse_becomes_circle() {
     let r_eq = (area / std::f64::consts::PI).sqrt();
     let out = surface_diffusion_run(mesh, 2e-5, 0.1, SolverKind::Lumped);
     let c = out.vertex_centroid();
-    let dev = out
-        .positions()
-        .iter()
-        .map(|p| ((p - c).norm() - r_eq).abs())
-        .fold(0.0, f64::max)
-        / r_eq;
+    let dev = out.positions().iter().map(|p| ((p - c).norm() - r_eq).abs()).fold(0.0, f64::max) / r_eq;
     eprintln!("ellipse -> circle: max radius deviation {dev:e}");
     assert!(dev < 0.01, "radius deviation {dev}");
 }
@@ -186,12 +150,7 @@ fn surface_diffusion_of_ellipsoid_becomes_sphere() {
     let r_eq = (3.0 * vol / (4.0 * std::f64::consts::PI)).cbrt();
     let out = surface_diffusion_run(mesh, 5e-5, 0.04, SolverKind::Lumped);
     let c = out.vertex_centroid();
-    let dev = out
-        .positions()
-        .iter()
-        .map(|p| ((p - c).norm() - r_eq).abs())
-        .fold(0.0, f64::max)
-        / r_eq;
+    let dev = out.positions().iter().map(|p| ((p - c).norm() - r_eq).abs()).fold(0.0, f64::max) / r_eq;
     eprintln!("ellipsoid -> sphere: max radius deviation {dev:e}");
     assert!(dev < 0.01, "radius deviation {dev}");
 }
@@ -213,19 +172,13 @@ impl<const D: usize> Problem<D> for AreaTarget {
     fn shape_gradient(&self, s: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
         let n = s.mesh.num_vertices();
         let f = 2.0 * (s.mesh.enclosed_measure() - self.target);
-        Ok(ShapeGradient {
-            g: vec![self.eps; n],
-            f: vec![f; n],
-        })
+        Ok(ShapeGradient { g: vec![self.eps; n], f: vec![f; n] })
     }
 }
 
 #[test]
 fn backtracking_keeps_a_too_large_step_monotone() {
-    let problem = AreaTarget {
-        target: 2.0 * std::f64::consts::PI,
-        eps: 0.1,
-    };
+    let problem = AreaTarget { target: 2.0 * std::f64::consts::PI, eps: 0.1 };
     let run = |backtracking: bool, iterations: usize| {
         let settings = FlowSettings {
             tau: 1.0,
@@ -234,8 +187,7 @@ fn backtracking_keeps_a_too_large_step_monotone() {
             backtracking,
             ..FlowSettings::default()
         };
-        let mut flow =
-            Flow::new(&problem, circle([0.0, 0.0], 1.0, 128).unwrap(), settings).unwrap();
+        let mut flow = Flow::new(&problem, circle([0.0, 0.0], 1.0, 128).unwrap(), settings).unwrap();
         let mut energies = vec![flow.energy()];
         let mut backtracks = 0;
         loop {
@@ -251,39 +203,19 @@ fn backtracking_keeps_a_too_large_step_monotone() {
         (energies, backtracks, flow.mesh().enclosed_measure())
     };
     let (energies, backtracks, area) = run(true, 30);
-    eprintln!(
-        "backtracks {backtracks}, energies {:?}, final area {area}",
-        &energies[..5]
-    );
+    eprintln!("backtracks {backtracks}, energies {:?}, final area {area}", &energies[..5]);
     assert!(backtracks > 0, "the test must exercise backtracking");
-    assert!(
-        energies.windows(2).all(|w| w[1] <= w[0]),
-        "energy history not monotone: {energies:?}"
-    );
-    assert!(
-        (area - problem.target).abs() < 0.05 * problem.target,
-        "converges near the target area: {area}"
-    );
+    assert!(energies.windows(2).all(|w| w[1] <= w[0]), "energy history not monotone: {energies:?}");
+    assert!((area - problem.target).abs() < 0.05 * problem.target, "converges near the target area: {area}");
     // the same τ without backtracking raises the energy
     let (energies, _, _) = run(false, 3);
-    assert!(
-        energies.windows(2).any(|w| w[1] > w[0]),
-        "without backtracking τ = 1 overshoots: {energies:?}"
-    );
+    assert!(energies.windows(2).any(|w| w[1] > w[0]), "without backtracking τ = 1 overshoots: {energies:?}");
 }
 
 #[test]
 fn resuming_from_a_checkpoint_reproduces_the_uninterrupted_run() {
-    let problem = CurvatureFlow {
-        gamma: 1.0,
-        lambda: 0.5,
-    };
-    let settings = FlowSettings {
-        tau: 2e-3,
-        max_iterations: 60,
-        tolerance: 0.0,
-        ..FlowSettings::default()
-    };
+    let problem = CurvatureFlow { gamma: 1.0, lambda: 0.5 };
+    let settings = FlowSettings { tau: 2e-3, max_iterations: 60, tolerance: 0.0, ..FlowSettings::default() };
     let start = || ellipse([0.1, 0.2], [1.0, 0.7], 0.3, 96).unwrap();
     let history = |flow: &mut Flow<'_, 2>, out: &mut Vec<(usize, f64, f64, f64)>| {
         flow.run(&AtomicBool::new(false), |f| {
@@ -298,15 +230,7 @@ fn resuming_from_a_checkpoint_reproduces_the_uninterrupted_run() {
     let final_full = flow.mesh().clone();
 
     let mut first = Vec::new();
-    let mut flow = Flow::new(
-        &problem,
-        start(),
-        FlowSettings {
-            max_iterations: 25,
-            ..settings.clone()
-        },
-    )
-    .unwrap();
+    let mut flow = Flow::new(&problem, start(), FlowSettings { max_iterations: 25, ..settings.clone() }).unwrap();
     history(&mut flow, &mut first);
     // through JSON, as stored
     let json = serde_json::to_string(&flow.checkpoint()).unwrap();
@@ -321,32 +245,16 @@ fn resuming_from_a_checkpoint_reproduces_the_uninterrupted_run() {
 
 #[test]
 fn stop_reasons_converged_cancelled_and_tau_min() {
-    let problem = AreaTarget {
-        target: 2.0 * std::f64::consts::PI,
-        eps: 0.1,
-    };
+    let problem = AreaTarget { target: 2.0 * std::f64::consts::PI, eps: 0.1 };
     let start = || circle([0.0, 0.0], 1.0, 64).unwrap();
     // converged: relative energy change below the tolerance
-    let s = FlowSettings {
-        tau: 0.05,
-        tolerance: 1e-9,
-        max_iterations: 5000,
-        ..FlowSettings::default()
-    };
+    let s = FlowSettings { tau: 0.05, tolerance: 1e-9, max_iterations: 5000, ..FlowSettings::default() };
     let mut flow = Flow::new(&problem, start(), s).unwrap();
-    assert_eq!(
-        flow.run(&AtomicBool::new(false), |_| {}).unwrap(),
-        StopReason::Converged
-    );
+    assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::Converged);
     assert!(flow.iteration() < 5000);
     // cancelled: the flag is checked before every step
     let cancel = AtomicBool::new(false);
-    let s = FlowSettings {
-        tau: 1e-3,
-        tolerance: 0.0,
-        max_iterations: 100,
-        ..FlowSettings::default()
-    };
+    let s = FlowSettings { tau: 1e-3, tolerance: 0.0, max_iterations: 100, ..FlowSettings::default() };
     let mut flow = Flow::new(&problem, start(), s).unwrap();
     let stop = flow
         .run(&cancel, |f| {
@@ -357,29 +265,13 @@ fn stop_reasons_converged_cancelled_and_tau_min() {
         .unwrap();
     assert_eq!((stop, flow.iteration()), (StopReason::Cancelled, 5));
     // tau_min: every admissible τ overshoots
-    let s = FlowSettings {
-        tau: 1.0,
-        tau_min: 0.5,
-        tolerance: 0.0,
-        ..FlowSettings::default()
-    };
+    let s = FlowSettings { tau: 1.0, tau_min: 0.5, tolerance: 0.0, ..FlowSettings::default() };
     let mut flow = Flow::new(&problem, start(), s).unwrap();
-    assert_eq!(
-        flow.run(&AtomicBool::new(false), |_| {}).unwrap(),
-        StopReason::TauMin
-    );
+    assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::TauMin);
     assert_eq!(flow.iteration(), 0);
     // max_iterations
-    let s = FlowSettings {
-        tau: 1e-3,
-        tolerance: 0.0,
-        max_iterations: 7,
-        ..FlowSettings::default()
-    };
+    let s = FlowSettings { tau: 1e-3, tolerance: 0.0, max_iterations: 7, ..FlowSettings::default() };
     let mut flow = Flow::new(&problem, start(), s).unwrap();
-    assert_eq!(
-        flow.run(&AtomicBool::new(false), |_| {}).unwrap(),
-        StopReason::MaxIterations
-    );
+    assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::MaxIterations);
     assert_eq!(flow.iteration(), 7);
 }

@@ -1,8 +1,6 @@
 //! Invalid specs, meshes and files give typed errors that name the field, index or file.
 
-use shapeflow::geometry::{
-    circle, icosphere, polygon, CurveMesh, Mesh, MeshError, Point, SurfaceMesh,
-};
+use shapeflow::geometry::{circle, icosphere, polygon, CurveMesh, Mesh, MeshError, Point, SurfaceMesh};
 use shapeflow::jobs::{parse_spec, prepare, read_mesh_file, AnyMesh, MeshFileError};
 use std::collections::HashMap;
 
@@ -10,14 +8,11 @@ fn spec_error(json: &str) -> String {
     let no_inputs = HashMap::new();
     match parse_spec(json) {
         Err(e) => e.to_string(),
-        Ok(spec) => prepare(spec, &no_inputs)
-            .expect_err("spec should be rejected")
-            .to_string(),
+        Ok(spec) => prepare(spec, &no_inputs).expect_err("spec should be rejected").to_string(),
     }
 }
 
-const GOOD: &str =
-    r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0}}"#;
+const GOOD: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0}}"#;
 
 #[test]
 fn good_spec_prepares_with_defaults() {
@@ -43,22 +38,13 @@ fn spec_errors_name_the_field() {
             r#"{"problem": {"type": "curvature_flow", "gama": 1}, "initial": {"shape": "circle", "radius": 1.0}}"#,
             "problem",
         ),
-        (
-            r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 0}}"#,
-            "initial.radius",
-        ),
+        (r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 0}}"#, "initial.radius"),
         (
             r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1, "resolution": 2}}"#,
             "initial.resolution",
         ),
-        (
-            r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "hexagon"}}"#,
-            "initial.shape",
-        ),
-        (
-            r#"{"problem": {"type": "nonsense"}, "initial": {"shape": "circle", "radius": 1}}"#,
-            "problem.type",
-        ),
+        (r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "hexagon"}}"#, "initial.shape"),
+        (r#"{"problem": {"type": "nonsense"}, "initial": {"shape": "circle", "radius": 1}}"#, "problem.type"),
         (
             r#"{"problem": {"type": "segmentation", "image": "input:image"}, "initial": {"shape": "circle", "radius": 1}}"#,
             "problem.type",
@@ -114,53 +100,31 @@ fn mesh_errors_name_the_index() {
     assert!(CurveMesh::new(sq.clone(), ok.clone()).is_ok());
     let mut nan = sq.clone();
     nan[2].x = f64::NAN;
-    assert_eq!(
-        CurveMesh::new(nan, ok.clone()),
-        Err(MeshError::NonFinite { vertex: 2 })
-    );
+    assert_eq!(CurveMesh::new(nan, ok.clone()), Err(MeshError::NonFinite { vertex: 2 }));
     assert_eq!(
         CurveMesh::new(sq.clone(), vec![[0, 1], [1, 2], [2, 7], [3, 0]]),
-        Err(MeshError::IndexOutOfRange {
-            element: 2,
-            index: 7,
-            count: 4
-        })
+        Err(MeshError::IndexOutOfRange { element: 2, index: 7, count: 4 })
     );
     let mut dup = sq.clone();
     dup[1] = dup[0];
-    assert_eq!(
-        CurveMesh::new(dup, ok.clone()),
-        Err(MeshError::Degenerate { element: 0 })
-    );
+    assert_eq!(CurveMesh::new(dup, ok.clone()), Err(MeshError::Degenerate { element: 0 }));
     assert_eq!(
         CurveMesh::new(sq.clone(), vec![[0, 1], [1, 2], [2, 3], [3, 0], [0, 1]]),
-        Err(MeshError::Duplicate {
-            element: 4,
-            other: 0
-        })
+        Err(MeshError::Duplicate { element: 4, other: 0 })
     );
     assert!(matches!(
         CurveMesh::new(sq.clone(), vec![[0, 1], [1, 2], [2, 3]]),
         Err(MeshError::CurveVertexDegree { vertex: 0, .. })
     ));
     let cw: Vec<[usize; 2]> = ok.iter().map(|e| [e[1], e[0]]).collect();
-    assert!(matches!(
-        CurveMesh::new(sq, cw),
-        Err(MeshError::InwardOrientation { .. })
-    ));
+    assert!(matches!(CurveMesh::new(sq, cw), Err(MeshError::InwardOrientation { .. })));
 
     let s = icosphere([0.0; 3], 1.0, 1).unwrap();
     let mut tris = s.elements().to_vec();
     tris.pop();
-    assert!(matches!(
-        SurfaceMesh::new(s.positions().to_vec(), tris),
-        Err(MeshError::OpenEdge { .. })
-    ));
+    assert!(matches!(SurfaceMesh::new(s.positions().to_vec(), tris), Err(MeshError::OpenEdge { .. })));
     let inward: Vec<[usize; 3]> = s.elements().iter().map(|t| [t[0], t[2], t[1]]).collect();
-    assert!(matches!(
-        Mesh::new(s.positions().to_vec(), inward),
-        Err(MeshError::InwardOrientation { .. })
-    ));
+    assert!(matches!(Mesh::new(s.positions().to_vec(), inward), Err(MeshError::InwardOrientation { .. })));
     // two spheres sharing one vertex: non-manifold vertex
     let a = icosphere([0.0; 3], 1.0, 1).unwrap();
     let mut pos = a.positions().to_vec();
@@ -169,44 +133,16 @@ fn mesh_errors_name_the_index() {
     pos.extend(a.positions()[1..].iter().map(|p| p + shift));
     let map = |v: usize| if v == 0 { 0 } else { v + n - 1 };
     let mut tris = a.elements().to_vec();
-    tris.extend(
-        a.elements()
-            .iter()
-            .map(|t| [map(t[0]), map(t[1]), map(t[2])]),
-    );
+    tris.extend(a.elements().iter().map(|t| [map(t[0]), map(t[1]), map(t[2])]));
     // reflect the copy's vertex 0 onto the original: use the shifted copy mirrored through vertex 0
-    let pos2: Vec<Point<3>> = pos
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            if i >= n {
-                a.positions()[0] * 2.0 - (p - shift)
-            } else {
-                *p
-            }
-        })
-        .collect();
-    let tris2: Vec<[usize; 3]> = tris
-        .iter()
-        .enumerate()
-        .map(|(k, t)| {
-            if k >= a.num_elements() {
-                [t[0], t[2], t[1]]
-            } else {
-                *t
-            }
-        })
-        .collect();
-    assert_eq!(
-        Mesh::new(pos2, tris2),
-        Err(MeshError::NonManifoldVertex { vertex: 0 })
-    );
+    let pos2: Vec<Point<3>> =
+        pos.iter().enumerate().map(|(i, p)| if i >= n { a.positions()[0] * 2.0 - (p - shift) } else { *p }).collect();
+    let tris2: Vec<[usize; 3]> =
+        tris.iter().enumerate().map(|(k, t)| if k >= a.num_elements() { [t[0], t[2], t[1]] } else { *t }).collect();
+    assert_eq!(Mesh::new(pos2, tris2), Err(MeshError::NonManifoldVertex { vertex: 0 }));
     // bow tie polygon
     assert!(matches!(
-        polygon(
-            &[p2(0.0, 0.0), p2(1.0, 1.0), p2(1.0, 0.0), p2(0.0, 1.0)],
-            None
-        ),
+        polygon(&[p2(0.0, 0.0), p2(1.0, 1.0), p2(1.0, 0.0), p2(0.0, 1.0)], None),
         Err(MeshError::SelfIntersection { .. })
     ));
     assert!(circle([0.0, 0.0], 1.0, 2).is_err());
@@ -216,9 +152,7 @@ fn mesh_errors_name_the_index() {
 fn mesh_files_round_trip_and_errors_name_the_input() {
     let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
     let m = read_mesh_file("tet", obj.as_bytes()).unwrap();
-    assert!(
-        matches!(m, AnyMesh::Surface(ref s) if (s.enclosed_measure() - 1.0 / 6.0).abs() < 1e-15)
-    );
+    assert!(matches!(m, AnyMesh::Surface(ref s) if (s.enclosed_measure() - 1.0 / 6.0).abs() < 1e-15));
     let off = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
     assert_eq!(read_mesh_file("tet.off", off.as_bytes()).unwrap(), m);
     let curve = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nl 1 2 3 4 1\n";
@@ -231,29 +165,12 @@ fn mesh_files_round_trip_and_errors_name_the_input() {
     assert!(err.to_string().contains("broken.obj"));
     let flipped = obj.replace("f 2 3 4", "f 2 4 3");
     let err = read_mesh_file("flipped", flipped.as_bytes()).unwrap_err();
-    assert!(
-        matches!(
-            err,
-            MeshFileError::Mesh {
-                error: MeshError::InconsistentEdge { .. },
-                ..
-            }
-        ),
-        "{err}"
-    );
-    assert!(matches!(
-        read_mesh_file("junk", b"hello"),
-        Err(MeshFileError::UnknownFormat { .. })
-    ));
+    assert!(matches!(err, MeshFileError::Mesh { error: MeshError::InconsistentEdge { .. }, .. }), "{err}");
+    assert!(matches!(read_mesh_file("junk", b"hello"), Err(MeshFileError::UnknownFormat { .. })));
     // binary STL of the same tetrahedron
     let mut stl = vec![0u8; 80];
     stl.extend_from_slice(&4u32.to_le_bytes());
-    let v = [
-        [0.0f32, 0.0, 0.0],
-        [1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [0.0, 0.0, 1.0],
-    ];
+    let v = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for t in [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]] {
         stl.extend_from_slice(&[0u8; 12]);
         for i in t {
@@ -263,7 +180,5 @@ fn mesh_files_round_trip_and_errors_name_the_input() {
         }
         stl.extend_from_slice(&[0u8; 2]);
     }
-    assert!(
-        matches!(read_mesh_file("tet.stl", &stl).unwrap(), AnyMesh::Surface(ref s) if s.num_vertices() == 4)
-    );
+    assert!(matches!(read_mesh_file("tet.stl", &stl).unwrap(), AnyMesh::Surface(ref s) if s.num_vertices() == 4));
 }

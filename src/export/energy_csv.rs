@@ -8,11 +8,7 @@ use std::fmt::Write;
 pub fn energy_csv(history: &[Progress]) -> String {
     let mut s = String::from("iteration,time,tau,energy,vertices,components\n");
     for p in history {
-        let _ = writeln!(
-            s,
-            "{},{:e},{:e},{:e},{},{}",
-            p.iteration, p.time, p.tau, p.energy, p.vertices, p.components
-        );
+        let _ = writeln!(s, "{},{:e},{:e},{:e},{},{}", p.iteration, p.time, p.tau, p.energy, p.vertices, p.components);
     }
     s
 }

@@ -8,11 +8,7 @@ use serde_json::{json, Value};
 
 /// The JSON document of a shape at some iteration.
 pub fn shape_json(mesh: &MeshData, energy: f64, iteration: usize) -> Value {
-    let energy = if energy.is_finite() {
-        json!(energy)
-    } else {
-        Value::Null
-    };
+    let energy = if energy.is_finite() { json!(energy) } else { Value::Null };
     if mesh.dimension == 2 {
         let n = mesh.positions.len();
         let mut next = vec![usize::MAX; n];

@@ -37,9 +37,7 @@ impl Weight {
                         out[v] += w[e] * m.measure[e] / D as f64;
                     }
                 }
-                out.iter_mut()
-                    .zip(&m.lumped_mass)
-                    .for_each(|(o, mi)| *o /= mi);
+                out.iter_mut().zip(&m.lumped_mass).for_each(|(o, mi)| *o /= mi);
                 out
             }
         }
@@ -53,12 +51,7 @@ impl Weight {
             Weight::Vertex(w) => (w, mesh.num_vertices(), "vertices"),
         };
         if vals.len() != need {
-            return Err(format!(
-                "weight has {} values for {} {}",
-                vals.len(),
-                need,
-                what
-            ));
+            return Err(format!("weight has {} values for {} {}", vals.len(), need, what));
         }
         if let Some(i) = vals.iter().position(|v| !v.is_finite()) {
             return Err(format!("weight value {i} is not finite"));
@@ -119,10 +112,7 @@ impl<const D: usize> Matrices<D> {
         self.local_stiffness.clear();
         reset(&mut self.lumped_mass, nv);
         reset(&mut self.stiffness, pattern.nnz());
-        reset(
-            &mut self.mass,
-            if consistent_mass { pattern.nnz() } else { 0 },
-        );
+        reset(&mut self.mass, if consistent_mass { pattern.nnz() } else { 0 });
         self.lumped_normal.clear();
         self.lumped_normal.resize(nv, Point::<D>::zeros());
         let off = 1.0 / (D * (D + 1)) as f64;
@@ -139,11 +129,7 @@ impl<const D: usize> Matrices<D> {
                 }
                 if consistent_mass {
                     for b in 0..D {
-                        self.mass[slots[a][b]] += if a == b {
-                            2.0 * off * d.measure
-                        } else {
-                            off * d.measure
-                        };
+                        self.mass[slots[a][b]] += if a == b { 2.0 * off * d.measure } else { off * d.measure };
                     }
                 }
             }
@@ -152,21 +138,11 @@ impl<const D: usize> Matrices<D> {
             self.local_stiffness.push(d.stiffness);
         }
         self.scalar_mass.clear();
-        self.scalar_mass.extend(
-            self.lumped_normal
-                .iter()
-                .zip(&self.lumped_mass)
-                .map(|(n, m)| n.norm_squared() / m),
-        );
+        self.scalar_mass.extend(self.lumped_normal.iter().zip(&self.lumped_mass).map(|(n, m)| n.norm_squared() / m));
     }
 
     /// `A_α = Σ_T α_T K_T` on the pattern.
-    pub fn weighted_stiffness(
-        &self,
-        mesh: &Mesh<D>,
-        pattern: &Pattern<D>,
-        alpha: &Weight,
-    ) -> Vec<f64> {
+    pub fn weighted_stiffness(&self, mesh: &Mesh<D>, pattern: &Pattern<D>, alpha: &Weight) -> Vec<f64> {
         let mut v = vec![0.0; pattern.nnz()];
         for (e, el) in mesh.elements().iter().enumerate() {
             let w = alpha.on_element(e, el);

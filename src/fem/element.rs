@@ -47,11 +47,7 @@ pub fn element_data<const D: usize>(p: &[SVector<f64, D>; D]) -> ElementData<D> 
         }
         _ => unreachable!(),
     }
-    ElementData {
-        measure,
-        normal,
-        stiffness,
-    }
+    ElementData { measure, normal, stiffness }
 }
 
 /// Entry `M_ab` of the consistent element mass matrix.
@@ -68,29 +64,19 @@ mod tests {
 
     #[test]
     fn triangle_stiffness_matches_gradients() {
-        let p = [
-            Vector3::new(0.0, 0.0, 0.0),
-            Vector3::new(2.0, 0.0, 0.0),
-            Vector3::new(0.0, 1.0, 0.0),
-        ];
+        let p = [Vector3::new(0.0, 0.0, 0.0), Vector3::new(2.0, 0.0, 0.0), Vector3::new(0.0, 1.0, 0.0)];
         let d = element_data(&p);
         assert!((d.measure - 1.0).abs() < 1e-15);
         // gradients: φ0 = 1 - x/2 - y, φ1 = x/2, φ2 = y
-        let g = [
-            Vector3::new(-0.5, -1.0, 0.0),
-            Vector3::new(0.5, 0.0, 0.0),
-            Vector3::new(0.0, 1.0, 0.0),
-        ];
+        let g = [Vector3::new(-0.5, -1.0, 0.0), Vector3::new(0.5, 0.0, 0.0), Vector3::new(0.0, 1.0, 0.0)];
         for a in 0..3 {
             for b in 0..3 {
                 assert!((d.stiffness[(a, b)] - g[a].dot(&g[b]) * d.measure).abs() < 1e-14);
             }
         }
         assert!((d.normal - Vector3::z()).norm() < 1e-15);
-        let total: f64 = (0..3)
-            .flat_map(|a| (0..3).map(move |b| (a, b)))
-            .map(|(a, b)| mass_entry::<3>(1.0, a, b))
-            .sum();
+        let total: f64 =
+            (0..3).flat_map(|a| (0..3).map(move |b| (a, b))).map(|(a, b)| mass_entry::<3>(1.0, a, b)).sum();
         assert!((total - 1.0).abs() < 1e-15);
     }
 }

@@ -40,21 +40,11 @@ impl<const D: usize> Pattern<D> {
             let range = &row_idx[col_ptr[col]..col_ptr[col + 1]];
             col_ptr[col] + range.binary_search(&row).expect("entry in pattern")
         };
-        let slots = elements
-            .iter()
-            .map(|el| std::array::from_fn(|a| std::array::from_fn(|b| find(el[a], el[b]))))
-            .collect();
+        let slots =
+            elements.iter().map(|el| std::array::from_fn(|a| std::array::from_fn(|b| find(el[a], el[b])))).collect();
         let diag = (0..n).map(|i| find(i, i)).collect();
-        let symbolic =
-            SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
-        Pattern {
-            n,
-            col_ptr,
-            row_idx,
-            slots,
-            diag,
-            symbolic,
-        }
+        let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
+        Pattern { n, col_ptr, row_idx, slots, diag, symbolic }
     }
 
     pub fn size(&self) -> usize {

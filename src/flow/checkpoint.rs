@@ -16,11 +16,7 @@ impl<const D: usize> From<&Mesh<D>> for MeshData {
     fn from(m: &Mesh<D>) -> Self {
         MeshData {
             dimension: D,
-            positions: m
-                .positions()
-                .iter()
-                .map(|p| p.iter().copied().collect())
-                .collect(),
+            positions: m.positions().iter().map(|p| p.iter().copied().collect()).collect(),
             elements: m.elements().iter().map(|e| e.to_vec()).collect(),
         }
     }
@@ -44,10 +40,7 @@ impl MeshData {
             .elements
             .iter()
             .enumerate()
-            .map(|(element, e)| {
-                <[usize; D]>::try_from(e.as_slice())
-                    .map_err(|_| MeshError::RepeatedVertex { element })
-            })
+            .map(|(element, e)| <[usize; D]>::try_from(e.as_slice()).map_err(|_| MeshError::RepeatedVertex { element }))
             .collect::<Result<Vec<_>, _>>()?;
         Mesh::new(positions, elements)
     }

@@ -5,9 +5,7 @@
 //! The pattern passed in holds both triangles; faer reads the lower one.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
-};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Par, Side};
@@ -23,23 +21,14 @@ pub struct SparseCholesky<T = f64> {
 impl<T: ComplexField + Copy> SparseCholesky<T> {
     /// Symbolic factorization of the pattern (lower triangle is read).
     pub fn new(pattern: SymbolicSparseColMatRef<'_, usize>) -> Result<Self, String> {
-        let symbolic = factorize_symbolic_cholesky(
-            pattern,
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            Default::default(),
-        )
-        .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
+        let symbolic = factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Amd, Default::default())
+            .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
         let req = symbolic
             .factorize_numeric_llt_scratch::<T>(Par::Seq, Default::default())
             .or(symbolic.solve_in_place_scratch::<T>(1, Par::Seq));
         let scratch = MemBuffer::try_new(req).map_err(|e| format!("{e:?}"))?;
         let values = vec![T::zero_impl(); symbolic.len_val()];
-        Ok(SparseCholesky {
-            symbolic,
-            values,
-            scratch,
-        })
+        Ok(SparseCholesky { symbolic, values, scratch })
     }
 
     /// Number of stored entries of the factor `L`.
@@ -48,11 +37,7 @@ impl<T: ComplexField + Copy> SparseCholesky<T> {
     }
 
     /// Numeric factorization of the matrix with `values` on the pattern given to `new`.
-    pub fn factorize(
-        &mut self,
-        pattern: SymbolicSparseColMatRef<'_, usize>,
-        values: &[T],
-    ) -> Result<(), String> {
+    pub fn factorize(&mut self, pattern: SymbolicSparseColMatRef<'_, usize>, values: &[T]) -> Result<(), String> {
         let a = SparseColMatRef::new(pattern, values);
         self.symbolic
             .factorize_numeric_llt::<T>(

@@ -37,10 +37,7 @@ impl ConsistentSolver {
     }
 
     /// Solve for `V` and `V⃗`.
-    pub fn solve<const D: usize>(
-        &mut self,
-        sys: &LinearSystem<'_, D>,
-    ) -> Result<(Vec<f64>, Vec<Point<D>>), FlowError> {
+    pub fn solve<const D: usize>(&mut self, sys: &LinearSystem<'_, D>) -> Result<(Vec<f64>, Vec<Point<D>>), FlowError> {
         let p = sys.pattern;
         let mx = sys.matrices;
         let n = p.size();
@@ -49,8 +46,7 @@ impl ConsistentSolver {
             self.mass = Some(SparseCholesky::new(sym).map_err(FlowError::Factorization)?);
         }
         let mfac = self.mass.as_mut().unwrap();
-        mfac.factorize(sym, &mx.mass)
-            .map_err(|e| FlowError::Factorization(format!("mass matrix: {e}")))?;
+        mfac.factorize(sym, &mx.mass).map_err(|e| FlowError::Factorization(format!("mass matrix: {e}")))?;
         let mfac = self.mass.as_ref().unwrap();
         let msolve = |x: &mut [f64]| mfac.solve_in_place(x);
         let normal = mx.consistent_normal(sys.mesh, p);
@@ -94,23 +90,13 @@ impl ConsistentSolver {
                 rhs.iter_mut().for_each(|r| *r = -*r);
                 let apply = |x: &[f64], out: &mut [f64]| {
                     curvature_op(x, &mut cv);
-                    cv.iter_mut()
-                        .zip(sys.g)
-                        .for_each(|(c, g)| *c *= sys.tau * g);
+                    cv.iter_mut().zip(sys.g).for_each(|(c, g)| *c *= sys.tau * g);
                     p.mul(&mx.stiffness, &cv, out);
                     p.mul(&mx.mass, x, &mut t3);
                     out.iter_mut().zip(&t3).for_each(|(o, t)| *o += t);
                 };
                 v = lumped_v;
-                outcome = gmres(
-                    apply,
-                    |x| lumped.apply_last_factor(x),
-                    &rhs,
-                    &mut v,
-                    1e-10,
-                    50,
-                    500,
-                );
+                outcome = gmres(apply, |x| lumped.apply_last_factor(x), &rhs, &mut v, 1e-10, 50, 500);
             }
             _ => {
                 let b = match sys.product {
@@ -131,20 +117,10 @@ impl ConsistentSolver {
                     curvature_op(x, &mut cv);
                     p.mul(&mg, &cv, out);
                     p.mul(&b, x, &mut t4);
-                    out.iter_mut()
-                        .zip(&t4)
-                        .for_each(|(o, t)| *o = sys.tau * *o + t);
+                    out.iter_mut().zip(&t4).for_each(|(o, t)| *o = sys.tau * *o + t);
                 };
                 v = lumped_v;
-                outcome = gmres(
-                    apply,
-                    |x| lumped.apply_last_factor(x),
-                    &rhs,
-                    &mut v,
-                    1e-10,
-                    50,
-                    500,
-                );
+                outcome = gmres(apply, |x| lumped.apply_last_factor(x), &rhs, &mut v, 1e-10, 50, 500);
             }
         }
         self.last = Some(outcome);

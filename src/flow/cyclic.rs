@@ -12,11 +12,7 @@ pub(crate) struct CyclicComponent {
 }
 
 /// `x ← T⁻¹ x` per component; false on a zero pivot (then `x` is unspecified).
-pub(crate) fn cyclic_solve_checked(
-    comps: &[CyclicComponent],
-    diags: &[[Vec<f64>; 3]],
-    x: &mut [f64],
-) -> bool {
+pub(crate) fn cyclic_solve_checked(comps: &[CyclicComponent], diags: &[[Vec<f64>; 3]], x: &mut [f64]) -> bool {
     for (comp, [a, b, c]) in comps.iter().zip(diags) {
         let r: Vec<f64> = comp.vertices.iter().map(|&v| x[v]).collect();
         match solve_cyclic_tridiagonal(a, b, c, &r) {
@@ -43,21 +39,14 @@ pub fn solve_cyclic_tridiagonal(a: &[f64], b: &[f64], c: &[f64], r: &[f64]) -> O
     let gamma = -b[0];
     // Thomas elimination of the tridiagonal part with b₀ − γ and b_{n−1} − αβ/γ,
     // applied at once to r and to u = (γ, 0, …, 0, α).
-    let scale = b
-        .iter()
-        .fold(0.0f64, |m, v| m.max(v.abs()))
-        .max(f64::MIN_POSITIVE);
+    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
     let mut cp = vec![0.0; n];
     let mut x = vec![0.0; n];
     let mut z = vec![0.0; n];
     let mut piv = b[0] - gamma;
     for k in 0..n {
         if k > 0 {
-            let bk = if k == n - 1 {
-                b[k] - alpha * beta / gamma
-            } else {
-                b[k]
-            };
+            let bk = if k == n - 1 { b[k] - alpha * beta / gamma } else { b[k] };
             piv = bk - a[k] * cp[k - 1];
         }
         if !(piv.abs() > 1e-14 * scale) {
@@ -110,12 +99,7 @@ mod tests {
             }
             let x = solve_cyclic_tridiagonal(&a, &b, &c, &r).unwrap();
             for k in 0..n {
-                assert!(
-                    (x[k] - xs[k]).abs() < 1e-12,
-                    "n={n} k={k}: {} vs {}",
-                    x[k],
-                    xs[k]
-                );
+                assert!((x[k] - xs[k]).abs() < 1e-12, "n={n} k={k}: {} vs {}", x[k], xs[k]);
             }
         }
     }

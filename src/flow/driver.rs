@@ -10,6 +10,7 @@
 //!
 //! Below `τ_min` the run stops with [`StopReason::TauMin`] on the last good state.
 
+use super::mesh_management::{Managed, MeshManager};
 use super::problem::{Problem, SurfaceState};
 use super::step::{SemiImplicitStep, SolverKind};
 use super::system::{LinearSystem, ProductWeights, ScalarProduct};
@@ -122,27 +123,25 @@ pub struct Flow<'p, const D: usize> {
     time: f64,
     tau: f64,
     energy: f64,
+    manager: Option<Box<dyn MeshManager<D> + 'p>>,
 }
 
 impl<'p, const D: usize> Flow<'p, D> {
+    /// Run mesh management (regularization, adaptivity, topology) after every step.
+    pub fn with_mesh_manager(mut self, manager: Box<dyn MeshManager<D> + 'p>) -> Self {
+        self.manager = Some(manager);
+        self
+    }
+
     /// Start a flow at iteration 0, time 0.
-    pub fn new(
-        problem: &'p dyn Problem<D>,
-        mesh: Mesh<D>,
-        settings: FlowSettings,
-    ) -> Result<Self, FlowError> {
+    pub fn new(problem: &'p dyn Problem<D>, mesh: Mesh<D>, settings: FlowSettings) -> Result<Self, FlowError> {
         check_settings(&settings)?;
         let energy = problem.energy(&mesh).map_err(|e| FlowError::Problem(e.0))?;
         if !energy.is_finite() {
-            return Err(FlowError::NonFiniteEnergy {
-                value: energy,
-                iteration: 0,
-            });
+            return Err(FlowError::NonFiniteEnergy { value: energy, iteration: 0 });
         }
         let tau = settings.tau;
-        Ok(Self::assemble_state(
-            problem, mesh, settings, 0, 0.0, tau, energy,
-        ))
+        Ok(Self::assemble_state(problem, mesh, settings, 0, 0.0, tau, energy))
     }
 
     /// Continue from a checkpoint.
@@ -152,10 +151,7 @@ impl<'p, const D: usize> Flow<'p, D> {
         settings: FlowSettings,
     ) -> Result<Self, FlowError> {
         check_settings(&settings)?;
-        let mesh = checkpoint
-            .mesh
-            .to_mesh::<D>()
-            .map_err(|e| FlowError::Checkpoint(e.to_string()))?;
+        let mesh = checkpoint.mesh.to_mesh::<D>().map_err(|e| FlowError::Checkpoint(e.to_string()))?;
         Ok(Self::assemble_state(
             problem,
             mesh,
@@ -179,18 +175,7 @@ impl<'p, const D: usize> Flow<'p, D> {
         let pattern = Pattern::new(mesh.num_vertices(), mesh.elements());
         let solver = SemiImplicitStep::new(settings.solver);
         let matrices = Matrices::assemble(&mesh, &pattern);
-        Flow {
-            problem,
-            settings,
-            mesh,
-            pattern,
-            solver,
-            matrices,
-            iteration,
-            time,
-            tau,
-            energy,
-        }
+        Flow { problem, settings, mesh, pattern, solver, matrices, iteration, time, tau, energy, manager: None }
     }
 
     pub fn mesh(&self) -> &Mesh<D> {
@@ -232,11 +217,7 @@ impl<'p, const D: usize> Flow<'p, D> {
 
     /// Run until a stop reason, calling `on_progress` after every accepted step
     /// (and once at the start), and checking `cancel` before every step.
-    pub fn run(
-        &mut self,
-        cancel: &AtomicBool,
-        mut on_progress: impl FnMut(&Self),
-    ) -> Result<StopReason, FlowError> {
+    pub fn run(&mut self, cancel: &AtomicBool, mut on_progress: impl FnMut(&Self)) -> Result<StopReason, FlowError> {
         on_progress(self);
         loop {
             if cancel.load(Ordering::Relaxed) {
@@ -255,12 +236,7 @@ impl<'p, const D: usize> Flow<'p, D> {
     /// Take one step (with its retries), or report why the run is over.
     pub fn step(&mut self) -> Result<StepReport, FlowError> {
         let s = &self.settings;
-        let mut report = StepReport {
-            stop: None,
-            accepted: false,
-            backtracks: 0,
-            reductions: 0,
-        };
+        let mut report = StepReport { stop: None, accepted: false, backtracks: 0, reductions: 0 };
         if self.iteration >= s.max_iterations {
             report.stop = Some(StopReason::MaxIterations);
             return Ok(report);
@@ -274,11 +250,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             }
             tau = tau.min(left);
         }
-        self.matrices.assemble_into(
-            &self.mesh,
-            &self.pattern,
-            self.settings.solver == SolverKind::Consistent,
-        );
+        self.matrices.assemble_into(&self.mesh, &self.pattern, self.settings.solver == SolverKind::Consistent);
         let matrices = &self.matrices;
         let ax = matrices.stiffness_times_positions(&self.mesh, &self.pattern);
         let curvature: Vec<f64> = (0..self.mesh.num_vertices())
@@ -287,46 +259,25 @@ impl<'p, const D: usize> Flow<'p, D> {
                 n.dot(&ax[i]) / n.norm_squared()
             })
             .collect();
-        let normals: Vec<Point<D>> = matrices
-            .lumped_normal
-            .iter()
-            .map(|n| n.normalize())
-            .collect();
-        let state = SurfaceState {
-            mesh: &self.mesh,
-            matrices,
-            curvature: &curvature,
-            normals: &normals,
-        };
-        let grad = self
-            .problem
-            .shape_gradient(&state)
-            .map_err(|e| FlowError::Problem(e.0))?;
+        let normals: Vec<Point<D>> = matrices.lumped_normal.iter().map(|n| n.normalize()).collect();
+        let state = SurfaceState { mesh: &self.mesh, matrices, curvature: &curvature, normals: &normals };
+        let grad = self.problem.shape_gradient(&state).map_err(|e| FlowError::Problem(e.0))?;
         check_values("g", &grad.g, self.mesh.num_vertices())?;
         check_values("f", &grad.f, self.mesh.num_vertices())?;
         let product = match s.scalar_product {
             ScalarProduct::L2 => ProductWeights::L2,
             ScalarProduct::HMinus1 => ProductWeights::HMinus1,
-            ScalarProduct::H1 => ProductWeights::H1 {
-                alpha: Weight::Constant(s.alpha),
-                beta: Weight::Constant(s.beta),
-            },
+            ScalarProduct::H1 => {
+                ProductWeights::H1 { alpha: Weight::Constant(s.alpha), beta: Weight::Constant(s.beta) }
+            }
             ScalarProduct::H1Newton => match self.problem.h1_weights(&state, &grad) {
                 Some(w) => {
                     for (what, weight) in [("alpha", &w.alpha), ("beta", &w.beta)] {
-                        weight
-                            .check(&self.mesh)
-                            .map_err(|r| FlowError::Problem(format!("{what}: {r}")))?;
+                        weight.check(&self.mesh).map_err(|r| FlowError::Problem(format!("{what}: {r}")))?;
                     }
-                    ProductWeights::H1 {
-                        alpha: w.alpha,
-                        beta: w.beta,
-                    }
+                    ProductWeights::H1 { alpha: w.alpha, beta: w.beta }
                 }
-                None => ProductWeights::H1 {
-                    alpha: Weight::Constant(s.alpha),
-                    beta: Weight::Constant(s.beta),
-                },
+                None => ProductWeights::H1 { alpha: Weight::Constant(s.alpha), beta: Weight::Constant(s.beta) },
             },
         };
         loop {
@@ -353,34 +304,20 @@ impl<'p, const D: usize> Flow<'p, D> {
                     continue;
                 }
             }
-            let positions: Vec<Point<D>> = self
-                .mesh
-                .positions()
-                .iter()
-                .zip(&vel.vector)
-                .map(|(x, v)| x + v * tau)
-                .collect();
+            let positions: Vec<Point<D>> =
+                self.mesh.positions().iter().zip(&vel.vector).map(|(x, v)| x + v * tau).collect();
             let candidate = self.mesh.with_positions(positions);
             if let Some(element) = tangled(&self.mesh, &candidate) {
                 tau *= 0.5;
                 report.reductions += 1;
                 if tau < s.tau_min {
-                    return Err(FlowError::Tangled {
-                        element,
-                        time: self.time,
-                    });
+                    return Err(FlowError::Tangled { element, time: self.time });
                 }
                 continue;
             }
-            let energy = self
-                .problem
-                .energy(&candidate)
-                .map_err(|e| FlowError::Problem(e.0))?;
+            let energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
             if !energy.is_finite() {
-                return Err(FlowError::NonFiniteEnergy {
-                    value: energy,
-                    iteration: self.iteration + 1,
-                });
+                return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration + 1 });
             }
             if s.backtracking && energy > self.energy {
                 tau *= 0.5;
@@ -397,18 +334,37 @@ impl<'p, const D: usize> Flow<'p, D> {
             if s.tolerance > 0.0 && (previous - energy).abs() <= s.tolerance * previous.abs() {
                 report.stop = Some(StopReason::Converged);
             }
+            self.manage_mesh()?;
             return Ok(report);
         }
     }
 }
 
+impl<const D: usize> Flow<'_, D> {
+    /// Apply the mesh manager, if any; a new connectivity rebuilds the pattern and
+    /// drops the symbolic factorizations. The energy is re-evaluated on the result.
+    fn manage_mesh(&mut self) -> Result<(), FlowError> {
+        let Some(manager) = self.manager.as_mut() else { return Ok(()) };
+        match manager.manage(&self.mesh)? {
+            Managed::Unchanged => return Ok(()),
+            Managed::Moved(m) => self.mesh = m,
+            Managed::Remeshed(m) => {
+                self.mesh = m;
+                self.pattern = Pattern::new(self.mesh.num_vertices(), self.mesh.elements());
+                self.solver.reset();
+            }
+        }
+        let energy = self.problem.energy(&self.mesh).map_err(|e| FlowError::Problem(e.0))?;
+        if !energy.is_finite() {
+            return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration });
+        }
+        self.energy = energy;
+        Ok(())
+    }
+}
+
 fn check_settings(s: &FlowSettings) -> Result<(), FlowError> {
-    let bad = |field: &'static str, reason: &str| {
-        Err(FlowError::Settings {
-            field,
-            reason: reason.into(),
-        })
-    };
+    let bad = |field: &'static str, reason: &str| Err(FlowError::Settings { field, reason: reason.into() });
     if !(s.tau.is_finite() && s.tau > 0.0) {
         return bad("flow.tau", "must be a positive number");
     }
@@ -439,10 +395,7 @@ fn check_settings(s: &FlowSettings) -> Result<(), FlowError> {
 
 fn check_values(what: &'static str, v: &[f64], n: usize) -> Result<(), FlowError> {
     if v.len() != n {
-        return Err(FlowError::Problem(format!(
-            "{what} has {} values for {n} vertices",
-            v.len()
-        )));
+        return Err(FlowError::Problem(format!("{what} has {} values for {n} vertices", v.len())));
     }
     match v.iter().position(|x| !x.is_finite()) {
         Some(index) => Err(FlowError::NonFiniteInput { what, index }),

@@ -35,11 +35,7 @@ pub fn gmres(
         r.iter_mut().zip(b).for_each(|(ri, bi)| *ri = bi - *ri);
         let beta = dot(&r, &r).sqrt();
         if beta / bnorm <= tol || iterations >= max_iterations {
-            return GmresOutcome {
-                iterations,
-                relative_residual: beta / bnorm,
-                converged: beta / bnorm <= tol,
-            };
+            return GmresOutcome { iterations, relative_residual: beta / bnorm, converged: beta / bnorm <= tol };
         }
         let m = restart.max(1);
         let mut v: Vec<Vec<f64>> = vec![r.iter().map(|ri| ri / beta).collect()];

@@ -28,12 +28,7 @@ impl LumpedSolver {
         let p = sys.pattern;
         let mx = sys.matrices;
         let n = p.size();
-        let (m, mh, nn, a) = (
-            &mx.lumped_mass,
-            &mx.scalar_mass,
-            &mx.lumped_normal,
-            &mx.stiffness,
-        );
+        let (m, mh, nn, a) = (&mx.lumped_mass, &mx.scalar_mass, &mx.lumped_normal, &mx.stiffness);
         let u: Vec<_> = nn.iter().zip(m).map(|(ni, mi)| ni / *mi).collect();
         // Q on the one-ring pattern, and B = M̂ + sA
         let gbar = sys.g.iter().map(|g| g.abs()).sum::<f64>() / n as f64;
@@ -46,11 +41,7 @@ impl LumpedSolver {
                 q[k] = a[k] * u[p.row_idx()[k]].dot(&u[j]);
             }
         }
-        let cyclic = if D == 2 {
-            Some(self.cyclic_diagonals(sys, &b))
-        } else {
-            None
-        };
+        let cyclic = if D == 2 { Some(self.cyclic_diagonals(sys, &b)) } else { None };
         if cyclic.is_none() {
             let sym = p.symbolic().as_ref();
             if self.chol32.is_none() {
@@ -62,9 +53,7 @@ impl LumpedSolver {
             }
         }
         // right-hand side −A (f + g κ⁰), κ⁰_j = N⃗_j·(A X)_j / |N⃗_j|²
-        let w: Vec<f64> = (0..n)
-            .map(|j| sys.f[j] + sys.g[j] * nn[j].dot(&sys.ax[j]) / nn[j].norm_squared())
-            .collect();
+        let w: Vec<f64> = (0..n).map(|j| sys.f[j] + sys.g[j] * nn[j].dot(&sys.ax[j]) / nn[j].norm_squared()).collect();
         let mut rhs = vec![0.0; n];
         p.mul(a, &w, &mut rhs);
         rhs.iter_mut().for_each(|r| *r = -*r);
@@ -75,10 +64,7 @@ impl LumpedSolver {
             p.mul(&q, v, &mut t);
             t.iter_mut().zip(&scale).for_each(|(ti, sc)| *ti *= sc);
             p.mul(a, &t, out);
-            out.iter_mut()
-                .zip(mh)
-                .zip(v)
-                .for_each(|((o, mi), vi)| *o += mi * vi);
+            out.iter_mut().zip(mh).zip(v).for_each(|((o, mi), vi)| *o += mi * vi);
         };
         let comps = self.cycles.clone();
         let chol = self.chol32.as_ref();
@@ -98,10 +84,7 @@ impl LumpedSolver {
         if !(out.converged && ok) {
             return Ok(None);
         }
-        self.last = Last::HMinus1 {
-            scalar_mass: mh.clone(),
-            cyclic,
-        };
+        self.last = Last::HMinus1 { scalar_mass: mh.clone(), cyclic };
         Ok(Some(v))
     }
 }

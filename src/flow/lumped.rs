@@ -81,14 +81,7 @@ pub struct LumpedSolver {
 
 impl Default for LumpedSolver {
     fn default() -> Self {
-        LumpedSolver {
-            cycles: None,
-            chol: None,
-            chol32: None,
-            lu: None,
-            two_ring: None,
-            last: Last::None,
-        }
+        LumpedSolver { cycles: None, chol: None, chol32: None, lu: None, two_ring: None, last: Last::None }
     }
 }
 
@@ -110,10 +103,7 @@ impl LumpedSolver {
     }
 
     /// Solve for the scalar normal velocity `V`.
-    pub fn solve<const D: usize>(
-        &mut self,
-        sys: &LinearSystem<'_, D>,
-    ) -> Result<Vec<f64>, FlowError> {
+    pub fn solve<const D: usize>(&mut self, sys: &LinearSystem<'_, D>) -> Result<Vec<f64>, FlowError> {
         if let ProductWeights::HMinus1 = sys.product {
             if let Some(v) = self.solve_h_minus_1(sys)? {
                 return Ok(v);
@@ -143,16 +133,10 @@ impl LumpedSolver {
         }
         let sym = sys.pattern.symbolic().clone();
         if self.lu.is_none() {
-            self.lu = Some(
-                SymbolicLu::try_new(sym.as_ref())
-                    .map_err(|e| FlowError::Factorization(format!("{e:?}")))?,
-            );
+            self.lu = Some(SymbolicLu::try_new(sym.as_ref()).map_err(|e| FlowError::Factorization(format!("{e:?}")))?);
         }
-        let lu = Lu::try_new_with_symbolic(
-            self.lu.clone().unwrap(),
-            SparseColMatRef::new(sym.as_ref(), &s.values),
-        )
-        .map_err(|e| FlowError::Factorization(format!("{e:?}")))?;
+        let lu = Lu::try_new_with_symbolic(self.lu.clone().unwrap(), SparseColMatRef::new(sym.as_ref(), &s.values))
+            .map_err(|e| FlowError::Factorization(format!("{e:?}")))?;
         let mut v = s.rhs;
         let n = v.len();
         lu.solve_in_place(MatMut::from_column_major_slice_mut(&mut v, n, 1));
@@ -166,10 +150,7 @@ impl LumpedSolver {
         match &self.last {
             Last::None => {}
             Last::OneRingCholesky => self.chol.as_ref().unwrap().solve_in_place(x),
-            Last::HMinus1 {
-                scalar_mass,
-                cyclic,
-            } => {
+            Last::HMinus1 { scalar_mass, cyclic } => {
                 self.solve_b(cyclic.as_deref(), x);
                 x.iter_mut().zip(scalar_mass).for_each(|(xi, m)| *xi *= m);
                 self.solve_b(cyclic.as_deref(), x);
@@ -192,11 +173,7 @@ impl LumpedSolver {
 
     /// Curves (L2/H1): one cyclic tridiagonal solve per component; `None` on a zero
     /// pivot (then the sparse factorizations take over).
-    fn solve_cyclic<const D: usize>(
-        &mut self,
-        sys: &LinearSystem<'_, D>,
-        s: &SchurMatrix,
-    ) -> Option<Vec<f64>> {
+    fn solve_cyclic<const D: usize>(&mut self, sys: &LinearSystem<'_, D>, s: &SchurMatrix) -> Option<Vec<f64>> {
         let diags = self.cyclic_diagonals(sys, &s.values);
         let mut v = s.rhs.clone();
         if !cyclic_solve_checked(self.cycles.as_ref().unwrap(), &diags, &mut v) {
@@ -216,29 +193,21 @@ impl LumpedSolver {
         let comps = self.cycles.get_or_insert_with(|| cyclic_components(sys));
         comps
             .iter()
-            .map(|comp| {
-                std::array::from_fn(|j| comp.positions.iter().map(|p| values[p[j]]).collect())
-            })
+            .map(|comp| std::array::from_fn(|j| comp.positions.iter().map(|p| values[p[j]]).collect()))
             .collect()
     }
 
     /// Sparse LU of the two-ring `S` (fallback of the `H^{-1}` path).
     fn solve_lu(&mut self, s: SchurMatrix) -> Result<Vec<f64>, FlowError> {
-        let tr = self
-            .two_ring
-            .as_mut()
-            .expect("two-ring pattern built in assemble");
+        let tr = self.two_ring.as_mut().expect("two-ring pattern built in assemble");
         if tr.lu.is_none() {
             tr.lu = Some(
-                SymbolicLu::try_new(tr.symbolic.as_ref())
-                    .map_err(|e| FlowError::Factorization(format!("{e:?}")))?,
+                SymbolicLu::try_new(tr.symbolic.as_ref()).map_err(|e| FlowError::Factorization(format!("{e:?}")))?,
             );
         }
-        let lu = Lu::try_new_with_symbolic(
-            tr.lu.clone().unwrap(),
-            SparseColMatRef::new(tr.symbolic.as_ref(), &s.values),
-        )
-        .map_err(|e| FlowError::Factorization(format!("{e:?}")))?;
+        let lu =
+            Lu::try_new_with_symbolic(tr.lu.clone().unwrap(), SparseColMatRef::new(tr.symbolic.as_ref(), &s.values))
+                .map_err(|e| FlowError::Factorization(format!("{e:?}")))?;
         let mut v = s.rhs;
         let n = v.len();
         lu.solve_in_place(MatMut::from_column_major_slice_mut(&mut v, n, 1));
@@ -251,14 +220,8 @@ impl LumpedSolver {
         let n = p.size();
         if self.two_ring.is_none() {
             let (col_ptr, row_idx) = p.squared();
-            let symbolic =
-                SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
-            self.two_ring = Some(TwoRing {
-                col_ptr,
-                row_idx,
-                symbolic,
-                lu: None,
-            });
+            let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
+            self.two_ring = Some(TwoRing { col_ptr, row_idx, symbolic, lu: None });
         }
         let tr = self.two_ring.as_ref().unwrap();
         let m = &sys.matrices.lumped_mass;
@@ -282,17 +245,11 @@ impl LumpedSolver {
                 }
             }
         }
-        let w: Vec<f64> = (0..n)
-            .map(|j| sys.f[j] + sys.g[j] * nn[j].dot(&sys.ax[j]) / nn[j].norm_squared())
-            .collect();
+        let w: Vec<f64> = (0..n).map(|j| sys.f[j] + sys.g[j] * nn[j].dot(&sys.ax[j]) / nn[j].norm_squared()).collect();
         let mut rhs = vec![0.0; n];
         p.mul(a, &w, &mut rhs);
         rhs.iter_mut().for_each(|r| *r = -*r);
-        SchurMatrix {
-            values,
-            rhs,
-            symmetric: false,
-        }
+        SchurMatrix { values, rhs, symmetric: false }
     }
 }
 
@@ -333,18 +290,11 @@ fn cyclic_components<const D: usize>(sys: &LinearSystem<'_, D>) -> Vec<CyclicCom
         let m = vertices.len();
         let positions = (0..m)
             .map(|k| {
-                let (prev, cur, nxt) = (
-                    vertices[(k + m - 1) % m],
-                    vertices[k],
-                    vertices[(k + 1) % m],
-                );
+                let (prev, cur, nxt) = (vertices[(k + m - 1) % m], vertices[k], vertices[(k + 1) % m]);
                 [at(cur, prev), p.diag()[cur], at(cur, nxt)]
             })
             .collect();
-        out.push(CyclicComponent {
-            vertices,
-            positions,
-        });
+        out.push(CyclicComponent { vertices, positions });
     }
     out
 }
@@ -353,17 +303,11 @@ fn assemble_l2_h1<const D: usize>(sys: &LinearSystem<'_, D>) -> SchurMatrix {
     let p = sys.pattern;
     let mx = sys.matrices;
     let n = p.size();
-    let (m, mh, nn, a) = (
-        &mx.lumped_mass,
-        &mx.scalar_mass,
-        &mx.lumped_normal,
-        &mx.stiffness,
-    );
+    let (m, mh, nn, a) = (&mx.lumped_mass, &mx.scalar_mass, &mx.lumped_normal, &mx.stiffness);
     let (mut values, beta) = match sys.product {
-        ProductWeights::H1 { alpha, beta } => (
-            mx.weighted_stiffness(sys.mesh, p, alpha),
-            beta.at_vertices(sys.mesh, mx),
-        ),
+        ProductWeights::H1 { alpha, beta } => {
+            (mx.weighted_stiffness(sys.mesh, p, alpha), beta.at_vertices(sys.mesh, mx))
+        }
         _ => (vec![0.0; p.nnz()], vec![1.0; n]),
     };
     // u_i = N⃗_i / m_i, so that S_ij += τ g_i (u_i·u_j) A_ij
@@ -377,14 +321,8 @@ fn assemble_l2_h1<const D: usize>(sys: &LinearSystem<'_, D>) -> SchurMatrix {
             values[k] += tg[i] * u[i].dot(&uj) * a[k];
         }
     }
-    let rhs = (0..n)
-        .map(|i| -mh[i] * sys.f[i] - sys.g[i] * u[i].dot(&sys.ax[i]))
-        .collect();
+    let rhs = (0..n).map(|i| -mh[i] * sys.f[i] - sys.g[i] * u[i].dot(&sys.ax[i])).collect();
     let g0 = sys.g[0];
     let symmetric = g0 >= 0.0 && sys.g.iter().all(|&g| g == g0);
-    SchurMatrix {
-        values,
-        rhs,
-        symmetric,
-    }
+    SchurMatrix { values, rhs, symmetric }
 }

@@ -11,6 +11,7 @@ mod error;
 mod gmres;
 mod h_minus_1;
 mod lumped;
+mod mesh_management;
 mod problem;
 mod step;
 mod system;
@@ -22,6 +23,7 @@ pub use driver::{Checkpoint, Flow, FlowSettings, MeshData, Progress, StepReport,
 pub use error::FlowError;
 pub use gmres::{gmres, GmresOutcome};
 pub use lumped::LumpedSolver;
+pub use mesh_management::{CurveManager, Managed, MeshManager};
 pub use problem::{H1Weights, Problem, ProblemError, ShapeGradient, SurfaceState};
 pub use step::{SemiImplicitStep, SolverKind, Velocity};
 pub use system::{LinearSystem, ProductWeights, ScalarProduct};

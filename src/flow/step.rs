@@ -33,11 +33,7 @@ pub struct SemiImplicitStep {
 
 impl SemiImplicitStep {
     pub fn new(kind: SolverKind) -> Self {
-        SemiImplicitStep {
-            kind,
-            lumped: LumpedSolver::new(),
-            consistent: ConsistentSolver::new(),
-        }
+        SemiImplicitStep { kind, lumped: LumpedSolver::new(), consistent: ConsistentSolver::new() }
     }
 
     pub fn kind(&self) -> SolverKind {
@@ -51,10 +47,7 @@ impl SemiImplicitStep {
     }
 
     /// Solve the linearized system (74) for `V` and `V⃗`.
-    pub fn velocity<const D: usize>(
-        &mut self,
-        sys: &LinearSystem<'_, D>,
-    ) -> Result<Velocity<D>, FlowError> {
+    pub fn velocity<const D: usize>(&mut self, sys: &LinearSystem<'_, D>) -> Result<Velocity<D>, FlowError> {
         let (normal, vector) = match self.kind {
             SolverKind::Lumped => {
                 let v = self.lumped.solve(sys)?;

@@ -243,7 +243,8 @@ pub fn resolve_intersections(mesh: &CurveMesh, min_area: f64) -> Result<Option<C
         }
         // probe just left and right of the longest segment's midpoint
         let n = l.len();
-        let k = (0..n).max_by(|&i, &j| (l[(i + 1) % n] - l[i]).norm().total_cmp(&(l[(j + 1) % n] - l[j]).norm())).unwrap();
+        let k =
+            (0..n).max_by(|&i, &j| (l[(i + 1) % n] - l[i]).norm().total_cmp(&(l[(j + 1) % n] - l[j]).norm())).unwrap();
         let (a, b) = (l[k], l[(k + 1) % n]);
         let d = b - a;
         let normal_left = Point::<2>::new(-d.y, d.x).normalize();
@@ -292,7 +293,12 @@ mod tests {
         let a = circle([0.0, 0.0], 1.0, 128).unwrap();
         let b = circle([5.0, 0.0], 1.0, 128).unwrap();
         let m = union(&[a, b]).unwrap();
-        let pos = m.positions().iter().enumerate().map(|(i, p)| if i >= 128 { p - Point::<2>::new(5.0 - d, 0.0) } else { *p }).collect();
+        let pos = m
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| if i >= 128 { p - Point::<2>::new(5.0 - d, 0.0) } else { *p })
+            .collect();
         m.with_positions(pos)
     }
 
@@ -322,10 +328,13 @@ mod tests {
             .collect();
         // build a valid mesh first (neck open), then move to the crossed state
         let open: Vec<Point<2>> = pts.iter().map(|p| Point::<2>::new(p.x, p.y + p.y.signum() * 0.0)).collect();
-        let valid = from_polylines(vec![(0..n).map(|k| {
-            let t = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
-            Point::<2>::new(2.0 * t.cos(), t.sin() * (0.6 * 4.0 * t.cos() * t.cos() + 0.3))
-        }).collect()]).unwrap();
+        let valid = from_polylines(vec![(0..n)
+            .map(|k| {
+                let t = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+                Point::<2>::new(2.0 * t.cos(), t.sin() * (0.6 * 4.0 * t.cos() * t.cos() + 0.3))
+            })
+            .collect()])
+        .unwrap();
         let crossed = valid.with_positions(open);
         let out = resolve_intersections(&crossed, 1e-6).unwrap().unwrap();
         assert_eq!(out.num_components(), 2);
@@ -335,7 +344,8 @@ mod tests {
         }
         // areas: each lobe ∫ |y| dx over the lobe, by symmetry equal
         let total = out.enclosed_measure();
-        let lobes: Vec<f64> = out.cycles().iter().map(|c| loop_area(&c.iter().map(|&v| out.positions()[v]).collect())).collect();
+        let lobes: Vec<f64> =
+            out.cycles().iter().map(|c| loop_area(&c.iter().map(|&v| out.positions()[v]).collect())).collect();
         assert!((lobes[0] - lobes[1]).abs() < 1e-3 * total);
     }
 }

@@ -28,12 +28,7 @@ pub fn circle(center: [f64; 2], radius: f64, n: usize) -> Result<CurveMesh, Mesh
 
 /// Ellipse with semi-axes `(a, b)`, rotated by `rotation` radians, with `n` vertices
 /// equally spaced in arclength.
-pub fn ellipse(
-    center: [f64; 2],
-    semi_axes: [f64; 2],
-    rotation: f64,
-    n: usize,
-) -> Result<CurveMesh, MeshError> {
+pub fn ellipse(center: [f64; 2], semi_axes: [f64; 2], rotation: f64, n: usize) -> Result<CurveMesh, MeshError> {
     let [a, b] = semi_axes;
     let at = |th: f64| Point::<2>::new(a * th.cos(), b * th.sin());
     let fine = 64 * n.max(3);
@@ -52,17 +47,10 @@ pub fn ellipse(
         while s[j + 1] < target {
             j += 1;
         }
-        let f = if s[j + 1] > s[j] {
-            (target - s[j]) / (s[j + 1] - s[j])
-        } else {
-            0.0
-        };
+        let f = if s[j + 1] > s[j] { (target - s[j]) / (s[j + 1] - s[j]) } else { 0.0 };
         let th = 2.0 * PI * (j as f64 + f) / fine as f64;
         let p = at(th);
-        pts.push(Point::<2>::new(
-            center[0] + c * p.x - r * p.y,
-            center[1] + r * p.x + c * p.y,
-        ));
+        pts.push(Point::<2>::new(center[0] + c * p.x - r * p.y, center[1] + r * p.x + c * p.y));
     }
     from_polylines(vec![pts])
 }
@@ -138,17 +126,12 @@ mod tests {
 
     #[test]
     fn clockwise_polygon_is_reoriented_and_bowtie_rejected() {
-        let sq =
-            [[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]].map(|p| Point::<2>::new(p[0], p[1]));
+        let sq = [[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]].map(|p| Point::<2>::new(p[0], p[1]));
         let m = polygon(&sq, Some(40)).unwrap();
         assert!((m.enclosed_measure() - 1.0).abs() < 1e-12);
         assert_eq!(m.num_vertices(), 40);
-        let bow =
-            [[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]].map(|p| Point::<2>::new(p[0], p[1]));
-        assert!(matches!(
-            polygon(&bow, None),
-            Err(MeshError::SelfIntersection { .. })
-        ));
+        let bow = [[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]].map(|p| Point::<2>::new(p[0], p[1]));
+        assert!(matches!(polygon(&bow, None), Err(MeshError::SelfIntersection { .. })));
     }
 
     #[test]
@@ -158,9 +141,6 @@ mod tests {
         let u = union(&[a.clone(), b]).unwrap();
         assert_eq!(u.num_components(), 2);
         let c = circle([1.5, 0.0], 1.0, 64).unwrap();
-        assert!(matches!(
-            union(&[a, c]),
-            Err(MeshError::SelfIntersection { .. })
-        ));
+        assert!(matches!(union(&[a, c]), Err(MeshError::SelfIntersection { .. })));
     }
 }

@@ -24,10 +24,7 @@ pub fn find_segment_intersections(points: &[Point<2>], segments: &[[usize; 2]]) 
     if segments.len() < 2 {
         return Vec::new();
     }
-    let total: f64 = segments
-        .iter()
-        .map(|s| (points[s[1]] - points[s[0]]).norm())
-        .sum();
+    let total: f64 = segments.iter().map(|s| (points[s[1]] - points[s[0]]).norm()).sum();
     let cell = (total / segments.len() as f64).max(1e-300);
     let key = |x: f64| (x / cell).floor() as i64;
     let mut grid: HashMap<(i64, i64), Vec<usize>> = HashMap::with_capacity(2 * segments.len());
@@ -64,12 +61,7 @@ fn cross(u: Point<2>, v: Point<2>) -> f64 {
     u.x * v.y - u.y * v.x
 }
 
-fn intersect_pair(
-    points: &[Point<2>],
-    segments: &[[usize; 2]],
-    a: usize,
-    b: usize,
-) -> Option<SegmentHit> {
+fn intersect_pair(points: &[Point<2>], segments: &[[usize; 2]], a: usize, b: usize) -> Option<SegmentHit> {
     let (sa, sb) = (segments[a], segments[b]);
     let shares = sa[0] == sb[0] || sa[0] == sb[1] || sa[1] == sb[0] || sa[1] == sb[1];
     let (p, r) = (points[sa[0]], points[sa[1]] - points[sa[0]]);
@@ -101,13 +93,7 @@ fn intersect_pair(
     let s = cross(qp, w) / denom;
     let t = cross(qp, r) / denom;
     if (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t) {
-        Some(SegmentHit {
-            a,
-            b,
-            s,
-            t,
-            point: p + r * s,
-        })
+        Some(SegmentHit { a, b, s, t, point: p + r * s })
     } else {
         None
     }

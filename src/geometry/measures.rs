@@ -20,23 +20,17 @@ impl<const D: usize> Mesh<D> {
     /// Signed enclosed measure: area `½ Σ (x_a y_b − x_b y_a)` (2D) or volume
     /// `⅙ Σ p_a · (p_b × p_c)` (3D). Positive for outward orientation.
     pub fn enclosed_measure(&self) -> f64 {
-        (0..self.num_elements())
-            .map(|e| simplex::enclosed_contribution(&self.element_points(e)))
-            .sum()
+        (0..self.num_elements()).map(|e| simplex::enclosed_contribution(&self.element_points(e))).sum()
     }
 
     /// Measure of Γ itself: perimeter (2D) or surface area (3D), `Σ_T |T|`.
     pub fn boundary_measure(&self) -> f64 {
-        (0..self.num_elements())
-            .map(|e| self.element_geometry(e).0)
-            .sum()
+        (0..self.num_elements()).map(|e| self.element_geometry(e).0).sum()
     }
 
     /// Unit outward normal `ν_T` of every element (`#E × D`).
     pub fn element_normals(&self) -> Vec<Point<D>> {
-        (0..self.num_elements())
-            .map(|e| self.element_geometry(e).1)
-            .collect()
+        (0..self.num_elements()).map(|e| self.element_geometry(e).1).collect()
     }
 
     /// Unit vertex normals: the normalized lumped `N⃗_i = ∫_Γ φ_i ν = Σ_{T∋i} |T| ν_T / D`.
@@ -65,12 +59,7 @@ impl<const D: usize> Mesh<D> {
 
     /// Edge lengths and angles: see [`MeshQuality`].
     pub fn quality(&self) -> MeshQuality {
-        let mut q = MeshQuality {
-            min_edge: f64::INFINITY,
-            max_edge: 0.0,
-            min_angle_deg: 180.0,
-            max_angle_deg: 0.0,
-        };
+        let mut q = MeshQuality { min_edge: f64::INFINITY, max_edge: 0.0, min_angle_deg: 180.0, max_angle_deg: 0.0 };
         for e in 0..self.num_elements() {
             let p = self.element_points(e);
             for a in 0..D {

@@ -11,11 +11,7 @@ pub enum MeshError {
     #[error("vertex {vertex} has a non-finite coordinate")]
     NonFinite { vertex: usize },
     #[error("element {element} refers to vertex {index}, but there are only {count} vertices")]
-    IndexOutOfRange {
-        element: usize,
-        index: usize,
-        count: usize,
-    },
+    IndexOutOfRange { element: usize, index: usize, count: usize },
     #[error("element {element} repeats a vertex")]
     RepeatedVertex { element: usize },
     #[error("element {element} is degenerate (zero length or area)")]
@@ -25,16 +21,12 @@ pub enum MeshError {
     #[error("vertex {vertex} is used by no element")]
     UnusedVertex { vertex: usize },
     #[error("curve vertex {vertex} starts {outgoing} and ends {incoming} segments; closed curves need one of each")]
-    CurveVertexDegree {
-        vertex: usize,
-        incoming: usize,
-        outgoing: usize,
-    },
-    #[error(
-        "curve component through vertex {vertex} has only {len} vertices; at least 3 are needed"
-    )]
+    CurveVertexDegree { vertex: usize, incoming: usize, outgoing: usize },
+    #[error("curve component through vertex {vertex} has only {len} vertices; at least 3 are needed")]
     ShortComponent { vertex: usize, len: usize },
-    #[error("edge ({a}, {b}) is used {count} times in the same direction: non-manifold or inconsistently oriented surface")]
+    #[error(
+        "edge ({a}, {b}) is used {count} times in the same direction: non-manifold or inconsistently oriented surface"
+    )]
     InconsistentEdge { a: usize, b: usize, count: usize },
     #[error("edge ({a}, {b}) has no opposite half-edge: the surface is not closed")]
     OpenEdge { a: usize, b: usize },
@@ -72,20 +64,14 @@ impl<const D: usize> Mesh<D> {
     /// area/volume must be positive (outward orientation).
     pub fn new(positions: Vec<Point<D>>, elements: Vec<[usize; D]>) -> Result<Self, MeshError> {
         validate::validate(&positions, &elements)?;
-        Ok(Mesh {
-            positions,
-            elements,
-        })
+        Ok(Mesh { positions, elements })
     }
 
     /// Same connectivity, new positions (the flow's update `X_{n+1} = X_n + τ V⃗`).
     /// Panics if the number of positions changes.
     pub fn with_positions(&self, positions: Vec<Point<D>>) -> Self {
         assert_eq!(positions.len(), self.positions.len());
-        Mesh {
-            positions,
-            elements: self.elements.clone(),
-        }
+        Mesh { positions, elements: self.elements.clone() }
     }
 
     /// Replace the positions in place (same count).

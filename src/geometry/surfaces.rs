@@ -6,14 +6,8 @@ use std::collections::HashMap;
 use std::f64::consts::PI;
 
 /// Validate and, if the enclosed volume came out negative, flip every triangle.
-fn oriented(
-    positions: Vec<Point<3>>,
-    mut elements: Vec<[usize; 3]>,
-) -> Result<SurfaceMesh, MeshError> {
-    let vol: f64 = elements
-        .iter()
-        .map(|t| positions[t[0]].dot(&positions[t[1]].cross(&positions[t[2]])))
-        .sum();
+fn oriented(positions: Vec<Point<3>>, mut elements: Vec<[usize; 3]>) -> Result<SurfaceMesh, MeshError> {
+    let vol: f64 = elements.iter().map(|t| positions[t[0]].dot(&positions[t[1]].cross(&positions[t[2]]))).sum();
     if vol < 0.0 {
         for t in &mut elements {
             t.swap(1, 2);
@@ -32,18 +26,11 @@ pub fn icosphere(center: [f64; 3], radius: f64, level: u32) -> Result<SurfaceMes
 }
 
 /// Ellipsoid with the given semi-axes: an icosphere of level `level` scaled per axis.
-pub fn ellipsoid(
-    center: [f64; 3],
-    semi_axes: [f64; 3],
-    level: u32,
-) -> Result<SurfaceMesh, MeshError> {
+pub fn ellipsoid(center: [f64; 3], semi_axes: [f64; 3], level: u32) -> Result<SurfaceMesh, MeshError> {
     let (unit, tris) = unit_icosphere(level);
     let c = Point::<3>::from(center);
     let s = Point::<3>::from(semi_axes);
-    oriented(
-        unit.into_iter().map(|p| c + p.component_mul(&s)).collect(),
-        tris,
-    )
+    oriented(unit.into_iter().map(|p| c + p.component_mul(&s)).collect(), tris)
 }
 
 fn unit_icosphere(level: u32) -> (Vec<Point<3>>, Vec<[usize; 3]>) {
@@ -62,10 +49,7 @@ fn unit_icosphere(level: u32) -> (Vec<Point<3>>, Vec<[usize; 3]>) {
         [-t, 0.0, -1.0],
         [-t, 0.0, 1.0],
     ];
-    let mut pts: Vec<Point<3>> = raw
-        .iter()
-        .map(|p| Point::<3>::from(*p).normalize())
-        .collect();
+    let mut pts: Vec<Point<3>> = raw.iter().map(|p| Point::<3>::from(*p).normalize()).collect();
     let mut tris: Vec<[usize; 3]> = vec![
         [0, 11, 5],
         [0, 5, 1],
@@ -112,18 +96,13 @@ fn unit_icosphere(level: u32) -> (Vec<Point<3>>, Vec<[usize; 3]>) {
 /// Axis-aligned box of the given centre and side lengths, each face a uniform grid
 /// of right triangles with `divisions` grid cells per unit length (at least one per
 /// side). The 8×1×1 prism of the paper (§4.4.1) at 8 divisions has 2,178 vertices.
-pub fn box_surface(
-    center: [f64; 3],
-    size: [f64; 3],
-    divisions: f64,
-) -> Result<SurfaceMesh, MeshError> {
+pub fn box_surface(center: [f64; 3], size: [f64; 3], divisions: f64) -> Result<SurfaceMesh, MeshError> {
     let n: [usize; 3] = std::array::from_fn(|a| ((size[a] * divisions).round() as usize).max(1));
     let mut index: HashMap<[usize; 3], usize> = HashMap::new();
     let mut positions = Vec::new();
     let mut vertex = |ijk: [usize; 3], positions: &mut Vec<Point<3>>| {
         *index.entry(ijk).or_insert_with(|| {
-            let p: [f64; 3] =
-                std::array::from_fn(|a| center[a] + size[a] * (ijk[a] as f64 / n[a] as f64 - 0.5));
+            let p: [f64; 3] = std::array::from_fn(|a| center[a] + size[a] * (ijk[a] as f64 / n[a] as f64 - 0.5));
             positions.push(Point::<3>::from(p));
             positions.len() - 1
         })
@@ -195,10 +174,7 @@ pub fn torus(
         }
     }
     let shifted: Vec<Point<3>> = positions.iter().map(|p| p - c).collect();
-    let vol: f64 = tris
-        .iter()
-        .map(|t| shifted[t[0]].dot(&shifted[t[1]].cross(&shifted[t[2]])))
-        .sum();
+    let vol: f64 = tris.iter().map(|t| shifted[t[0]].dot(&shifted[t[1]].cross(&shifted[t[2]]))).sum();
     if vol < 0.0 {
         for t in &mut tris {
             t.swap(1, 2);

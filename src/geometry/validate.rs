@@ -3,10 +3,7 @@
 use super::{simplex, MeshError, Point};
 use std::collections::HashMap;
 
-pub(super) fn validate<const D: usize>(
-    positions: &[Point<D>],
-    elements: &[[usize; D]],
-) -> Result<(), MeshError> {
+pub(super) fn validate<const D: usize>(positions: &[Point<D>], elements: &[[usize; D]]) -> Result<(), MeshError> {
     if elements.is_empty() {
         return Err(MeshError::Empty);
     }
@@ -22,11 +19,7 @@ pub(super) fn validate<const D: usize>(
     for (e, el) in elements.iter().enumerate() {
         for &index in el {
             if index >= n {
-                return Err(MeshError::IndexOutOfRange {
-                    element: e,
-                    index,
-                    count: n,
-                });
+                return Err(MeshError::IndexOutOfRange { element: e, index, count: n });
             }
             used[index] = true;
         }
@@ -58,10 +51,7 @@ pub(super) fn validate<const D: usize>(
     match D {
         2 => {
             validate_curve(n, elements)?;
-            let pts: Vec<Point<2>> = positions
-                .iter()
-                .map(|p| Point::<2>::new(p[0], p[1]))
-                .collect();
+            let pts: Vec<Point<2>> = positions.iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
             let segs: Vec<[usize; 2]> = elements.iter().map(|e| [e[0], e[1]]).collect();
             if let Some(h) = super::find_segment_intersections(&pts, &segs).first() {
                 return Err(MeshError::SelfIntersection { a: h.a, b: h.b });
@@ -70,16 +60,11 @@ pub(super) fn validate<const D: usize>(
         3 => validate_surface(n, elements)?,
         _ => unreachable!(),
     }
-    let enclosed: f64 = elements
-        .iter()
-        .map(|el| simplex::enclosed_contribution(&std::array::from_fn(|k| positions[el[k]])))
-        .sum();
+    let enclosed: f64 =
+        elements.iter().map(|el| simplex::enclosed_contribution(&std::array::from_fn(|k| positions[el[k]]))).sum();
     if enclosed <= 0.0 {
         let what = if D == 2 { "area" } else { "volume" };
-        return Err(MeshError::InwardOrientation {
-            what,
-            value: enclosed,
-        });
+        return Err(MeshError::InwardOrientation { what, value: enclosed });
     }
     Ok(())
 }
@@ -105,11 +90,7 @@ fn validate_curve<const D: usize>(n: usize, elements: &[[usize; D]]) -> Result<(
     }
     for v in 0..n {
         if outgoing[v] != 1 || incoming[v] != 1 {
-            return Err(MeshError::CurveVertexDegree {
-                vertex: v,
-                incoming: incoming[v],
-                outgoing: outgoing[v],
-            });
+            return Err(MeshError::CurveVertexDegree { vertex: v, incoming: incoming[v], outgoing: outgoing[v] });
         }
     }
     let mut seen = vec![false; n];

@@ -3,7 +3,7 @@
 
 use super::mesh_io::read_mesh_file;
 use super::spec::{InitialSpec, JobSpec, ProblemSpec, SpecError};
-use crate::flow::{FlowSettings, Problem};
+use crate::flow::{CurveManager, FlowSettings, Problem};
 use crate::geometry::{self, CurveMesh, Mesh, MeshError, Point, SurfaceMesh};
 use crate::problems::{CurvatureFlow, SurfaceDiffusion};
 use std::collections::HashMap;
@@ -54,42 +54,31 @@ pub struct PreparedJob {
     pub problem: ProblemKind,
     pub settings: FlowSettings,
     pub checkpoint_every: usize,
+    /// Mesh management of curves, resolved from the spec and the initial mesh
+    /// (`None` for surfaces, or when every switch is off).
+    pub curve_manager: Option<CurveManager>,
 }
 
 fn positive(field: &str, v: f64) -> Result<f64, SpecError> {
     if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
-        Err(SpecError::new(
-            field,
-            format!("must be a positive number, got {v}"),
-        ))
+        Err(SpecError::new(field, format!("must be a positive number, got {v}")))
     }
 }
 
 fn finite(field: &str, v: &[f64]) -> Result<(), SpecError> {
     match v.iter().position(|x| !x.is_finite()) {
-        Some(i) => Err(SpecError::new(
-            format!("{field}[{i}]"),
-            "must be a finite number",
-        )),
+        Some(i) => Err(SpecError::new(format!("{field}[{i}]"), "must be a finite number")),
         None => Ok(()),
     }
 }
 
-fn in_range<T: PartialOrd + std::fmt::Display + Copy>(
-    field: &str,
-    v: T,
-    lo: T,
-    hi: T,
-) -> Result<T, SpecError> {
+fn in_range<T: PartialOrd + std::fmt::Display + Copy>(field: &str, v: T, lo: T, hi: T) -> Result<T, SpecError> {
     if v >= lo && v <= hi {
         Ok(v)
     } else {
-        Err(SpecError::new(
-            field,
-            format!("must be between {lo} and {hi}, got {v}"),
-        ))
+        Err(SpecError::new(field, format!("must be between {lo} and {hi}, got {v}")))
     }
 }
 
@@ -122,22 +111,13 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     let tau = positive("flow.tau", f.tau.unwrap_or(d.tau))?;
     let tau_min = positive("flow.tau_min", f.tau_min.unwrap_or(d.tau_min.min(tau)))?;
     if tau_min > tau {
-        return Err(SpecError::new(
-            "flow.tau_min",
-            format!("must not exceed flow.tau ({tau})"),
-        ));
+        return Err(SpecError::new("flow.tau_min", format!("must not exceed flow.tau ({tau})")));
     }
     let tolerance = f.tolerance.unwrap_or(d.tolerance);
     if !(tolerance.is_finite() && tolerance >= 0.0) {
-        return Err(SpecError::new(
-            "flow.tolerance",
-            format!("must be a nonnegative number, got {tolerance}"),
-        ));
+        return Err(SpecError::new("flow.tolerance", format!("must be a nonnegative number, got {tolerance}")));
     }
-    let end_time = f
-        .end_time
-        .map(|t| positive("flow.end_time", t))
-        .transpose()?;
+    let end_time = f.end_time.map(|t| positive("flow.end_time", t)).transpose()?;
     let step_control = match f.step_control {
         None => d.step_control,
         Some(e) if e == 0.0 => None,
@@ -145,18 +125,10 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     };
     let alpha = f.alpha.unwrap_or(d.alpha);
     if !(alpha.is_finite() && alpha >= 0.0) {
-        return Err(SpecError::new(
-            "flow.alpha",
-            format!("must be a nonnegative number, got {alpha}"),
-        ));
+        return Err(SpecError::new("flow.alpha", format!("must be a nonnegative number, got {alpha}")));
     }
     let beta = positive("flow.beta", f.beta.unwrap_or(d.beta))?;
-    let max_iterations = in_range(
-        "flow.max_iterations",
-        f.max_iterations.unwrap_or(d.max_iterations),
-        1,
-        100_000_000,
-    )?;
+    let max_iterations = in_range("flow.max_iterations", f.max_iterations.unwrap_or(d.max_iterations), 1, 100_000_000)?;
     let scalar_product = f.scalar_product.unwrap_or(default_product);
     let settings = FlowSettings {
         scalar_product,
@@ -171,19 +143,42 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         alpha,
         beta,
     };
-    let checkpoint_every = in_range(
-        "output.checkpoint_every",
-        spec.output.checkpoint_every,
-        1,
-        usize::MAX,
-    )?;
-    Ok(PreparedJob {
-        spec,
-        mesh,
-        problem,
-        settings,
-        checkpoint_every,
-    })
+    let checkpoint_every = in_range("output.checkpoint_every", spec.output.checkpoint_every, 1, usize::MAX)?;
+    let curve_manager = match &mesh {
+        AnyMesh::Curve(c) => curve_manager(&spec.mesh, c)?,
+        AnyMesh::Surface(_) => None,
+    };
+    Ok(PreparedJob { spec, mesh, problem, settings, checkpoint_every, curve_manager })
+}
+
+fn curve_manager(m: &super::spec::MeshSpec, initial: &CurveMesh) -> Result<Option<CurveManager>, SpecError> {
+    if !(m.regularize || m.adapt || m.topology_changes) {
+        return Ok(None);
+    }
+    let mut params = CurveManager::defaults_for(initial);
+    if let Some(e) = m.epsilon {
+        params.epsilon = positive("mesh.epsilon", e)?;
+    }
+    if let Some(h) = m.h_min {
+        params.h_min = positive("mesh.h_min", h)?;
+    }
+    if let Some(h) = m.h_max {
+        params.h_max = positive("mesh.h_max", h)?;
+    }
+    if params.h_min * 2.0 > params.h_max {
+        return Err(SpecError::new("mesh.h_max", format!("must be at least twice mesh.h_min ({})", params.h_min)));
+    }
+    if let Some(a) = m.min_area {
+        params.min_area = positive("mesh.min_area", a)?;
+    }
+    let sweeps = in_range("mesh.sweeps", m.sweeps, 0, 1000)?;
+    Ok(Some(CurveManager {
+        regularize: m.regularize,
+        sweeps,
+        adapt: m.adapt,
+        topology_changes: m.topology_changes,
+        params,
+    }))
 }
 
 fn curve(field: &str, m: Result<CurveMesh, MeshError>) -> Result<AnyMesh, SpecError> {
@@ -194,57 +189,31 @@ fn surface(field: &str, m: Result<SurfaceMesh, MeshError>) -> Result<AnyMesh, Sp
     m.map(AnyMesh::Surface).map_err(|e| mesh_err(field, e))
 }
 
-fn build_initial(
-    field: &str,
-    s: &InitialSpec,
-    inputs: &HashMap<String, Vec<u8>>,
-) -> Result<AnyMesh, SpecError> {
+fn build_initial(field: &str, s: &InitialSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<AnyMesh, SpecError> {
     let at = |name: &str| format!("{field}.{name}");
     let curve_res = |r: usize| in_range(&at("resolution"), r, 3, MAX_VERTICES);
     match s {
-        InitialSpec::Circle {
-            center,
-            radius,
-            resolution,
-        } => {
+        InitialSpec::Circle { center, radius, resolution } => {
             finite(&at("center"), center)?;
             let r = positive(&at("radius"), *radius)?;
             curve(field, geometry::circle(*center, r, curve_res(*resolution)?))
         }
-        InitialSpec::Ellipse {
-            center,
-            semi_axes,
-            rotation,
-            resolution,
-        } => {
+        InitialSpec::Ellipse { center, semi_axes, rotation, resolution } => {
             finite(&at("center"), center)?;
             positive(&at("semi_axes[0]"), semi_axes[0])?;
             positive(&at("semi_axes[1]"), semi_axes[1])?;
             finite(&at("rotation"), &[*rotation])?;
-            curve(
-                field,
-                geometry::ellipse(*center, *semi_axes, *rotation, curve_res(*resolution)?),
-            )
+            curve(field, geometry::ellipse(*center, *semi_axes, *rotation, curve_res(*resolution)?))
         }
-        InitialSpec::Rectangle {
-            center,
-            size,
-            resolution,
-        } => {
+        InitialSpec::Rectangle { center, size, resolution } => {
             finite(&at("center"), center)?;
             positive(&at("size[0]"), size[0])?;
             positive(&at("size[1]"), size[1])?;
-            curve(
-                field,
-                geometry::rectangle(*center, *size, curve_res(*resolution)?.max(4)),
-            )
+            curve(field, geometry::rectangle(*center, *size, curve_res(*resolution)?.max(4)))
         }
         InitialSpec::Polygon { points, resolution } => {
             if points.len() < 3 {
-                return Err(SpecError::new(
-                    at("points"),
-                    format!("needs at least 3 points, got {}", points.len()),
-                ));
+                return Err(SpecError::new(at("points"), format!("needs at least 3 points, got {}", points.len())));
             }
             for (i, p) in points.iter().enumerate() {
                 finite(&format!("{field}.points[{i}]"), p)?;
@@ -266,62 +235,32 @@ fn build_initial(
                 }
             }
             if !surfaces.is_empty() && !curves.is_empty() {
-                return Err(SpecError::new(
-                    at("parts"),
-                    "mixes curves (2D) and surfaces (3D)",
-                ));
+                return Err(SpecError::new(at("parts"), "mixes curves (2D) and surfaces (3D)"));
             }
             if !surfaces.is_empty() {
                 return surface(field, surface_union(&surfaces));
             }
             curve(field, geometry::union(&curves))
         }
-        InitialSpec::Sphere {
-            center,
-            radius,
-            resolution,
-        } => {
+        InitialSpec::Sphere { center, radius, resolution } => {
             finite(&at("center"), center)?;
             let r = positive(&at("radius"), *radius)?;
-            surface(
-                field,
-                geometry::icosphere(*center, r, in_range(&at("resolution"), *resolution, 0, 8)?),
-            )
+            surface(field, geometry::icosphere(*center, r, in_range(&at("resolution"), *resolution, 0, 8)?))
         }
-        InitialSpec::Ellipsoid {
-            center,
-            semi_axes,
-            resolution,
-        } => {
+        InitialSpec::Ellipsoid { center, semi_axes, resolution } => {
             finite(&at("center"), center)?;
             for (i, a) in semi_axes.iter().enumerate() {
                 positive(&format!("{field}.semi_axes[{i}]"), *a)?;
             }
-            surface(
-                field,
-                geometry::ellipsoid(
-                    *center,
-                    *semi_axes,
-                    in_range(&at("resolution"), *resolution, 0, 8)?,
-                ),
-            )
+            surface(field, geometry::ellipsoid(*center, *semi_axes, in_range(&at("resolution"), *resolution, 0, 8)?))
         }
-        InitialSpec::Box {
-            center,
-            size,
-            resolution,
-        } => {
+        InitialSpec::Box { center, size, resolution } => {
             finite(&at("center"), center)?;
             for (i, a) in size.iter().enumerate() {
                 positive(&format!("{field}.size[{i}]"), *a)?;
             }
             let div = positive(&at("resolution"), *resolution)?;
-            let cells: f64 = size
-                .iter()
-                .map(|s| (s * div).max(1.0))
-                .product::<f64>()
-                .powf(2.0 / 3.0)
-                * 6.0;
+            let cells: f64 = size.iter().map(|s| (s * div).max(1.0)).product::<f64>().powf(2.0 / 3.0) * 6.0;
             if cells > MAX_VERTICES as f64 {
                 return Err(SpecError::new(
                     at("resolution"),
@@ -330,20 +269,12 @@ fn build_initial(
             }
             surface(field, geometry::box_surface(*center, *size, div))
         }
-        InitialSpec::Torus {
-            center,
-            major_radius,
-            minor_radius,
-            resolution,
-        } => {
+        InitialSpec::Torus { center, major_radius, minor_radius, resolution } => {
             finite(&at("center"), center)?;
             let big = positive(&at("major_radius"), *major_radius)?;
             let small = positive(&at("minor_radius"), *minor_radius)?;
             if small >= big {
-                return Err(SpecError::new(
-                    at("minor_radius"),
-                    "must be smaller than major_radius",
-                ));
+                return Err(SpecError::new(at("minor_radius"), "must be smaller than major_radius"));
             }
             let n = in_range(&at("resolution"), *resolution, 3, 4096)?;
             let n_minor = ((n as f64 * small / big).round() as usize).max(8);
@@ -351,14 +282,11 @@ fn build_initial(
         }
         InitialSpec::Mesh { file } => {
             let name = file.strip_prefix("input:").ok_or_else(|| {
-                SpecError::new(
-                    at("file"),
-                    format!("must name an uploaded input as \"input:NAME\", got {file:?}"),
-                )
+                SpecError::new(at("file"), format!("must name an uploaded input as \"input:NAME\", got {file:?}"))
             })?;
-            let bytes = inputs.get(name).ok_or_else(|| {
-                SpecError::new(at("file"), format!("no input named {name:?} was supplied"))
-            })?;
+            let bytes = inputs
+                .get(name)
+                .ok_or_else(|| SpecError::new(at("file"), format!("no input named {name:?} was supplied")))?;
             read_mesh_file(name, bytes).map_err(|e| SpecError::new(at("file"), e.to_string()))
         }
     }
@@ -370,11 +298,7 @@ fn surface_union(parts: &[SurfaceMesh]) -> Result<SurfaceMesh, MeshError> {
     for p in parts {
         let base = positions.len();
         positions.extend_from_slice(p.positions());
-        elements.extend(
-            p.elements()
-                .iter()
-                .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
-        );
+        elements.extend(p.elements().iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
     }
     Mesh::new(positions, elements)
 }

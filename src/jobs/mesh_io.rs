@@ -12,11 +12,7 @@ pub enum MeshFileError {
     #[error("input {name:?}: not a recognised mesh file (OBJ, OFF or STL)")]
     UnknownFormat { name: String },
     #[error("input {name:?}, line {line}: {message}")]
-    Parse {
-        name: String,
-        line: usize,
-        message: String,
-    },
+    Parse { name: String, line: usize, message: String },
     #[error("input {name:?}: {message}")]
     Content { name: String, message: String },
     #[error("input {name:?}: invalid mesh: {error}")]
@@ -36,10 +32,7 @@ pub fn read_mesh_file(name: &str, bytes: &[u8]) -> Result<AnyMesh, MeshFileError
         if is_binary_stl {
             MeshFileError::UnknownFormat { name: name.into() }
         } else {
-            MeshFileError::Content {
-                name: name.into(),
-                message: "not UTF-8 text and not binary STL".into(),
-            }
+            MeshFileError::Content { name: name.into(), message: "not UTF-8 text and not binary STL".into() }
         }
     })?;
     let head = text.trim_start();
@@ -57,44 +50,24 @@ pub fn read_mesh_file(name: &str, bytes: &[u8]) -> Result<AnyMesh, MeshFileError
 }
 
 fn parse_err(name: &str, line: usize, message: impl Into<String>) -> MeshFileError {
-    MeshFileError::Parse {
-        name: name.into(),
-        line,
-        message: message.into(),
-    }
+    MeshFileError::Parse { name: name.into(), line, message: message.into() }
 }
 
-fn nums<T: std::str::FromStr>(
-    name: &str,
-    line: usize,
-    parts: &[&str],
-) -> Result<Vec<T>, MeshFileError> {
+fn nums<T: std::str::FromStr>(name: &str, line: usize, parts: &[&str]) -> Result<Vec<T>, MeshFileError> {
     parts
         .iter()
-        .map(|p| {
-            p.parse::<T>()
-                .map_err(|_| parse_err(name, line, format!("cannot read number {p:?}")))
-        })
+        .map(|p| p.parse::<T>().map_err(|_| parse_err(name, line, format!("cannot read number {p:?}"))))
         .collect()
 }
 
-fn surface(
-    name: &str,
-    positions: Vec<Point<3>>,
-    tris: Vec<[usize; 3]>,
-) -> Result<AnyMesh, MeshFileError> {
+fn surface(name: &str, positions: Vec<Point<3>>, tris: Vec<[usize; 3]>) -> Result<AnyMesh, MeshFileError> {
     if positions.len() > MAX_VERTICES {
         return Err(MeshFileError::Content {
             name: name.into(),
             message: format!("more than {MAX_VERTICES} vertices"),
         });
     }
-    Mesh::new(positions, tris)
-        .map(AnyMesh::Surface)
-        .map_err(|error| MeshFileError::Mesh {
-            name: name.into(),
-            error,
-        })
+    Mesh::new(positions, tris).map(AnyMesh::Surface).map_err(|error| MeshFileError::Mesh { name: name.into(), error })
 }
 
 fn read_obj(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
@@ -109,17 +82,11 @@ fn read_obj(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
         };
         let index = |tok: &str| -> Result<usize, MeshFileError> {
             let first = tok.split('/').next().unwrap_or("");
-            let i: i64 = first
-                .parse()
-                .map_err(|_| parse_err(name, line, format!("bad index {tok:?}")))?;
+            let i: i64 = first.parse().map_err(|_| parse_err(name, line, format!("bad index {tok:?}")))?;
             let n = verts.len() as i64;
             let idx = if i < 0 { n + i } else { i - 1 };
             if idx < 0 || idx >= n {
-                return Err(parse_err(
-                    name,
-                    line,
-                    format!("index {i} out of range (1..={n})"),
-                ));
+                return Err(parse_err(name, line, format!("index {i} out of range (1..={n})")));
             }
             Ok(idx as usize)
         };
@@ -132,10 +99,7 @@ fn read_obj(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
                 verts.push(Point::<3>::new(c[0], c[1], c[2]));
             }
             "f" => {
-                let ids = rest
-                    .iter()
-                    .map(|t| index(t))
-                    .collect::<Result<Vec<_>, _>>()?;
+                let ids = rest.iter().map(|t| index(t)).collect::<Result<Vec<_>, _>>()?;
                 if ids.len() < 3 {
                     return Err(parse_err(name, line, "face needs at least 3 vertices"));
                 }
@@ -144,10 +108,7 @@ fn read_obj(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
                 }
             }
             "l" => {
-                let mut ids = rest
-                    .iter()
-                    .map(|t| index(t))
-                    .collect::<Result<Vec<_>, _>>()?;
+                let mut ids = rest.iter().map(|t| index(t)).collect::<Result<Vec<_>, _>>()?;
                 if ids.len() > 1 && ids.first() == ids.last() {
                     ids.pop();
                 }
@@ -182,10 +143,7 @@ fn read_obj(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
         }
         return Mesh::new(positions, elements)
             .map(AnyMesh::Curve)
-            .map_err(|error| MeshFileError::Mesh {
-                name: name.into(),
-                error,
-            });
+            .map_err(|error| MeshFileError::Mesh { name: name.into(), error });
     }
     surface(name, verts, tris)
 }
@@ -195,15 +153,11 @@ fn read_off(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
         let t = l.trim();
         !t.is_empty() && !t.starts_with('#')
     });
-    let (_, first) = lines
-        .next()
-        .ok_or_else(|| parse_err(name, 1, "empty file"))?;
+    let (_, first) = lines.next().ok_or_else(|| parse_err(name, 1, "empty file"))?;
     let mut header: Vec<&str> = first.split_whitespace().skip(1).collect();
     let mut line_no = 1;
     if header.is_empty() {
-        let (k, l) = lines
-            .next()
-            .ok_or_else(|| parse_err(name, 2, "missing counts"))?;
+        let (k, l) = lines.next().ok_or_else(|| parse_err(name, 2, "missing counts"))?;
         header = l.split_whitespace().collect();
         line_no = k + 1;
     }
@@ -221,9 +175,7 @@ fn read_off(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
     let mut verts = Vec::with_capacity(nv);
     let mut tris = Vec::with_capacity(nf);
     for _ in 0..nv {
-        let (k, l) = lines
-            .next()
-            .ok_or_else(|| parse_err(name, 0, "file ends inside the vertex list"))?;
+        let (k, l) = lines.next().ok_or_else(|| parse_err(name, 0, "file ends inside the vertex list"))?;
         let p: Vec<&str> = l.split_whitespace().collect();
         if p.len() < 3 {
             return Err(parse_err(name, k + 1, "vertex needs x y z"));
@@ -232,27 +184,17 @@ fn read_off(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
         verts.push(Point::<3>::new(c[0], c[1], c[2]));
     }
     for _ in 0..nf {
-        let (k, l) = lines
-            .next()
-            .ok_or_else(|| parse_err(name, 0, "file ends inside the face list"))?;
+        let (k, l) = lines.next().ok_or_else(|| parse_err(name, 0, "file ends inside the face list"))?;
         let p: Vec<&str> = l.split_whitespace().collect();
         let ids: Vec<usize> = nums(name, k + 1, &p)?;
         let Some((&cnt, rest)) = ids.split_first() else {
             continue;
         };
         if cnt < 3 || rest.len() < cnt {
-            return Err(parse_err(
-                name,
-                k + 1,
-                "face needs a count and that many indices (at least 3)",
-            ));
+            return Err(parse_err(name, k + 1, "face needs a count and that many indices (at least 3)"));
         }
         if let Some(bad) = rest[..cnt].iter().find(|&&i| i >= nv) {
-            return Err(parse_err(
-                name,
-                k + 1,
-                format!("index {bad} out of range (0..{nv})"),
-            ));
+            return Err(parse_err(name, k + 1, format!("index {bad} out of range (0..{nv})")));
         }
         for j in 1..cnt - 1 {
             tris.push([rest[0], rest[j], rest[j + 1]]);
@@ -308,13 +250,9 @@ fn read_ascii_stl(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
 fn read_binary_stl(name: &str, bytes: &[u8]) -> Result<AnyMesh, MeshFileError> {
     let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
     if n > 3 * MAX_VERTICES {
-        return Err(MeshFileError::Content {
-            name: name.into(),
-            message: format!("{n} triangles is too many"),
-        });
+        return Err(MeshFileError::Content { name: name.into(), message: format!("{n} triangles is too many") });
     }
-    let f =
-        |o: usize| f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]) as f64;
+    let f = |o: usize| f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]) as f64;
     let soup = (0..n)
         .map(|t| {
             let base = 84 + 50 * t + 12;

@@ -11,6 +11,4 @@ mod spec;
 pub use build::{prepare, AnyMesh, PreparedJob, ProblemKind};
 pub use mesh_io::{read_mesh_file, MeshFileError};
 pub use run::{run_prepared, JobFailure, JobOutcome, RunEvents};
-pub use spec::{
-    parse_spec, FlowSpec, InitialSpec, JobSpec, MeshSpec, OutputSpec, ProblemSpec, SpecError,
-};
+pub use spec::{parse_spec, FlowSpec, InitialSpec, JobSpec, MeshSpec, OutputSpec, ProblemSpec, SpecError};

@@ -3,7 +3,7 @@
 //! the end), cancellation, and resumption from a checkpoint.
 
 use super::build::{AnyMesh, PreparedJob};
-use crate::flow::{Checkpoint, Flow, FlowError, Progress, StopReason};
+use crate::flow::{Checkpoint, Flow, FlowError, MeshManager, Progress, StopReason};
 use crate::geometry::Mesh;
 use std::sync::atomic::AtomicBool;
 
@@ -41,14 +41,18 @@ pub fn run_prepared(
     events: &mut dyn RunEvents,
 ) -> Result<JobOutcome, Box<JobFailure>> {
     match &job.mesh {
-        AnyMesh::Curve(m) => run_dim::<2>(job, m, resume, cancel, events),
-        AnyMesh::Surface(m) => run_dim::<3>(job, m, resume, cancel, events),
+        AnyMesh::Curve(m) => {
+            let manager = job.curve_manager.map(|c| Box::new(c) as Box<dyn MeshManager<2>>);
+            run_dim::<2>(job, m, manager, resume, cancel, events)
+        }
+        AnyMesh::Surface(m) => run_dim::<3>(job, m, None, resume, cancel, events),
     }
 }
 
 fn run_dim<const D: usize>(
     job: &PreparedJob,
     mesh: &Mesh<D>,
+    manager: Option<Box<dyn MeshManager<D>>>,
     resume: Option<&Checkpoint>,
     cancel: &AtomicBool,
     events: &mut dyn RunEvents,
@@ -69,6 +73,9 @@ fn run_dim<const D: usize>(
         });
         fail(e, start)
     })?;
+    if let Some(m) = manager {
+        flow = flow.with_mesh_manager(m);
+    }
     let every = job.checkpoint_every.max(1);
     let mut last_saved = resume.map(|c| c.iteration);
     let result = flow.run(cancel, |f| {

@@ -14,10 +14,7 @@ pub struct SpecError {
 
 impl SpecError {
     pub fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
-        SpecError {
-            field: field.into(),
-            message: message.into(),
-        }
+        SpecError { field: field.into(), message: message.into() }
     }
 }
 
@@ -169,13 +166,22 @@ pub struct FlowSpec {
     pub beta: Option<f64>,
 }
 
-/// `mesh`: mesh management switches (paper §4.1).
+/// `mesh`: mesh management (paper §4.1). Switches default on; the sizes default to
+/// values derived from the initial mesh (see `flow::CurveManager::defaults_for`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MeshSpec {
     pub regularize: bool,
     pub adapt: bool,
     pub topology_changes: bool,
+    /// Regularization sweeps per step.
+    pub sweeps: usize,
+    /// Refinement threshold for `h_S β_S`.
+    pub epsilon: Option<f64>,
+    pub h_min: Option<f64>,
+    pub h_max: Option<f64>,
+    /// Components with a smaller enclosed area are dropped after a topological change.
+    pub min_area: Option<f64>,
 }
 
 impl Default for MeshSpec {
@@ -184,6 +190,11 @@ impl Default for MeshSpec {
             regularize: true,
             adapt: true,
             topology_changes: true,
+            sweeps: 3,
+            epsilon: None,
+            h_min: None,
+            h_max: None,
+            min_area: None,
         }
     }
 }
@@ -198,27 +209,19 @@ pub struct OutputSpec {
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        OutputSpec {
-            checkpoint_every: 10,
-        }
+        OutputSpec { checkpoint_every: 10 }
     }
 }
 
 const PLANNED: [(&str, &str); 2] = [
-    (
-        "segmentation",
-        "image segmentation is not available yet in this version",
-    ),
-    (
-        "shape_design",
-        "optimal shape design is not available yet in this version",
-    ),
+    ("segmentation", "image segmentation is not available yet in this version"),
+    ("shape_design", "optimal shape design is not available yet in this version"),
 ];
 
 /// Parse a spec from JSON text. Errors name the field path.
 pub fn parse_spec(text: &str) -> Result<JobSpec, SpecError> {
-    let value: serde_json::Value = serde_json::from_str(text)
-        .map_err(|e| SpecError::new("(document)", format!("malformed JSON: {e}")))?;
+    let value: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| SpecError::new("(document)", format!("malformed JSON: {e}")))?;
     if let Some(t) = value.pointer("/problem/type").and_then(|t| t.as_str()) {
         if let Some((_, msg)) = PLANNED.iter().find(|(name, _)| *name == t) {
             return Err(SpecError::new("problem.type", format!("`{t}`: {msg}")));
@@ -226,11 +229,7 @@ pub fn parse_spec(text: &str) -> Result<JobSpec, SpecError> {
     }
     let spec: JobSpec = serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
-        let field = if path == "." || path.is_empty() {
-            "(document)".to_string()
-        } else {
-            path
-        };
+        let field = if path == "." || path.is_empty() { "(document)".to_string() } else { path };
         SpecError::new(field, e.into_inner().to_string())
     })?;
     Ok(spec)

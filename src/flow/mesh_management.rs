@@ -1,0 +1,86 @@
+//! Mesh management between steps (paper §4.1), behind one trait so that the driver
+//! stays dimension-independent: regularization, refinement/coarsening and
+//! topological changes. Curves: [`CurveManager`].
+
+use super::FlowError;
+use crate::geometry::{adapt_curve, regularize_curve, resolve_intersections, CurveMesh, CurveRemeshSettings, Mesh};
+
+/// What mesh management did to the mesh after a step.
+pub enum Managed<const D: usize> {
+    Unchanged,
+    /// Same connectivity, moved vertices (tangential regularization).
+    Moved(Mesh<D>),
+    /// New connectivity (refinement, coarsening, topological change).
+    Remeshed(Mesh<D>),
+}
+
+/// Called by the driver after every accepted step.
+pub trait MeshManager<const D: usize>: Send {
+    fn manage(&mut self, mesh: &Mesh<D>) -> Result<Managed<D>, FlowError>;
+}
+
+/// Switches and resolved parameters of curve mesh management.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CurveManager {
+    pub regularize: bool,
+    /// Gauss–Seidel sweeps of the regularization per step.
+    pub sweeps: usize,
+    pub adapt: bool,
+    pub topology_changes: bool,
+    pub params: CurveRemeshSettings,
+}
+
+impl CurveManager {
+    /// Defaults derived from an initial mesh: `h_min`, `h_max` = ¼ and 3× its mean
+    /// edge length, `ε` = 1.5× its largest `h_S β_S` (so that a well-resolved initial
+    /// curve is not refined at once), minimum area `(h_min)²`.
+    pub fn defaults_for(initial: &CurveMesh) -> CurveRemeshSettings {
+        let mean = initial.boundary_measure() / initial.num_elements() as f64;
+        let mut worst: f64 = 0.0;
+        for cyc in initial.cycles() {
+            let n = cyc.len();
+            for k in 0..n {
+                let (a, b, c) = (
+                    initial.positions()[cyc[(k + n - 1) % n]],
+                    initial.positions()[cyc[k]],
+                    initial.positions()[cyc[(k + 1) % n]],
+                );
+                let (u, v) = (b - a, c - b);
+                let beta = (u.x * v.y - u.y * v.x).atan2(u.dot(&v)).abs();
+                worst = worst.max(beta * u.norm().max(v.norm()));
+            }
+        }
+        let h_min = 0.25 * mean;
+        CurveRemeshSettings { epsilon: (1.5 * worst).max(1e-12), h_min, h_max: 3.0 * mean, min_area: h_min * h_min }
+    }
+}
+
+impl MeshManager<2> for CurveManager {
+    fn manage(&mut self, mesh: &CurveMesh) -> Result<Managed<2>, FlowError> {
+        let fail = |e: crate::geometry::MeshError| FlowError::Problem(format!("mesh management: {e}"));
+        let mut remeshed: Option<CurveMesh> = None;
+        if self.topology_changes {
+            if let Some(m) = resolve_intersections(mesh, self.params.min_area).map_err(fail)? {
+                remeshed = Some(m);
+            }
+        }
+        if self.adapt {
+            let cur = remeshed.as_ref().unwrap_or(mesh);
+            if let Some(m) = adapt_curve(cur, &self.params).map_err(fail)? {
+                remeshed = Some(m);
+            }
+        }
+        let moved = if self.regularize {
+            let cur = remeshed.as_ref().unwrap_or(mesh);
+            let sizes = self.adapt.then_some(&self.params);
+            Some(regularize_curve(cur, self.sweeps, sizes))
+        } else {
+            None
+        };
+        Ok(match (remeshed, moved) {
+            (Some(_), Some(m)) | (Some(m), None) => Managed::Remeshed(m),
+            (None, Some(m)) => Managed::Moved(m),
+            (None, None) => Managed::Unchanged,
+        })
+    }
+}
