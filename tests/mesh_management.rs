@@ -1,0 +1,173 @@
+//! Mesh management of curves in the flow: regularization, adaptivity, topology.
+
+use shapeflow::flow::{CurveManager, Flow, FlowSettings, MeshManager, StopReason};
+use shapeflow::geometry::{circle, polygon, union, CurveMesh, CurveRemeshSettings, Point};
+use shapeflow::problems::CurvatureFlow;
+use std::f64::consts::PI;
+use std::sync::atomic::AtomicBool;
+
+/// A dumbbell `x = 2 cos t, y = sin t (0.6 x² + neck)`, sampled non-uniformly in `t`.
+fn dumbbell(n: usize, neck: f64, skew: f64) -> CurveMesh {
+    let pts: Vec<Point<2>> = (0..n)
+        .map(|k| {
+            let u = k as f64 / n as f64;
+            let t = 2.0 * PI * (u + skew * (2.0 * PI * u).sin() / (2.0 * PI));
+            let x = 2.0 * t.cos();
+            Point::<2>::new(x, t.sin() * (0.6 * x * x + neck))
+        })
+        .collect();
+    polygon(&pts, None).unwrap()
+}
+
+fn manager(regularize: bool, adapt: bool, topology: bool, params: CurveRemeshSettings) -> Box<dyn MeshManager<2>> {
+    Box::new(CurveManager { regularize, sweeps: 3, adapt, topology_changes: topology, params })
+}
+
+/// Runs curvature flow and returns the worst longest/shortest edge ratio seen.
+fn worst_edge_ratio(mesh: CurveMesh, regularize: bool) -> (f64, f64) {
+    let problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
+    let params = CurveManager::defaults_for(&mesh);
+    let settings = FlowSettings {
+        tau: 2e-4,
+        end_time: Some(0.1),
+        max_iterations: usize::MAX,
+        tolerance: 0.0,
+        ..FlowSettings::default()
+    };
+    let mut flow = Flow::new(&problem, mesh, settings).unwrap();
+    if regularize {
+        flow = flow.with_mesh_manager(manager(true, false, false, params));
+    }
+    let mut worst: f64 = 0.0;
+    let stop = flow
+        .run(&AtomicBool::new(false), |f| {
+            let q = f.mesh().quality();
+            worst = worst.max(q.max_edge / q.min_edge);
+        })
+        .unwrap();
+    let q = flow.mesh().quality();
+    eprintln!(
+        "regularize={regularize}: stop {stop:?}, worst ratio {worst:.2}, final ratio {:.2}",
+        q.max_edge / q.min_edge
+    );
+    (worst, q.max_edge / q.min_edge)
+}
+
+#[test]
+fn regularization_keeps_a_nonuniform_dumbbell_regular() {
+    let start = dumbbell(200, 0.15, 0.8);
+    let q = start.quality();
+    eprintln!("initial ratio {:.2}", q.max_edge / q.min_edge);
+    let (with, with_final) = worst_edge_ratio(start.clone(), true);
+    let (without, without_final) = worst_edge_ratio(start, false);
+    assert!(with_final < 2.0, "with regularization the edges equalize: {with_final}");
+    assert!(with <= q.max_edge / q.min_edge + 1e-9, "never worse than the start: {with}");
+    assert!(
+        without_final > 2.0 * with_final,
+        "without regularization the sampling stays bad: {without_final} vs {with_final}"
+    );
+    assert!(without > q.max_edge / q.min_edge, "and degrades further: {without}");
+}
+
+fn run_with_topology(mesh: CurveMesh, lambda: f64, end: f64) -> Flow<'static, 2> {
+    let problem: &'static CurvatureFlow = Box::leak(Box::new(CurvatureFlow { gamma: 1.0, lambda }));
+    let params = CurveManager::defaults_for(&mesh);
+    let settings = FlowSettings {
+        tau: 1e-3,
+        end_time: Some(end),
+        max_iterations: usize::MAX,
+        tolerance: 0.0,
+        backtracking: false,
+        ..FlowSettings::default()
+    };
+    let mut flow = Flow::new(problem, mesh, settings).unwrap().with_mesh_manager(manager(true, true, true, params));
+    let stop = flow.run(&AtomicBool::new(false), |_| {}).unwrap();
+    assert_eq!(stop, StopReason::EndTime);
+    flow
+}
+
+fn component_areas(m: &CurveMesh) -> Vec<f64> {
+    m.cycles()
+        .iter()
+        .map(|c| {
+            (0..c.len())
+                .map(|k| {
+                    let (p, q) = (m.positions()[c[k]], m.positions()[c[(k + 1) % c.len()]]);
+                    0.5 * (p.x * q.y - q.x * p.y)
+                })
+                .sum()
+        })
+        .collect()
+}
+
+#[test]
+fn two_growing_circles_merge_into_one_curve() {
+    let a = circle([-0.55, 0.0], 0.5, 96).unwrap();
+    let b = circle([0.55, 0.0], 0.5, 96).unwrap();
+    let start = union(&[a, b]).unwrap();
+    // λ = −3: each circle grows with speed 3 − κ = 1 until they touch
+    let flow = run_with_topology(start, -3.0, 0.15);
+    let m = flow.mesh();
+    let areas = component_areas(m);
+    eprintln!("merged: components {}, areas {areas:?}", m.num_components());
+    assert_eq!(m.num_components(), 1);
+    assert!(areas[0] > 2.0 * PI * 0.5 * 0.5, "counter-clockwise and larger than both disks: {areas:?}");
+}
+
+#[test]
+fn a_pinched_dumbbell_splits_into_two_curves() {
+    let start = dumbbell(300, 0.04, 0.0);
+    // λ = 3 closes the thin neck long before the lobes vanish
+    let flow = run_with_topology(start, 3.0, 0.05);
+    let m = flow.mesh();
+    let areas = component_areas(m);
+    eprintln!("split: components {}, areas {areas:?}", m.num_components());
+    assert_eq!(m.num_components(), 2);
+    assert!(areas.iter().all(|&a| a > 0.5), "both lobes counter-clockwise with their area: {areas:?}");
+    assert!((areas[0] - areas[1]).abs() < 0.02 * areas[0], "symmetric lobes: {areas:?}");
+}
+
+#[test]
+fn adaptivity_keeps_the_exact_circle_and_grades_an_ellipse() {
+    // the shrinking circle of the engine tests, with every management switch on
+    let start = circle([0.0, 0.0], 1.0, 256).unwrap();
+    let params = CurveManager::defaults_for(&start);
+    let h = 2.0 * PI / 256.0;
+    let settings = FlowSettings {
+        tau: 0.5 * h * h,
+        end_time: Some(0.25),
+        max_iterations: usize::MAX,
+        tolerance: 0.0,
+        step_control: None,
+        ..FlowSettings::default()
+    };
+    let problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
+    let mut flow = Flow::new(&problem, start, settings).unwrap().with_mesh_manager(manager(true, true, true, params));
+    flow.run(&AtomicBool::new(false), |_| {}).unwrap();
+    let exact = 0.5f64.sqrt();
+    let err = flow.mesh().positions().iter().map(|p| (p.norm() - exact).abs()).fold(0.0, f64::max);
+    eprintln!("circle with management: error {err:e}, vertices {}", flow.mesh().num_vertices());
+    assert!(err < 1e-3, "{err}");
+
+    // a 4:1 ellipse sampled uniformly: refinement at the tips, coarsening on the flanks
+    let start = shapeflow::geometry::ellipse([0.0, 0.0], [2.0, 0.5], 0.0, 200).unwrap();
+    let mut params = CurveManager::defaults_for(&start);
+    params.epsilon *= 0.3;
+    let settings = FlowSettings { tau: 1e-4, max_iterations: 20, tolerance: 0.0, ..FlowSettings::default() };
+    let mut flow = Flow::new(&problem, start, settings).unwrap().with_mesh_manager(manager(true, true, false, params));
+    flow.run(&AtomicBool::new(false), |_| {}).unwrap();
+    let m = flow.mesh();
+    let mean_len = |pred: &dyn Fn(f64) -> bool| {
+        let lens: Vec<f64> = m
+            .elements()
+            .iter()
+            .filter(|e| pred(m.positions()[e[0]].x))
+            .map(|e| (m.positions()[e[1]] - m.positions()[e[0]]).norm())
+            .collect();
+        lens.iter().sum::<f64>() / lens.len() as f64
+    };
+    let tips = mean_len(&|x: f64| x.abs() > 1.8);
+    let flanks = mean_len(&|x: f64| x.abs() < 0.8);
+    eprintln!("ellipse: {} vertices, mean edge at the tips {tips:.4}, on the flanks {flanks:.4}", m.num_vertices());
+    assert!(flanks > 2.0 * tips, "fewer vertices on flat parts: tips {tips}, flanks {flanks}");
+}
