@@ -46,7 +46,8 @@ impl CurveManager {
                     initial.positions()[cyc[(k + 1) % n]],
                 );
                 let (u, v) = (b - a, c - b);
-                let beta = (u.x * v.y - u.y * v.x).atan2(u.dot(&v)).abs();
+                // turning angle as the chord of the unit tangents, as in the kernels
+                let beta = (v / v.norm() - u / u.norm()).norm();
                 worst = worst.max(beta * u.norm().max(v.norm()));
             }
         }

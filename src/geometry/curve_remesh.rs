@@ -3,7 +3,7 @@
 //! turning angle at vertex `S`), and topological changes on intersection. Pure
 //! functions from a curve mesh to a curve mesh.
 
-use super::curves::from_polylines;
+use super::curves::{from_polylines, from_polylines_trusted};
 use super::{find_segment_intersections, CurveMesh, MeshError, Point};
 
 /// Parameters of curve mesh management.
@@ -32,17 +32,21 @@ fn loop_area(l: &Loop) -> f64 {
     (0..l.len()).map(|k| 0.5 * cross(l[k], l[(k + 1) % l.len()])).sum()
 }
 
-/// Turning angle at every vertex of a loop (angle between the two adjacent segment
-/// directions, in `[0, π]`).
+/// Turning angle at every vertex of a loop, measured as the chord `|t₁ − t₂|` of the
+/// two adjacent unit tangents (`2 sin(β/2)`: the angle itself for small angles,
+/// monotone in it, and free of trigonometric calls).
 fn turning_angles(l: &Loop) -> Vec<f64> {
     let n = l.len();
-    (0..n)
-        .map(|i| {
-            let a = l[i] - l[(i + n - 1) % n];
-            let b = l[(i + 1) % n] - l[i];
-            cross(a, b).atan2(a.dot(&b)).abs()
-        })
-        .collect()
+    let unit = |v: Point<2>| {
+        let len = v.norm();
+        if len > 0.0 {
+            v / len
+        } else {
+            v
+        }
+    };
+    let t: Vec<Point<2>> = (0..n).map(|i| unit(l[(i + 1) % n] - l[i])).collect();
+    (0..n).map(|i| (t[i] - t[(i + n - 1) % n]).norm()).collect()
 }
 
 /// Desired segment length at every vertex: `ε / κ_S` with `κ_S = β_S / h_S`, clamped
@@ -146,7 +150,7 @@ pub fn adapt_curve(mesh: &CurveMesh, s: &CurveRemeshSettings) -> Result<Option<C
     if !changed {
         return Ok(None);
     }
-    from_polylines(out).map(Some)
+    from_polylines_trusted(out).map(Some)
 }
 
 /// Winding number of the point `p` with respect to closed loops.

@@ -8,6 +8,23 @@ use std::f64::consts::PI;
 /// Build a curve mesh from closed polylines, one per component, each listed once
 /// (the closing segment is implied). Orientation is taken as given.
 pub(crate) fn from_polylines(parts: Vec<Vec<Point<2>>>) -> Result<CurveMesh, MeshError> {
+    let (positions, elements) = polyline_parts(parts);
+    Mesh::new(positions, elements)
+}
+
+/// Like [`from_polylines`] for the remeshing kernels, which keep every component
+/// closed with at least three distinct vertices: no validation pass (an
+/// intersection created by a remeshing step is resolved by the topology step of
+/// the next one). Empty input is still an error.
+pub(crate) fn from_polylines_trusted(parts: Vec<Vec<Point<2>>>) -> Result<CurveMesh, MeshError> {
+    if parts.iter().all(|p| p.is_empty()) {
+        return Err(MeshError::Empty);
+    }
+    let (positions, elements) = polyline_parts(parts);
+    Ok(Mesh::from_trusted_parts(positions, elements))
+}
+
+fn polyline_parts(parts: Vec<Vec<Point<2>>>) -> (Vec<Point<2>>, Vec<[usize; 2]>) {
     let mut positions = Vec::new();
     let mut elements = Vec::new();
     for part in parts {
@@ -18,7 +35,7 @@ pub(crate) fn from_polylines(parts: Vec<Vec<Point<2>>>) -> Result<CurveMesh, Mes
             elements.push([base + k, base + (k + 1) % n]);
         }
     }
-    Mesh::new(positions, elements)
+    (positions, elements)
 }
 
 /// Circle of the given centre and radius with `n` equally spaced vertices.

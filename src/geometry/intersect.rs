@@ -4,7 +4,6 @@
 //! sharing a cell are tested.
 
 use super::Point;
-use std::collections::{HashMap, HashSet};
 
 /// Two segments that intersect: their indices (`a < b`), the parameters `s, t ∈ [0, 1]`
 /// of the intersection point along each, and the point itself.
@@ -26,34 +25,86 @@ pub fn find_segment_intersections(points: &[Point<2>], segments: &[[usize; 2]]) 
     }
     let total: f64 = segments.iter().map(|s| (points[s[1]] - points[s[0]]).norm()).sum();
     let cell = (total / segments.len() as f64).max(1e-300);
-    let key = |x: f64| (x / cell).floor() as i64;
-    let mut grid: HashMap<(i64, i64), Vec<usize>> = HashMap::with_capacity(2 * segments.len());
+    let inv = 1.0 / cell;
+    let (mut x_lo, mut y_lo) = (f64::INFINITY, f64::INFINITY);
+    for s in segments {
+        for &v in s {
+            x_lo = x_lo.min(points[v].x);
+            y_lo = y_lo.min(points[v].y);
+        }
+    }
+    // coordinates shifted to be nonnegative, so truncation is floor
+    let key = |x: f64, lo: f64| ((x - lo) * inv) as u64;
+    // (bucket, segment) pairs, bucket = hash of the cell; counting sort, O(n).
+    // Segments of different cells sharing a bucket are merely tested needlessly.
+    let hash =
+        |cx: u64, cy: u64| (cx.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ cy.wrapping_mul(0xC2B2_AE3D_27D4_EB4F)) >> 32;
+    let mut entries: Vec<(u32, u32)> = Vec::with_capacity(4 * segments.len());
+    let mut long = Vec::new();
     for (i, s) in segments.iter().enumerate() {
         let (p, q) = (points[s[0]], points[s[1]]);
-        let (x0, x1) = (key(p.x.min(q.x)), key(p.x.max(q.x)));
-        let (y0, y1) = (key(p.y.min(q.y)), key(p.y.max(q.y)));
+        let (x0, x1) = (key(p.x.min(q.x), x_lo), key(p.x.max(q.x), x_lo));
+        let (y0, y1) = (key(p.y.min(q.y), y_lo), key(p.y.max(q.y), y_lo));
+        if (x1 - x0 + 1) * (y1 - y0 + 1) > 64 {
+            long.push(i); // far longer than the mean: tested against every segment
+            continue;
+        }
         for cx in x0..=x1 {
             for cy in y0..=y1 {
-                grid.entry((cx, cy)).or_default().push(i);
+                entries.push((hash(cx, cy) as u32, i as u32));
             }
         }
     }
-    let mut tested: HashSet<(usize, usize)> = HashSet::new();
+    let buckets = entries.len().next_power_of_two().max(2);
+    let mask = buckets as u32 - 1;
+    let mut start = vec![0u32; buckets + 1];
+    for e in &entries {
+        start[(e.0 & mask) as usize + 1] += 1;
+    }
+    for k in 0..buckets {
+        start[k + 1] += start[k];
+    }
+    let mut sorted = vec![0u32; entries.len()];
+    for e in entries.iter().rev() {
+        let b = (e.0 & mask) as usize + 1;
+        start[b] -= 1;
+        sorted[start[b] as usize] = e.1;
+    }
+    // now start[b + 1] is the beginning of bucket b; shift back
+    start.remove(0);
+    start.push(entries.len() as u32);
     let mut hits = Vec::new();
-    for list in grid.values() {
-        for (k, &i) in list.iter().enumerate() {
-            for &j in &list[k + 1..] {
-                let (a, b) = if i < j { (i, j) } else { (j, i) };
-                if !tested.insert((a, b)) {
-                    continue;
+    for k in 0..buckets {
+        let (lo, hi) = (start[k] as usize, start[k + 1] as usize);
+        debug_assert!(lo <= hi);
+        if hi - lo < 2 {
+            continue;
+        }
+        let bucket = &sorted[lo..hi];
+        for (j, &sa) in bucket.iter().enumerate() {
+            for &sb in &bucket[j + 1..] {
+                let (a, b) = if sa < sb { (sa as usize, sb as usize) } else { (sb as usize, sa as usize) };
+                if a != b {
+                    if let Some(h) = intersect_pair(points, segments, a, b) {
+                        hits.push(h);
+                    }
                 }
+            }
+        }
+    }
+    for &l in &long {
+        for other in 0..segments.len() {
+            if other != l && !(long.contains(&other) && other < l) {
+                let (a, b) = if l < other { (l, other) } else { (other, l) };
                 if let Some(h) = intersect_pair(points, segments, a, b) {
                     hits.push(h);
                 }
             }
         }
     }
+    // a pair sharing several cells is found once per cell
     hits.sort_by(|x, y| (x.a, x.b).cmp(&(y.a, y.b)));
+    hits.dedup_by(|x, y| (x.a, x.b) == (y.a, y.b));
     hits
 }
 
@@ -63,26 +114,37 @@ fn cross(u: Point<2>, v: Point<2>) -> f64 {
 
 fn intersect_pair(points: &[Point<2>], segments: &[[usize; 2]], a: usize, b: usize) -> Option<SegmentHit> {
     let (sa, sb) = (segments[a], segments[b]);
+    let (p, p2) = (points[sa[0]], points[sa[1]]);
+    let (q, q2) = (points[sb[0]], points[sb[1]]);
     let shares = sa[0] == sb[0] || sa[0] == sb[1] || sa[1] == sb[0] || sa[1] == sb[1];
-    let (p, r) = (points[sa[0]], points[sa[1]] - points[sa[0]]);
-    let (q, w) = (points[sb[0]], points[sb[1]] - points[sb[0]]);
+    if !shares
+        && (p.x.max(p2.x) < q.x.min(q2.x)
+            || q.x.max(q2.x) < p.x.min(p2.x)
+            || p.y.max(p2.y) < q.y.min(q2.y)
+            || q.y.max(q2.y) < p.y.min(p2.y))
+    {
+        return None;
+    }
+    let (r, w) = (p2 - p, q2 - q);
     let denom = cross(r, w);
+    let (rr, ww) = (r.dot(&r), w.dot(&w));
     let qp = q - p;
-    let scale = r.norm() * w.norm();
-    if denom.abs() <= 1e-14 * scale {
-        // Parallel: report only collinear overlaps of positive length.
-        if cross(qp, r).abs() > 1e-12 * r.norm() * (qp.norm() + r.norm()) {
+    if denom * denom <= 1e-28 * rr * ww {
+        // parallel: report only collinear overlaps of positive length
+        let c = cross(qp, r);
+        if c * c > 1e-24 * rr * (qp.dot(&qp) + rr) {
             return None;
         }
-        let rr = r.dot(&r);
+        if shares && r.dot(&w) > 0.0 {
+            return None; // consecutive and pointing the same way: no overlap
+        }
         let t0 = qp.dot(&r) / rr;
         let t1 = t0 + w.dot(&r) / rr;
         let (lo, hi) = (t0.min(t1).max(0.0), t0.max(t1).min(1.0));
-        let overlap = (hi - lo) * rr.sqrt();
-        if overlap > 1e-12 * r.norm() {
+        if (hi - lo) > 1e-12 {
             let s = 0.5 * (lo + hi);
             let point = p + r * s;
-            let t = ((point - q).dot(&w) / w.dot(&w)).clamp(0.0, 1.0);
+            let t = ((point - q).dot(&w) / ww).clamp(0.0, 1.0);
             return Some(SegmentHit { a, b, s, t, point });
         }
         return None;

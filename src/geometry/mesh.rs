@@ -67,6 +67,13 @@ impl<const D: usize> Mesh<D> {
         Ok(Mesh { positions, elements })
     }
 
+    /// A mesh produced by the remeshing kernels, whose connectivity is valid by
+    /// construction; only debug builds re-check it.
+    pub(crate) fn from_trusted_parts(positions: Vec<Point<D>>, elements: Vec<[usize; D]>) -> Self {
+        debug_assert!(elements.iter().all(|e| e.iter().all(|&v| v < positions.len())));
+        Mesh { positions, elements }
+    }
+
     /// Same connectivity, new positions (the flow's update `X_{n+1} = X_n + τ V⃗`).
     /// Panics if the number of positions changes.
     pub fn with_positions(&self, positions: Vec<Point<D>>) -> Self {

@@ -190,7 +190,7 @@ impl Default for MeshSpec {
             regularize: true,
             adapt: true,
             topology_changes: true,
-            sweeps: 3,
+            sweeps: 1,
             epsilon: None,
             h_min: None,
             h_max: None,

@@ -1,0 +1,85 @@
+//! Cost of curve mesh management per step (intersection check by spatial hashing,
+//! refinement/coarsening, one regularization sweep) next to the cost of the L2 step
+//! itself (assembly + Schur solve), on circles of 10k and 100k vertices whose
+//! sampling is perturbed so that every part has work to do.
+//! `cargo bench --bench management`.
+
+use shapeflow::fem::{Matrices, Pattern};
+use shapeflow::flow::{CurveManager, LinearSystem, MeshManager, ProductWeights, SemiImplicitStep, SolverKind};
+use shapeflow::geometry::{polygon, Point};
+use std::hint::black_box;
+use std::time::Instant;
+
+fn time_it(mut f: impl FnMut()) -> f64 {
+    f();
+    let start = Instant::now();
+    let mut n = 0;
+    while n < 5 || start.elapsed().as_secs_f64() < 0.5 {
+        f();
+        n += 1;
+    }
+    start.elapsed().as_secs_f64() / n as f64
+}
+
+fn main() {
+    println!("| curve vertices | L2 step (ms) | management (ms) | management / step |");
+    println!("|---:|---:|---:|---:|");
+    for n in [10_000usize, 100_000] {
+        let pts: Vec<Point<2>> = (0..n)
+            .map(|k| {
+                let u = k as f64 / n as f64;
+                let t = 2.0 * std::f64::consts::PI * (u + 0.05 * (2.0 * std::f64::consts::PI * u).sin() / 6.3);
+                let r = 1.0 + 0.05 * (7.0 * t).cos();
+                Point::<2>::new(r * t.cos(), r * t.sin())
+            })
+            .collect();
+        let mesh = polygon(&pts, None).unwrap();
+        let pattern = Pattern::new(mesh.num_vertices(), mesh.elements());
+        let mut m = Matrices::assemble(&mesh, &pattern);
+        let g = vec![1.0; n];
+        let f = vec![0.0; n];
+        let mut step = SemiImplicitStep::new(SolverKind::Lumped);
+        let t_step = time_it(|| {
+            m.assemble_into(&mesh, &pattern, false);
+            let ax = m.stiffness_times_positions(&mesh, &pattern);
+            let sys = LinearSystem {
+                mesh: &mesh,
+                pattern: &pattern,
+                matrices: &m,
+                ax: &ax,
+                g: &g,
+                f: &f,
+                product: &ProductWeights::L2,
+                tau: 1e-4,
+            };
+            black_box(step.velocity(&sys).unwrap());
+        });
+        let mut manager = CurveManager {
+            regularize: true,
+            sweeps: 1,
+            adapt: true,
+            topology_changes: true,
+            params: CurveManager::defaults_for(&mesh),
+        };
+        let t_manage = time_it(|| {
+            black_box(manager.manage(&mesh).unwrap());
+        });
+        let t_int = time_it(|| {
+            black_box(shapeflow::geometry::find_segment_intersections(mesh.positions(), mesh.elements()));
+        });
+        let params = manager.params;
+        let t_adapt = time_it(|| {
+            black_box(shapeflow::geometry::adapt_curve(&mesh, &params).unwrap());
+        });
+        let t_reg = time_it(|| {
+            black_box(shapeflow::geometry::regularize_curve(&mesh, 1, Some(&params)));
+        });
+        eprintln!(
+            "n={n}: intersections {:.3} ms, adapt {:.3} ms, regularize {:.3} ms",
+            t_int * 1e3,
+            t_adapt * 1e3,
+            t_reg * 1e3
+        );
+        println!("| {n} | {:.3} | {:.3} | {:.2} |", t_step * 1e3, t_manage * 1e3, t_manage / t_step);
+    }
+}
