@@ -31,6 +31,8 @@ pub enum StopReason {
     EndTime,
     TauMin,
     Cancelled,
+    /// A neck of a surface collapsed (mesh management detected it after the step).
+    PinchOff,
 }
 
 impl StopReason {
@@ -41,6 +43,7 @@ impl StopReason {
             StopReason::EndTime => "end_time",
             StopReason::TauMin => "tau_min",
             StopReason::Cancelled => "cancelled",
+            StopReason::PinchOff => "pinch_off",
         }
     }
 }
@@ -334,7 +337,9 @@ impl<'p, const D: usize> Flow<'p, D> {
             if s.tolerance > 0.0 && (previous - energy).abs() <= s.tolerance * previous.abs() {
                 report.stop = Some(StopReason::Converged);
             }
-            self.manage_mesh()?;
+            if self.manage_mesh()? {
+                report.stop = Some(StopReason::PinchOff);
+            }
             return Ok(report);
         }
     }
@@ -343,10 +348,12 @@ impl<'p, const D: usize> Flow<'p, D> {
 impl<const D: usize> Flow<'_, D> {
     /// Apply the mesh manager, if any; a new connectivity rebuilds the pattern and
     /// drops the symbolic factorizations. The energy is re-evaluated on the result.
-    fn manage_mesh(&mut self) -> Result<(), FlowError> {
-        let Some(manager) = self.manager.as_mut() else { return Ok(()) };
+    /// Returns `true` on pinch-off.
+    fn manage_mesh(&mut self) -> Result<bool, FlowError> {
+        let Some(manager) = self.manager.as_mut() else { return Ok(false) };
         match manager.manage(&self.mesh)? {
-            Managed::Unchanged => return Ok(()),
+            Managed::Unchanged => return Ok(false),
+            Managed::PinchOff => return Ok(true),
             Managed::Moved(m) => self.mesh = m,
             Managed::Remeshed(m) => {
                 self.mesh = m;
@@ -359,7 +366,7 @@ impl<const D: usize> Flow<'_, D> {
             return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration });
         }
         self.energy = energy;
-        Ok(())
+        Ok(false)
     }
 }
 

@@ -3,7 +3,10 @@
 //! topological changes. Curves: [`CurveManager`].
 
 use super::FlowError;
-use crate::geometry::{adapt_curve, regularize_curve, resolve_intersections, CurveMesh, CurveRemeshSettings, Mesh};
+use crate::geometry::{
+    adapt_curve, adapt_surface, regularize_curve, regularize_surface, resolve_intersections, CurveMesh,
+    CurveRemeshSettings, Mesh, SurfaceMesh, SurfaceRemeshSettings,
+};
 
 /// What mesh management did to the mesh after a step.
 pub enum Managed<const D: usize> {
@@ -12,6 +15,8 @@ pub enum Managed<const D: usize> {
     Moved(Mesh<D>),
     /// New connectivity (refinement, coarsening, topological change).
     Remeshed(Mesh<D>),
+    /// A neck collapsed (3D): the run ends with `pinch_off` on the current mesh.
+    PinchOff,
 }
 
 /// Called by the driver after every accepted step.
@@ -75,6 +80,83 @@ impl MeshManager<2> for CurveManager {
             let cur = remeshed.as_ref().unwrap_or(mesh);
             let sizes = self.adapt.then_some(&self.params);
             Some(regularize_curve(cur, self.sweeps, sizes))
+        } else {
+            None
+        };
+        Ok(match (remeshed, moved) {
+            (Some(_), Some(m)) | (Some(m), None) => Managed::Remeshed(m),
+            (None, Some(m)) => Managed::Moved(m),
+            (None, None) => Managed::Unchanged,
+        })
+    }
+}
+
+/// Switches and resolved parameters of surface mesh management.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceManager {
+    pub regularize: bool,
+    pub sweeps: usize,
+    pub adapt: bool,
+    pub params: SurfaceRemeshSettings,
+    /// Pinch-off is declared when some edge has `β/h` (angle between the normals of
+    /// its two triangles over its length: a principal curvature) above this, i.e. a
+    /// neck radius below its inverse, which the mesh (`h ≥ h_min`) cannot resolve.
+    pub pinch_curvature: Option<f64>,
+}
+
+impl SurfaceManager {
+    /// Defaults derived from an initial surface: `h_min`, `h_max` = ¼ and 3× its mean
+    /// edge, `ε` = 1.5× its largest edge `h β`, 120° angle limit, pinch-off at a
+    /// curvature of `2/h_min` (neck radius `h_min/2`).
+    pub fn defaults_for(initial: &SurfaceMesh) -> (SurfaceRemeshSettings, f64) {
+        let (mean, worst) = edge_stats(initial);
+        let h_min = 0.25 * mean;
+        (
+            SurfaceRemeshSettings {
+                epsilon: (1.5 * worst.0).max(1e-12),
+                h_min,
+                h_max: 3.0 * mean,
+                max_angle_deg: 120.0,
+            },
+            2.0 / h_min,
+        )
+    }
+}
+
+/// Mean edge length and the largest `h β` and `β/h` over the edges.
+fn edge_stats(m: &SurfaceMesh) -> (f64, (f64, f64)) {
+    let p = m.positions();
+    let mut by_edge: std::collections::HashMap<(usize, usize), Vec<usize>> = std::collections::HashMap::new();
+    for (k, t) in m.elements().iter().enumerate() {
+        for e in 0..3 {
+            let (a, b) = (t[e], t[(e + 1) % 3]);
+            by_edge.entry((a.min(b), a.max(b))).or_default().push(k);
+        }
+    }
+    let normals = m.element_normals();
+    let (mut sum, mut hb, mut bh) = (0.0, 0.0f64, 0.0f64);
+    for (&(a, b), ts) in &by_edge {
+        let h = (p[b] - p[a]).norm();
+        sum += h;
+        if ts.len() == 2 {
+            let beta = normals[ts[0]].dot(&normals[ts[1]]).clamp(-1.0, 1.0).acos();
+            hb = hb.max(h * beta);
+            bh = bh.max(beta / h);
+        }
+    }
+    (sum / by_edge.len() as f64, (hb, bh))
+}
+
+impl MeshManager<3> for SurfaceManager {
+    fn manage(&mut self, mesh: &SurfaceMesh) -> Result<Managed<3>, FlowError> {
+        if let Some(k) = self.pinch_curvature {
+            if edge_stats(mesh).1 .1 > k {
+                return Ok(Managed::PinchOff);
+            }
+        }
+        let remeshed = if self.adapt { adapt_surface(mesh, &self.params) } else { None };
+        let moved = if self.regularize {
+            Some(regularize_surface(remeshed.as_ref().unwrap_or(mesh), self.sweeps))
         } else {
             None
         };

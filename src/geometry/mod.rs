@@ -8,6 +8,7 @@ mod intersect;
 mod measures;
 mod mesh;
 pub mod simplex;
+mod surface_remesh;
 mod surfaces;
 mod validate;
 
@@ -16,6 +17,7 @@ pub use curves::{circle, ellipse, polygon, rectangle, union};
 pub use intersect::{find_segment_intersections, SegmentHit};
 pub use measures::MeshQuality;
 pub use mesh::{CurveMesh, Mesh, MeshError, SurfaceMesh};
+pub use surface_remesh::{adapt_surface, regularize_surface, SurfaceRemeshSettings};
 pub use surfaces::{box_surface, ellipsoid, icosphere, torus};
 
 /// A point of `R^D`.

@@ -3,7 +3,7 @@
 
 use super::mesh_io::read_mesh_file;
 use super::spec::{InitialSpec, JobSpec, ProblemSpec, SpecError};
-use crate::flow::{CurveManager, FlowSettings, Problem};
+use crate::flow::{CurveManager, FlowSettings, Problem, SurfaceManager};
 use crate::geometry::{self, CurveMesh, Mesh, MeshError, Point, SurfaceMesh};
 use crate::problems::{CurvatureFlow, SurfaceDiffusion};
 use std::collections::HashMap;
@@ -57,6 +57,8 @@ pub struct PreparedJob {
     /// Mesh management of curves, resolved from the spec and the initial mesh
     /// (`None` for surfaces, or when every switch is off).
     pub curve_manager: Option<CurveManager>,
+    /// Mesh management of surfaces, likewise.
+    pub surface_manager: Option<SurfaceManager>,
 }
 
 fn positive(field: &str, v: f64) -> Result<f64, SpecError> {
@@ -144,11 +146,34 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         beta,
     };
     let checkpoint_every = in_range("output.checkpoint_every", spec.output.checkpoint_every, 1, usize::MAX)?;
-    let curve_manager = match &mesh {
-        AnyMesh::Curve(c) => curve_manager(&spec.mesh, c)?,
-        AnyMesh::Surface(_) => None,
+    let (curve_manager, surface_manager) = match &mesh {
+        AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
+        AnyMesh::Surface(m) => (None, surface_manager(&spec.mesh, m)?),
     };
-    Ok(PreparedJob { spec, mesh, problem, settings, checkpoint_every, curve_manager })
+    Ok(PreparedJob { spec, mesh, problem, settings, checkpoint_every, curve_manager, surface_manager })
+}
+
+fn surface_manager(m: &super::spec::MeshSpec, initial: &SurfaceMesh) -> Result<Option<SurfaceManager>, SpecError> {
+    if !(m.regularize || m.adapt || m.pinch_off) {
+        return Ok(None);
+    }
+    let (mut params, _) = SurfaceManager::defaults_for(initial);
+    if let Some(e) = m.epsilon {
+        params.epsilon = positive("mesh.epsilon", e)?;
+    }
+    if let Some(h) = m.h_min {
+        params.h_min = positive("mesh.h_min", h)?;
+    }
+    if let Some(h) = m.h_max {
+        params.h_max = positive("mesh.h_max", h)?;
+    }
+    if params.h_min * 2.0 > params.h_max {
+        return Err(SpecError::new("mesh.h_max", format!("must be at least twice mesh.h_min ({})", params.h_min)));
+    }
+    params.max_angle_deg = in_range("mesh.max_angle", m.max_angle, 90.0, 179.0)?;
+    let sweeps = in_range("mesh.sweeps", m.sweeps, 0, 1000)?;
+    let pinch_curvature = m.pinch_off.then_some(2.0 / params.h_min);
+    Ok(Some(SurfaceManager { regularize: m.regularize, sweeps, adapt: m.adapt, params, pinch_curvature }))
 }
 
 fn curve_manager(m: &super::spec::MeshSpec, initial: &CurveMesh) -> Result<Option<CurveManager>, SpecError> {

@@ -45,7 +45,10 @@ pub fn run_prepared(
             let manager = job.curve_manager.map(|c| Box::new(c) as Box<dyn MeshManager<2>>);
             run_dim::<2>(job, m, manager, resume, cancel, events)
         }
-        AnyMesh::Surface(m) => run_dim::<3>(job, m, None, resume, cancel, events),
+        AnyMesh::Surface(m) => {
+            let manager = job.surface_manager.map(|c| Box::new(c) as Box<dyn MeshManager<3>>);
+            run_dim::<3>(job, m, manager, resume, cancel, events)
+        }
     }
 }
 

@@ -182,6 +182,10 @@ pub struct MeshSpec {
     pub h_max: Option<f64>,
     /// Components with a smaller enclosed area are dropped after a topological change.
     pub min_area: Option<f64>,
+    /// Angle-width control (surfaces): split edges opposite wider angles (degrees).
+    pub max_angle: f64,
+    /// Surfaces: stop with `pinch_off` when a neck radius falls below `h_min/2`.
+    pub pinch_off: bool,
 }
 
 impl Default for MeshSpec {
@@ -195,6 +199,8 @@ impl Default for MeshSpec {
             h_min: None,
             h_max: None,
             min_area: None,
+            max_angle: 120.0,
+            pinch_off: true,
         }
     }
 }

@@ -1,0 +1,458 @@
+//! Mesh management for closed triangle surfaces (paper §4.1): volume-preserving
+//! tangential regularization, and adaptivity by edge split, collapse and flip with
+//! angle-width control. Pure functions from a surface mesh to a surface mesh.
+
+use super::{Mesh, Point, SurfaceMesh};
+use std::collections::HashMap;
+
+/// Parameters of surface mesh management.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceRemeshSettings {
+    /// Refine an edge where `h β > epsilon` (`β` the angle between the normals of the
+    /// two triangles sharing it); collapse where far below.
+    pub epsilon: f64,
+    pub h_min: f64,
+    pub h_max: f64,
+    /// Angle-width control: split the edge opposite an angle wider than this (degrees).
+    pub max_angle_deg: f64,
+}
+
+fn tri_normal(p: &[Point<3>], t: &[usize; 3]) -> Point<3> {
+    (p[t[1]] - p[t[0]]).cross(&(p[t[2]] - p[t[0]]))
+}
+
+/// Incident triangles of every vertex (CSR).
+fn vertex_triangles(n: usize, tris: &[[usize; 3]]) -> (Vec<usize>, Vec<usize>) {
+    let mut start = vec![0usize; n + 1];
+    for t in tris {
+        for &v in t {
+            start[v + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut list = vec![0usize; start[n]];
+    for (k, t) in tris.iter().enumerate() {
+        for &v in t {
+            list[fill[v]] = k;
+            fill[v] += 1;
+        }
+    }
+    (start, list)
+}
+
+/// Tangential regularization by `sweeps` Gauss–Seidel sweeps: every vertex moves
+/// towards the area-weighted centroid of its incident triangles (which evens out
+/// areas and angles in the vertex star), with the component along the volume
+/// gradient `g_i = Σ_{(i,j,k)} X_j × X_k / 6` removed. The enclosed volume is linear
+/// in one vertex with the others fixed, so each move keeps it exactly; `g_i` is the
+/// area-weighted normal, so the move is tangential. A move that would turn an
+/// incident triangle by more than 60° is skipped.
+pub fn regularize_surface(mesh: &SurfaceMesh, sweeps: usize) -> SurfaceMesh {
+    let mut p = mesh.positions().to_vec();
+    let tris = mesh.elements();
+    let (start, list) = vertex_triangles(p.len(), tris);
+    for _ in 0..sweeps {
+        for v in 0..p.len() {
+            let star = &list[start[v]..start[v + 1]];
+            let mut c = Point::<3>::zeros();
+            let mut w = 0.0;
+            let mut g = Point::<3>::zeros();
+            for &t in star {
+                let tr = tris[t];
+                let k = tr.iter().position(|&x| x == v).unwrap();
+                let (j, l) = (tr[(k + 1) % 3], tr[(k + 2) % 3]);
+                let area = 0.5 * tri_normal(&p, &tr).norm();
+                c += (p[v] + p[j] + p[l]) * (area / 3.0);
+                w += area;
+                g += p[j].cross(&p[l]) / 6.0;
+            }
+            let gg = g.norm_squared();
+            if w <= 0.0 || gg <= 0.0 {
+                continue;
+            }
+            let mut d = c / w - p[v];
+            d -= g * (d.dot(&g) / gg);
+            let old = p[v];
+            let normals: Vec<Point<3>> = star.iter().map(|&t| tri_normal(&p, &tris[t])).collect();
+            p[v] = old + d;
+            let ok = star.iter().zip(&normals).all(|(&t, n0)| {
+                let n1 = tri_normal(&p, &tris[t]);
+                n1.dot(n0) > 0.5 * n1.norm() * n0.norm()
+            });
+            if !ok {
+                p[v] = old;
+            }
+        }
+    }
+    mesh.with_positions(p)
+}
+
+/// Unit vertex normals (area weighted).
+fn vertex_normals(p: &[Point<3>], tris: &[[usize; 3]]) -> Vec<Point<3>> {
+    let mut n = vec![Point::<3>::zeros(); p.len()];
+    for t in tris {
+        let nt = tri_normal(p, t);
+        for &v in t {
+            n[v] += nt;
+        }
+    }
+    n.iter().map(|x| x.normalize()).collect()
+}
+
+fn angle_at(p: &[Point<3>], a: usize, b: usize, c: usize) -> f64 {
+    let (u, w) = (p[b] - p[a], p[c] - p[a]);
+    (u.dot(&w) / (u.norm() * w.norm())).clamp(-1.0, 1.0).acos().to_degrees()
+}
+
+/// Edge → the (up to two) triangles containing it, keyed by the sorted vertex pair.
+fn edge_map(tris: &[[usize; 3]]) -> HashMap<(usize, usize), Vec<usize>> {
+    let mut m: HashMap<(usize, usize), Vec<usize>> = HashMap::with_capacity(tris.len() * 2);
+    for (k, t) in tris.iter().enumerate() {
+        for e in 0..3 {
+            let (a, b) = (t[e], t[(e + 1) % 3]);
+            m.entry((a.min(b), a.max(b))).or_default().push(k);
+        }
+    }
+    m
+}
+
+/// Refinement by edge splits: an edge is split when longer than `h_max`, when
+/// `h β > ε` and its halves stay above `h_min`, or when it lies opposite an angle
+/// wider than `max_angle_deg` (angle-width control). The new vertex is the edge
+/// midpoint lifted by the sagitta `e·(n_b − n_a)/8` along the mean normal, which is
+/// exact on a sphere with exact normals. Triangles with one, two or three split edges
+/// are divided into two, three or four.
+fn split_edges(p: &mut Vec<Point<3>>, tris: &[[usize; 3]], s: &SurfaceRemeshSettings) -> Option<Vec<[usize; 3]>> {
+    let normals = vertex_normals(p, tris);
+    let edges = edge_map(tris);
+    let mut mid: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut keys: Vec<_> = edges.keys().copied().collect();
+    keys.sort_unstable();
+    for (a, b) in keys {
+        let ts = &edges[&(a, b)];
+        if ts.len() != 2 {
+            continue;
+        }
+        let h = (p[b] - p[a]).norm();
+        let (n0, n1) = (tri_normal(p, &tris[ts[0]]).normalize(), tri_normal(p, &tris[ts[1]]).normalize());
+        let beta = n0.dot(&n1).clamp(-1.0, 1.0).acos();
+        let wide = ts.iter().any(|&t| {
+            let c = tris[t].iter().copied().find(|&x| x != a && x != b).unwrap();
+            angle_at(p, c, a, b) > s.max_angle_deg
+        });
+        if h > s.h_max || (h * beta > s.epsilon && h > 2.0 * s.h_min) || wide {
+            let e = p[b] - p[a];
+            let nm = (normals[a] + normals[b]).normalize();
+            let lift = e.dot(&(normals[b] - normals[a])) / 8.0;
+            p.push((p[a] + p[b]) * 0.5 + nm * lift);
+            mid.insert((a, b), p.len() - 1);
+        }
+    }
+    if mid.is_empty() {
+        return None;
+    }
+    let m = |a: usize, b: usize| mid.get(&(a.min(b), a.max(b))).copied();
+    let mut out = Vec::with_capacity(tris.len() + 3 * mid.len());
+    for &t in tris {
+        let ms = [m(t[0], t[1]), m(t[1], t[2]), m(t[2], t[0])];
+        match ms.iter().filter(|x| x.is_some()).count() {
+            0 => out.push(t),
+            1 => {
+                let k = ms.iter().position(|x| x.is_some()).unwrap();
+                let (a, b, c, x) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3], ms[k].unwrap());
+                out.push([a, x, c]);
+                out.push([x, b, c]);
+            }
+            2 => {
+                let k = ms.iter().position(|x| x.is_none()).unwrap();
+                // edge k (t[k] → t[k+1]) is whole; the other two are split
+                let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+                let (y, z) = (ms[(k + 1) % 3].unwrap(), ms[(k + 2) % 3].unwrap()); // on b–c and c–a
+                out.push([z, y, c]);
+                // split the quad a, b, y, z along its shorter diagonal
+                if (p[y] - p[a]).norm() < (p[z] - p[b]).norm() {
+                    out.push([a, b, y]);
+                    out.push([a, y, z]);
+                } else {
+                    out.push([a, b, z]);
+                    out.push([b, y, z]);
+                }
+            }
+            _ => {
+                let (x, y, z) = (ms[0].unwrap(), ms[1].unwrap(), ms[2].unwrap());
+                out.push([t[0], x, z]);
+                out.push([x, t[1], y]);
+                out.push([z, y, t[2]]);
+                out.push([x, y, z]);
+            }
+        }
+    }
+    Some(out)
+}
+
+/// Coarsening by edge collapses: an edge shorter than `h_min`, or flat (`h β` below
+/// `ε/8` at every edge around both ends) and shorter than `h_max/2`, is collapsed to
+/// its midpoint when the link condition holds (exactly two common neighbours), no
+/// triangle turns by more than 30°, becomes degenerate or gets an angle wider than
+/// `max_angle_deg`, and no new edge exceeds `h_max`. One collapse per vertex star
+/// and pass.
+fn collapse_edges(p: &mut [Point<3>], tris: &mut Vec<[usize; 3]>, s: &SurfaceRemeshSettings) -> bool {
+    let n = p.len();
+    let (start, list) = vertex_triangles(n, tris);
+    let edges = edge_map(tris);
+    let mut flat_vertex = vec![true; n];
+    for (&(a, b), ts) in &edges {
+        if ts.len() == 2 {
+            let (n0, n1) = (tri_normal(p, &tris[ts[0]]).normalize(), tri_normal(p, &tris[ts[1]]).normalize());
+            let beta = n0.dot(&n1).clamp(-1.0, 1.0).acos();
+            if (p[b] - p[a]).norm() * beta >= s.epsilon / 8.0 {
+                flat_vertex[a] = false;
+                flat_vertex[b] = false;
+            }
+        }
+    }
+    let mut keys: Vec<_> = edges.keys().copied().collect();
+    keys.sort_unstable_by(|x, y| (p[x.1] - p[x.0]).norm().total_cmp(&(p[y.1] - p[y.0]).norm()));
+    let mut locked = vec![false; n];
+    let mut dead = vec![false; tris.len()];
+    let mut remap: Vec<usize> = (0..n).collect();
+    let mut any = false;
+    let neighbours = |v: usize, tris: &[[usize; 3]]| -> Vec<usize> {
+        let mut nb: Vec<usize> =
+            list[start[v]..start[v + 1]].iter().flat_map(|&t| tris[t]).filter(|&x| x != v).collect();
+        nb.sort_unstable();
+        nb.dedup();
+        nb
+    };
+    for (a, b) in keys {
+        let h = (p[b] - p[a]).norm();
+        let short = h < s.h_min;
+        let flat = flat_vertex[a] && flat_vertex[b] && h < 0.5 * s.h_max;
+        if !(short || flat) || locked[a] || locked[b] {
+            continue;
+        }
+        let (na, nb) = (neighbours(a, tris), neighbours(b, tris));
+        let common = na.iter().filter(|x| nb.binary_search(x).is_ok()).count();
+        if common != 2 || na.len() < 4 || nb.len() < 4 {
+            continue;
+        }
+        let target = (p[a] + p[b]) * 0.5;
+        // triangles around a or b that survive, with b replaced by a
+        let star: Vec<usize> =
+            list[start[a]..start[a + 1]].iter().chain(&list[start[b]..start[b + 1]]).copied().collect();
+        let mut ok = true;
+        for &t in &star {
+            let tr = tris[t];
+            if tr.contains(&a) && tr.contains(&b) {
+                continue;
+            }
+            let moved = tr.map(|x| if x == b { a } else { x });
+            let n0 = tri_normal(p, &tr);
+            let q = |x: usize| if x == a { target } else { p[x] };
+            let n1 = (q(moved[1]) - q(moved[0])).cross(&(q(moved[2]) - q(moved[0])));
+            let longest = (0..3).map(|e| (q(moved[(e + 1) % 3]) - q(moved[e])).norm()).fold(0.0, f64::max);
+            let wide = (0..3).any(|e| {
+                let (u, w) = (q(moved[(e + 1) % 3]) - q(moved[e]), q(moved[(e + 2) % 3]) - q(moved[e]));
+                (u.dot(&w) / (u.norm() * w.norm())).clamp(-1.0, 1.0).acos().to_degrees() > s.max_angle_deg
+            });
+            if n1.norm() <= 1e-12 * n0.norm()
+                || n1.dot(&n0) < 0.866 * n1.norm() * n0.norm()
+                || longest > s.h_max
+                || wide
+            {
+                ok = false;
+                break;
+            }
+        }
+        if !ok {
+            continue;
+        }
+        for &v in na.iter().chain(&nb) {
+            locked[v] = true;
+        }
+        locked[a] = true;
+        locked[b] = true;
+        p[a] = target;
+        remap[b] = a;
+        for &t in &star {
+            if tris[t].contains(&a) && tris[t].contains(&b) {
+                dead[t] = true;
+            }
+        }
+        any = true;
+    }
+    if any {
+        let kept: Vec<[usize; 3]> =
+            tris.iter().zip(&dead).filter(|(_, d)| !**d).map(|(t, _)| t.map(|x| remap[x])).collect();
+        *tris = kept;
+    }
+    any
+}
+
+/// Edge flips towards valence 6 between nearly coplanar triangles (dihedral angle
+/// below 20°), when neither new triangle is degenerate, turned, or wider than the
+/// angle limit, and the new edge does not exist yet.
+fn flip_edges(p: &[Point<3>], tris: &mut [[usize; 3]], s: &SurfaceRemeshSettings) -> bool {
+    let n = p.len();
+    let mut valence = vec![0i64; n];
+    let edges = edge_map(tris);
+    for &(a, b) in edges.keys() {
+        valence[a] += 1;
+        valence[b] += 1;
+    }
+    let mut exists: std::collections::HashSet<(usize, usize)> = edges.keys().copied().collect();
+    let mut keys: Vec<_> = edges.keys().copied().collect();
+    keys.sort_unstable();
+    let mut touched = vec![false; tris.len()];
+    let mut any = false;
+    for (a, b) in keys {
+        let ts = &edges[&(a, b)];
+        if ts.len() != 2 || touched[ts[0]] || touched[ts[1]] {
+            continue;
+        }
+        let (t0, t1) = (tris[ts[0]], tris[ts[1]]);
+        // orient: t0 = (a, b, c) in its own rotation, t1 = (b, a, d)
+        let k0 = (0..3).find(|&k| t0[k] == a && t0[(k + 1) % 3] == b);
+        let (t0, t1, a, b) = match k0 {
+            Some(_) => (t0, t1, a, b),
+            None => (t1, t0, a, b),
+        };
+        let Some(k0) = (0..3).find(|&k| t0[k] == a && t0[(k + 1) % 3] == b) else { continue };
+        let c = t0[(k0 + 2) % 3];
+        let Some(k1) = (0..3).find(|&k| t1[k] == b && t1[(k + 1) % 3] == a) else { continue };
+        let d = t1[(k1 + 2) % 3];
+        if c == d || exists.contains(&(c.min(d), c.max(d))) {
+            continue;
+        }
+        let dev =
+            |va: i64, vb: i64, vc: i64, vd: i64| (va - 6).pow(2) + (vb - 6).pow(2) + (vc - 6).pow(2) + (vd - 6).pow(2);
+        let before = dev(valence[a], valence[b], valence[c], valence[d]);
+        let after = dev(valence[a] - 1, valence[b] - 1, valence[c] + 1, valence[d] + 1);
+        if after >= before {
+            continue;
+        }
+        let (n0, n1) = (tri_normal(p, &t0), tri_normal(p, &t1));
+        if n0.dot(&n1) < (20f64).to_radians().cos() * n0.norm() * n1.norm() {
+            continue;
+        }
+        let new0 = [c, a, d];
+        let new1 = [d, b, c];
+        let good = [new0, new1].iter().all(|t| {
+            let nt = tri_normal(p, t);
+            nt.norm() > 1e-12 * n0.norm()
+                && nt.dot(&n0) > 0.0
+                && angle_at(p, t[0], t[1], t[2]).max(angle_at(p, t[1], t[2], t[0])).max(angle_at(p, t[2], t[0], t[1]))
+                    <= s.max_angle_deg
+        });
+        if !good {
+            continue;
+        }
+        let (i0, i1) = if tris[ts[0]] == t0 { (ts[0], ts[1]) } else { (ts[1], ts[0]) };
+        tris[i0] = new0;
+        tris[i1] = new1;
+        touched[i0] = true;
+        touched[i1] = true;
+        exists.remove(&(a.min(b), a.max(b)));
+        exists.insert((c.min(d), c.max(d)));
+        valence[a] -= 1;
+        valence[b] -= 1;
+        valence[c] += 1;
+        valence[d] += 1;
+        any = true;
+    }
+    any
+}
+
+/// One adaptation pass: splits (refinement and angle-width control), collapses,
+/// flips. Returns `None` if nothing changed or the result would not be a valid
+/// closed oriented surface (then the mesh is left as it is).
+pub fn adapt_surface(mesh: &SurfaceMesh, s: &SurfaceRemeshSettings) -> Option<SurfaceMesh> {
+    let mut p = mesh.positions().to_vec();
+    let mut tris = mesh.elements().to_vec();
+    let mut changed = false;
+    if let Some(t) = split_edges(&mut p, &tris, s) {
+        tris = t;
+        changed = true;
+    }
+    changed |= collapse_edges(&mut p, &mut tris, s);
+    changed |= flip_edges(&p, &mut tris, s);
+    if !changed {
+        return None;
+    }
+    // drop vertices no longer used and renumber
+    let mut used = vec![usize::MAX; p.len()];
+    let mut positions = Vec::with_capacity(p.len());
+    for t in &tris {
+        for &v in t {
+            if used[v] == usize::MAX {
+                used[v] = positions.len();
+                positions.push(p[v]);
+            }
+        }
+    }
+    let tris: Vec<[usize; 3]> = tris.iter().map(|t| t.map(|v| used[v])).collect();
+    Mesh::new(positions, tris).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{ellipsoid, icosphere};
+
+    #[test]
+    fn regularization_keeps_volume_and_improves_angles() {
+        let s = icosphere([0.0; 3], 1.0, 3).unwrap();
+        // shear the vertices tangentially
+        let p: Vec<Point<3>> = s
+            .positions()
+            .iter()
+            .map(|x| {
+                let t = Point::<3>::new(-x.y, x.x, 0.0) * (0.15 * (3.0 * x.z).sin());
+                (x + t).normalize()
+            })
+            .collect();
+        let bad = s.with_positions(p);
+        let q0 = bad.quality();
+        let r = regularize_surface(&bad, 10);
+        let q1 = r.quality();
+        assert!((r.enclosed_measure() - bad.enclosed_measure()).abs() < 1e-12, "volume kept");
+        assert!(q1.min_angle_deg > q0.min_angle_deg + 5.0, "{q0:?} -> {q1:?}");
+    }
+
+    #[test]
+    fn adaptivity_refines_tips_and_controls_wide_angles() {
+        let e = ellipsoid([0.0; 3], [2.0, 0.5, 0.5], 3).unwrap();
+        let mean = {
+            let q = e.quality();
+            0.5 * (q.min_edge + q.max_edge)
+        };
+        let s = SurfaceRemeshSettings { epsilon: 0.02, h_min: 0.1 * mean, h_max: 2.0 * mean, max_angle_deg: 120.0 };
+        let mut m = e.clone();
+        for _ in 0..6 {
+            if let Some(next) = adapt_surface(&m, &s) {
+                m = regularize_surface(&next, 3);
+            }
+        }
+        let q = m.quality();
+        assert!(q.max_angle_deg <= 125.0, "{q:?}");
+        let mean_edge = |pred: &dyn Fn(f64) -> bool| {
+            let mut sum = 0.0;
+            let mut cnt = 0.0;
+            for t in m.elements() {
+                let c = (m.positions()[t[0]] + m.positions()[t[1]] + m.positions()[t[2]]) / 3.0;
+                if pred(c.x) {
+                    sum += (m.positions()[t[1]] - m.positions()[t[0]]).norm();
+                    cnt += 1.0;
+                }
+            }
+            sum / cnt
+        };
+        let tips = mean_edge(&|x| x.abs() > 1.8);
+        let flanks = mean_edge(&|x| x.abs() < 0.5);
+        eprintln!("tips {tips} flanks {flanks} vertices {} quality {q:?}", m.num_vertices());
+        assert!(flanks > 1.5 * tips, "tips {tips} flanks {flanks}");
+    }
+}
