@@ -103,12 +103,6 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
         }
         None => None,
     };
-    let m = &job.spec.mesh;
-    if job.mesh.dimension() == 3 && (m.regularize || m.adapt || m.topology_changes) {
-        eprintln!(
-            "note: mesh management of surfaces is not implemented in this version; the surface keeps its connectivity"
-        );
-    }
     std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory {}", out.display()))?;
     let s = &job.settings;
     let len = if s.end_time.is_some() { 1000 } else { s.max_iterations as u64 };

@@ -171,3 +171,33 @@ fn adaptivity_keeps_the_exact_circle_and_grades_an_ellipse() {
     eprintln!("ellipse: {} vertices, mean edge at the tips {tips:.4}, on the flanks {flanks:.4}", m.num_vertices());
     assert!(flanks > 2.0 * tips, "fewer vertices on flat parts: tips {tips}, flanks {flanks}");
 }
+
+#[test]
+fn shrinking_sphere_keeps_its_exact_solution_with_surface_management() {
+    use shapeflow::flow::SurfaceManager;
+    let start = shapeflow::geometry::icosphere([0.0; 3], 1.0, 4).unwrap();
+    let (params, pinch) = SurfaceManager::defaults_for(&start);
+    let mgr = SurfaceManager { regularize: true, sweeps: 3, adapt: true, params, pinch_curvature: Some(pinch) };
+    let settings = FlowSettings {
+        tau: 2.5e-4,
+        end_time: Some(0.1),
+        max_iterations: usize::MAX,
+        tolerance: 0.0,
+        step_control: None,
+        ..FlowSettings::default()
+    };
+    let problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
+    let mut flow = Flow::new(&problem, start, settings).unwrap().with_mesh_manager(Box::new(mgr));
+    assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::EndTime);
+    let exact = (1.0f64 - 0.4).sqrt();
+    let err = flow.mesh().positions().iter().map(|p| (p.norm() - exact).abs()).fold(0.0, f64::max);
+    let q = flow.mesh().quality();
+    eprintln!(
+        "sphere with management: error {err:e}, vertices {}, angles [{:.1}, {:.1}]",
+        flow.mesh().num_vertices(),
+        q.min_angle_deg,
+        q.max_angle_deg
+    );
+    assert!(err < 5e-3, "{err}");
+    assert!(q.min_angle_deg > 30.0);
+}

@@ -171,7 +171,7 @@ fn surface_manager(m: &super::spec::MeshSpec, initial: &SurfaceMesh) -> Result<O
         return Err(SpecError::new("mesh.h_max", format!("must be at least twice mesh.h_min ({})", params.h_min)));
     }
     params.max_angle_deg = in_range("mesh.max_angle", m.max_angle, 90.0, 179.0)?;
-    let sweeps = in_range("mesh.sweeps", m.sweeps, 0, 1000)?;
+    let sweeps = in_range("mesh.sweeps", m.sweeps.unwrap_or(3), 0, 1000)?;
     let pinch_curvature = m.pinch_off.then_some(2.0 / params.h_min);
     Ok(Some(SurfaceManager { regularize: m.regularize, sweeps, adapt: m.adapt, params, pinch_curvature }))
 }
@@ -196,7 +196,7 @@ fn curve_manager(m: &super::spec::MeshSpec, initial: &CurveMesh) -> Result<Optio
     if let Some(a) = m.min_area {
         params.min_area = positive("mesh.min_area", a)?;
     }
-    let sweeps = in_range("mesh.sweeps", m.sweeps, 0, 1000)?;
+    let sweeps = in_range("mesh.sweeps", m.sweeps.unwrap_or(1), 0, 1000)?;
     Ok(Some(CurveManager {
         regularize: m.regularize,
         sweeps,

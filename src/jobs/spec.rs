@@ -174,8 +174,8 @@ pub struct MeshSpec {
     pub regularize: bool,
     pub adapt: bool,
     pub topology_changes: bool,
-    /// Regularization sweeps per step.
-    pub sweeps: usize,
+    /// Regularization sweeps per step (default 1 for curves, 3 for surfaces).
+    pub sweeps: Option<usize>,
     /// Refinement threshold for `h_S β_S`.
     pub epsilon: Option<f64>,
     pub h_min: Option<f64>,
@@ -194,7 +194,7 @@ impl Default for MeshSpec {
             regularize: true,
             adapt: true,
             topology_changes: true,
-            sweeps: 1,
+            sweeps: None,
             epsilon: None,
             h_min: None,
             h_max: None,

@@ -1,0 +1,60 @@
+//! Surface diffusion of the 8×1×1 prism (paper §4.4.1) runs to pinch-off with mesh
+//! management keeping the triangles sound.
+
+use shapeflow::flow::{Checkpoint, Progress, StopReason};
+use shapeflow::jobs::{parse_spec, prepare, run_prepared, RunEvents};
+use std::collections::HashMap;
+use std::sync::atomic::AtomicBool;
+
+struct Watch {
+    /// (time, min angle, max angle) at every checkpoint
+    angles: Vec<(f64, f64, f64)>,
+    vertices: (usize, usize),
+    last: Option<Checkpoint>,
+}
+
+impl RunEvents for Watch {
+    fn progress(&mut self, p: &Progress) {
+        self.vertices = (self.vertices.0.min(p.vertices), self.vertices.1.max(p.vertices));
+    }
+    fn checkpoint(&mut self, c: &Checkpoint) {
+        let m = c.mesh.to_mesh::<3>().expect("every checkpoint is a valid closed surface");
+        let q = m.quality();
+        self.angles.push((c.time, q.min_angle_deg, q.max_angle_deg));
+        self.last = Some(c.clone());
+    }
+}
+
+#[test]
+fn prism_surface_diffusion_reaches_pinch_off() {
+    let spec = parse_spec(
+        r#"{"problem": {"type": "surface_diffusion"},
+            "initial": {"shape": "box", "size": [8.0, 1.0, 1.0], "resolution": 8},
+            "flow": {"tau": 5e-4, "end_time": 0.6, "max_iterations": 100000},
+            "mesh": {"h_max": 0.2},
+            "output": {"checkpoint_every": 25}}"#,
+    )
+    .unwrap();
+    let job = prepare(spec, &HashMap::new()).unwrap();
+    let mut w = Watch { angles: Vec::new(), vertices: (usize::MAX, 0), last: None };
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut w).unwrap();
+    let last = w.last.unwrap();
+    // neck radius at the centre of the final shape
+    let neck =
+        last.mesh.positions.iter().filter(|p| p[0].abs() < 0.1).map(|p| p[1].hypot(p[2])).fold(f64::INFINITY, f64::min);
+    // triangle quality until the last 3 % of the time before the pinch (in the final
+    // collapse of the neck the angles do degrade: see README, an open item)
+    let before: Vec<_> = w.angles.iter().filter(|a| a.0 < 0.97 * last.time).collect();
+    let min_angle = before.iter().map(|a| a.1).fold(180.0, f64::min);
+    let max_angle = before.iter().map(|a| a.2).fold(0.0, f64::max);
+    eprintln!(
+        "stop {:?} at t = {:.4}, neck radius {neck:.4}, vertices {:?}, angles before the final collapse [{min_angle:.1}, {max_angle:.1}], at the end {:?}",
+        out.stop, last.time, w.vertices, w.angles.last()
+    );
+    assert_eq!(out.stop, StopReason::PinchOff);
+    assert!(neck < 0.1, "a thin neck at the centre: {neck}");
+    assert!(min_angle > 25.0 && max_angle < 110.0, "angles [{min_angle}, {max_angle}]");
+    assert!(w.vertices.0 >= 1000 && w.vertices.1 <= 2500, "vertex counts of the paper's order: {:?}", w.vertices);
+    // the paper reports t ≈ 0.4135; we reach the pinch somewhat earlier (see README)
+    assert!(last.time > 0.33 && last.time < 0.45, "pinch-off time {}", last.time);
+}
