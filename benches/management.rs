@@ -5,8 +5,8 @@
 //! `cargo bench --bench management`.
 
 use shapeflow::fem::{Matrices, Pattern};
-use shapeflow::flow::{CurveManager, LinearSystem, MeshManager, ProductWeights, SemiImplicitStep, SolverKind};
-use shapeflow::geometry::{polygon, Point};
+use shapeflow::flow::{CurveManager, LinearSystem, MeshManager, ProductWeights, SemiImplicitStep, SolverKind, SurfaceManager};
+use shapeflow::geometry::{icosphere, polygon, Point};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -82,4 +82,25 @@ fn main() {
         );
         println!("| {n} | {:.3} | {:.3} | {:.2} |", t_step * 1e3, t_manage * 1e3, t_manage / t_step);
     }
+    println!();
+    println!("| surface vertices | L2 step (ms) | management (ms) | management / step |");
+    println!("|---:|---:|---:|---:|");
+    let mesh = icosphere([0.0; 3], 1.0, 6).unwrap();
+    let n = mesh.num_vertices();
+    let pattern = Pattern::new(n, mesh.elements());
+    let mut m = Matrices::assemble(&mesh, &pattern);
+    let (g, f) = (vec![1.0; n], vec![0.0; n]);
+    let mut step = SemiImplicitStep::new(SolverKind::Lumped);
+    let t_step = time_it(|| {
+        m.assemble_into(&mesh, &pattern, false);
+        let ax = m.stiffness_times_positions(&mesh, &pattern);
+        let sys = LinearSystem { mesh: &mesh, pattern: &pattern, matrices: &m, ax: &ax, g: &g, f: &f, product: &ProductWeights::L2, tau: 1e-4 };
+        black_box(step.velocity(&sys).unwrap());
+    });
+    let (params, pinch) = SurfaceManager::defaults_for(&mesh);
+    let mut manager = SurfaceManager { regularize: true, sweeps: 3, adapt: true, params, pinch_curvature: Some(pinch) };
+    let t_manage = time_it(|| {
+        black_box(manager.manage(&mesh).unwrap());
+    });
+    println!("| {n} | {:.3} | {:.3} | {:.2} |", t_step * 1e3, t_manage * 1e3, t_manage / t_step);
 }
