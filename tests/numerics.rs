@@ -275,3 +275,65 @@ fn stop_reasons_converged_cancelled_and_tau_min() {
     assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::MaxIterations);
     assert_eq!(flow.iteration(), 7);
 }
+
+/// Linear stability of the circle and the sphere under surface diffusion: a mode
+/// `cos kθ` on the unit circle decays at `k²(k²−1)`, a zonal `P₂` mode on the unit
+/// sphere at `l(l+1)(l−1)(l+2) = 24` (time scale of `V = Δ_Γ κ`, κ the sum of the
+/// principal curvatures).
+#[test]
+fn surface_diffusion_decays_perturbations_at_the_linear_rates() {
+    let run = |tau: f64, end: f64| FlowSettings {
+        scalar_product: ScalarProduct::HMinus1,
+        tau,
+        end_time: Some(end),
+        max_iterations: usize::MAX,
+        tolerance: 0.0,
+        backtracking: false,
+        step_control: None,
+        ..FlowSettings::default()
+    };
+    let problem = SurfaceDiffusion { gamma: 1.0 };
+    let (n, k, d) = (256, 4.0, 0.01);
+    let pts: Vec<shapeflow::geometry::Point<2>> = (0..n)
+        .map(|i| {
+            let t = 2.0 * std::f64::consts::PI * i as f64 / n as f64;
+            let r = 1.0 + d * (k * t).cos();
+            shapeflow::geometry::Point::<2>::new(r * t.cos(), r * t.sin())
+        })
+        .collect();
+    let amp2 = |m: &Mesh<2>| {
+        let (mut c, mut s) = (0.0, 0.0);
+        for p in m.positions() {
+            let th = p.y.atan2(p.x);
+            c += p.norm() * (k * th).cos();
+            s += p.norm() * (k * th).sin();
+        }
+        2.0 * (c * c + s * s).sqrt() / m.num_vertices() as f64
+    };
+    let mesh = shapeflow::geometry::polygon(&pts, None).unwrap();
+    let a0 = amp2(&mesh);
+    let mut flow = Flow::new(&problem, mesh, run(1e-6, 0.004)).unwrap();
+    flow.run(&AtomicBool::new(false), |_| {}).unwrap();
+    let rate2 = -(amp2(flow.mesh()) / a0).ln() / 0.004;
+
+    let amp3 = |m: &Mesh<3>| {
+        let (mut num, mut den) = (0.0, 0.0);
+        for p in m.positions() {
+            let c = p.z / p.norm();
+            let p2 = 0.5 * (3.0 * c * c - 1.0);
+            num += p.norm() * p2;
+            den += p2 * p2;
+        }
+        num / den
+    };
+    let s = icosphere([0.0; 3], 1.0, 4).unwrap();
+    let p = s.positions().iter().map(|x| x * (1.0 + 0.01 * 0.5 * (3.0 * x.z * x.z - 1.0))).collect();
+    let mesh = s.with_positions(p);
+    let a0 = amp3(&mesh);
+    let mut flow = Flow::new(&problem, mesh, run(2e-5, 0.02)).unwrap();
+    flow.run(&AtomicBool::new(false), |_| {}).unwrap();
+    let rate3 = -(amp3(flow.mesh()) / a0).ln() / 0.02;
+    eprintln!("decay rates: circle mode 4 {rate2:.2} (240), sphere P2 {rate3:.2} (24)");
+    assert!((rate2 - 240.0).abs() < 0.01 * 240.0, "{rate2}");
+    assert!((rate3 - 24.0).abs() < 0.05 * 24.0, "{rate3}");
+}
