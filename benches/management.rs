@@ -5,7 +5,9 @@
 //! `cargo bench --bench management`.
 
 use shapeflow::fem::{Matrices, Pattern};
-use shapeflow::flow::{CurveManager, LinearSystem, MeshManager, ProductWeights, SemiImplicitStep, SolverKind, SurfaceManager};
+use shapeflow::flow::{
+    CurveManager, LinearSystem, MeshManager, ProductWeights, SemiImplicitStep, SolverKind, SurfaceManager,
+};
 use shapeflow::geometry::{icosphere, polygon, Point};
 use std::hint::black_box;
 use std::time::Instant;
@@ -94,7 +96,16 @@ fn main() {
     let t_step = time_it(|| {
         m.assemble_into(&mesh, &pattern, false);
         let ax = m.stiffness_times_positions(&mesh, &pattern);
-        let sys = LinearSystem { mesh: &mesh, pattern: &pattern, matrices: &m, ax: &ax, g: &g, f: &f, product: &ProductWeights::L2, tau: 1e-4 };
+        let sys = LinearSystem {
+            mesh: &mesh,
+            pattern: &pattern,
+            matrices: &m,
+            ax: &ax,
+            g: &g,
+            f: &f,
+            product: &ProductWeights::L2,
+            tau: 1e-4,
+        };
         black_box(step.velocity(&sys).unwrap());
     });
     let (params, pinch) = SurfaceManager::defaults_for(&mesh);
