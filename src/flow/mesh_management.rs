@@ -4,8 +4,8 @@
 
 use super::FlowError;
 use crate::geometry::{
-    adapt_curve, adapt_surface, regularize_curve, regularize_surface, resolve_intersections, CurveMesh,
-    CurveRemeshSettings, Mesh, SurfaceMesh, SurfaceRemeshSettings,
+    adapt_curve, adapt_surface, edge_statistics, regularize_curve, regularize_surface, resolve_intersections,
+    CurveMesh, CurveRemeshSettings, Mesh, SurfaceMesh, SurfaceRemeshSettings,
 };
 
 /// What mesh management did to the mesh after a step.
@@ -123,28 +123,9 @@ impl SurfaceManager {
     }
 }
 
-/// Mean edge length and the largest `h β` and `β/h` over the edges.
 fn edge_stats(m: &SurfaceMesh) -> (f64, (f64, f64)) {
-    let p = m.positions();
-    let mut by_edge: std::collections::HashMap<(usize, usize), Vec<usize>> = std::collections::HashMap::new();
-    for (k, t) in m.elements().iter().enumerate() {
-        for e in 0..3 {
-            let (a, b) = (t[e], t[(e + 1) % 3]);
-            by_edge.entry((a.min(b), a.max(b))).or_default().push(k);
-        }
-    }
-    let normals = m.element_normals();
-    let (mut sum, mut hb, mut bh) = (0.0, 0.0f64, 0.0f64);
-    for (&(a, b), ts) in &by_edge {
-        let h = (p[b] - p[a]).norm();
-        sum += h;
-        if ts.len() == 2 {
-            let beta = normals[ts[0]].dot(&normals[ts[1]]).clamp(-1.0, 1.0).acos();
-            hb = hb.max(h * beta);
-            bh = bh.max(beta / h);
-        }
-    }
-    (sum / by_edge.len() as f64, (hb, bh))
+    let (mean, hb, bh) = edge_statistics(m);
+    (mean, (hb, bh))
 }
 
 impl MeshManager<3> for SurfaceManager {

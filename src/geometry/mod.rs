@@ -17,7 +17,9 @@ pub use curves::{circle, ellipse, polygon, rectangle, union};
 pub use intersect::{find_segment_intersections, SegmentHit};
 pub use measures::MeshQuality;
 pub use mesh::{CurveMesh, Mesh, MeshError, SurfaceMesh};
-pub use surface_remesh::{adapt_surface, regularize_surface, SurfaceRemeshSettings};
+pub use surface_remesh::{
+    adapt_surface, edge_statistics, regularize_surface, surface_edges, SurfaceEdge, SurfaceRemeshSettings,
+};
 pub use surfaces::{box_surface, ellipsoid, icosphere, torus};
 
 /// A point of `R^D`.

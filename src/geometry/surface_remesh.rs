@@ -3,7 +3,7 @@
 //! angle-width control. Pure functions from a surface mesh to a surface mesh.
 
 use super::{Mesh, Point, SurfaceMesh};
-use std::collections::HashMap;
+use std::collections::HashSet;
 
 /// Parameters of surface mesh management.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -54,6 +54,7 @@ pub fn regularize_surface(mesh: &SurfaceMesh, sweeps: usize) -> SurfaceMesh {
     let mut p = mesh.positions().to_vec();
     let tris = mesh.elements();
     let (start, list) = vertex_triangles(p.len(), tris);
+    let mut normals: Vec<Point<3>> = Vec::with_capacity(16);
     for _ in 0..sweeps {
         for v in 0..p.len() {
             let star = &list[start[v]..start[v + 1]];
@@ -76,7 +77,8 @@ pub fn regularize_surface(mesh: &SurfaceMesh, sweeps: usize) -> SurfaceMesh {
             let mut d = c / w - p[v];
             d -= g * (d.dot(&g) / gg);
             let old = p[v];
-            let normals: Vec<Point<3>> = star.iter().map(|&t| tri_normal(&p, &tris[t])).collect();
+            normals.clear();
+            normals.extend(star.iter().map(|&t| tri_normal(&p, &tris[t])));
             p[v] = old + d;
             let ok = star.iter().zip(&normals).all(|(&t, n0)| {
                 let n1 = tri_normal(&p, &tris[t]);
@@ -107,16 +109,76 @@ fn angle_at(p: &[Point<3>], a: usize, b: usize, c: usize) -> f64 {
     (u.dot(&w) / (u.norm() * w.norm())).clamp(-1.0, 1.0).acos().to_degrees()
 }
 
-/// Edge → the (up to two) triangles containing it, keyed by the sorted vertex pair.
-fn edge_map(tris: &[[usize; 3]]) -> HashMap<(usize, usize), Vec<usize>> {
-    let mut m: HashMap<(usize, usize), Vec<usize>> = HashMap::with_capacity(tris.len() * 2);
-    for (k, t) in tris.iter().enumerate() {
+/// An edge `a < b` with the two triangles containing it (`t[1] = usize::MAX` if only one).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceEdge {
+    pub a: usize,
+    pub b: usize,
+    pub t: [usize; 2],
+}
+
+/// All edges, sorted by `(a, b)`, built in `O(n)` through per-vertex buckets.
+pub fn surface_edges(n: usize, tris: &[[usize; 3]]) -> Vec<SurfaceEdge> {
+    let mut start = vec![0usize; n + 1];
+    for t in tris {
         for e in 0..3 {
-            let (a, b) = (t[e], t[(e + 1) % 3]);
-            m.entry((a.min(b), a.max(b))).or_default().push(k);
+            start[t[e].min(t[(e + 1) % 3]) + 1] += 1;
         }
     }
-    m
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut slot = vec![(0usize, 0usize); start[n]];
+    for (k, t) in tris.iter().enumerate() {
+        for e in 0..3 {
+            let (a, b) = (t[e].min(t[(e + 1) % 3]), t[e].max(t[(e + 1) % 3]));
+            slot[fill[a]] = (b, k);
+            fill[a] += 1;
+        }
+    }
+    let mut out = Vec::with_capacity(start[n] / 2 + 1);
+    for a in 0..n {
+        let list = &mut slot[start[a]..start[a + 1]];
+        list.sort_unstable();
+        let mut i = 0;
+        while i < list.len() {
+            let b = list[i].0;
+            let mut t = [list[i].1, usize::MAX];
+            if i + 1 < list.len() && list[i + 1].0 == b {
+                t[1] = list[i + 1].1;
+                i += 1;
+            }
+            out.push(SurfaceEdge { a, b, t });
+            i += 1;
+        }
+    }
+    out
+}
+
+/// Index of edge `{a, b}` in a sorted edge list.
+fn edge_index(edges: &[SurfaceEdge], a: usize, b: usize) -> Option<usize> {
+    let key = (a.min(b), a.max(b));
+    edges.binary_search_by(|e| (e.a, e.b).cmp(&key)).ok()
+}
+
+/// Mean edge length, the largest `h β` and the largest `β/h` over the edges (`β` the
+/// angle between the normals of the two triangles at the edge).
+pub fn edge_statistics(mesh: &SurfaceMesh) -> (f64, f64, f64) {
+    let p = mesh.positions();
+    let edges = surface_edges(p.len(), mesh.elements());
+    let normals = mesh.element_normals();
+    let (mut sum, mut hb, mut bh) = (0.0, 0.0f64, 0.0f64);
+    for e in &edges {
+        let h = (p[e.b] - p[e.a]).norm();
+        sum += h;
+        if e.t[1] != usize::MAX {
+            let beta = normals[e.t[0]].dot(&normals[e.t[1]]).clamp(-1.0, 1.0).acos();
+            hb = hb.max(h * beta);
+            bh = bh.max(beta / h);
+        }
+    }
+    (sum / edges.len().max(1) as f64, hb, bh)
 }
 
 /// Refinement by edge splits: an edge is split when longer than `h_max`, when
@@ -127,35 +189,38 @@ fn edge_map(tris: &[[usize; 3]]) -> HashMap<(usize, usize), Vec<usize>> {
 /// are divided into two, three or four.
 fn split_edges(p: &mut Vec<Point<3>>, tris: &[[usize; 3]], s: &SurfaceRemeshSettings) -> Option<Vec<[usize; 3]>> {
     let normals = vertex_normals(p, tris);
-    let edges = edge_map(tris);
-    let mut mid: HashMap<(usize, usize), usize> = HashMap::new();
-    let mut keys: Vec<_> = edges.keys().copied().collect();
-    keys.sort_unstable();
-    for (a, b) in keys {
-        let ts = &edges[&(a, b)];
-        if ts.len() != 2 {
+    let edges = surface_edges(p.len(), tris);
+    let mut mid = vec![usize::MAX; edges.len()];
+    let mut count = 0;
+    for (k, edge) in edges.iter().enumerate() {
+        let (a, b) = (edge.a, edge.b);
+        if edge.t[1] == usize::MAX {
             continue;
         }
+        let ts = &edge.t;
         let h = (p[b] - p[a]).norm();
         let (n0, n1) = (tri_normal(p, &tris[ts[0]]).normalize(), tri_normal(p, &tris[ts[1]]).normalize());
         let beta = n0.dot(&n1).clamp(-1.0, 1.0).acos();
+        let cos_max = s.max_angle_deg.to_radians().cos();
         let wide = ts.iter().any(|&t| {
             let c = tris[t].iter().copied().find(|&x| x != a && x != b).unwrap();
-            angle_at(p, c, a, b) > s.max_angle_deg
+            let (u, w) = (p[a] - p[c], p[b] - p[c]);
+            u.dot(&w) < cos_max * u.norm() * w.norm()
         });
         if h > s.h_max || (h * beta > s.epsilon && h > 2.0 * s.h_min) || wide {
             let e = p[b] - p[a];
             let nm = (normals[a] + normals[b]).normalize();
             let lift = e.dot(&(normals[b] - normals[a])) / 8.0;
             p.push((p[a] + p[b]) * 0.5 + nm * lift);
-            mid.insert((a, b), p.len() - 1);
+            mid[k] = p.len() - 1;
+            count += 1;
         }
     }
-    if mid.is_empty() {
+    if count == 0 {
         return None;
     }
-    let m = |a: usize, b: usize| mid.get(&(a.min(b), a.max(b))).copied();
-    let mut out = Vec::with_capacity(tris.len() + 3 * mid.len());
+    let m = |a: usize, b: usize| edge_index(&edges, a, b).map(|k| mid[k]).filter(|&x| x != usize::MAX);
+    let mut out = Vec::with_capacity(tris.len() + 3 * count);
     for &t in tris {
         let ms = [m(t[0], t[1]), m(t[1], t[2]), m(t[2], t[0])];
         match ms.iter().filter(|x| x.is_some()).count() {
@@ -202,10 +267,11 @@ fn split_edges(p: &mut Vec<Point<3>>, tris: &[[usize; 3]], s: &SurfaceRemeshSett
 fn collapse_edges(p: &mut [Point<3>], tris: &mut Vec<[usize; 3]>, s: &SurfaceRemeshSettings) -> bool {
     let n = p.len();
     let (start, list) = vertex_triangles(n, tris);
-    let edges = edge_map(tris);
+    let edges = surface_edges(n, tris);
     let mut flat_vertex = vec![true; n];
-    for (&(a, b), ts) in &edges {
-        if ts.len() == 2 {
+    for e in &edges {
+        let (a, b, ts) = (e.a, e.b, e.t);
+        if ts[1] != usize::MAX {
             let (n0, n1) = (tri_normal(p, &tris[ts[0]]).normalize(), tri_normal(p, &tris[ts[1]]).normalize());
             let beta = n0.dot(&n1).clamp(-1.0, 1.0).acos();
             if (p[b] - p[a]).norm() * beta >= s.epsilon / 8.0 {
@@ -214,8 +280,8 @@ fn collapse_edges(p: &mut [Point<3>], tris: &mut Vec<[usize; 3]>, s: &SurfaceRem
             }
         }
     }
-    let mut keys: Vec<_> = edges.keys().copied().collect();
-    keys.sort_unstable_by(|x, y| (p[x.1] - p[x.0]).norm().total_cmp(&(p[y.1] - p[y.0]).norm()));
+    let mut keys: Vec<(f64, usize, usize)> = edges.iter().map(|e| ((p[e.b] - p[e.a]).norm(), e.a, e.b)).collect();
+    keys.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
     let mut locked = vec![false; n];
     let mut dead = vec![false; tris.len()];
     let mut remap: Vec<usize> = (0..n).collect();
@@ -227,8 +293,7 @@ fn collapse_edges(p: &mut [Point<3>], tris: &mut Vec<[usize; 3]>, s: &SurfaceRem
         nb.dedup();
         nb
     };
-    for (a, b) in keys {
-        let h = (p[b] - p[a]).norm();
+    for (h, a, b) in keys {
         let short = h < s.h_min;
         let flat = flat_vertex[a] && flat_vertex[b] && h < 0.5 * s.h_max;
         if !(short || flat) || locked[a] || locked[b] {
@@ -298,19 +363,19 @@ fn collapse_edges(p: &mut [Point<3>], tris: &mut Vec<[usize; 3]>, s: &SurfaceRem
 fn flip_edges(p: &[Point<3>], tris: &mut [[usize; 3]], s: &SurfaceRemeshSettings) -> bool {
     let n = p.len();
     let mut valence = vec![0i64; n];
-    let edges = edge_map(tris);
-    for &(a, b) in edges.keys() {
-        valence[a] += 1;
-        valence[b] += 1;
+    let edges = surface_edges(n, tris);
+    for e in &edges {
+        valence[e.a] += 1;
+        valence[e.b] += 1;
     }
-    let mut exists: std::collections::HashSet<(usize, usize)> = edges.keys().copied().collect();
-    let mut keys: Vec<_> = edges.keys().copied().collect();
-    keys.sort_unstable();
+    // edges created by earlier flips of this pass (removed ones need no record: a
+    // flipped edge's triangles are touched and not considered again)
+    let mut added: HashSet<(usize, usize)> = HashSet::new();
     let mut touched = vec![false; tris.len()];
     let mut any = false;
-    for (a, b) in keys {
-        let ts = &edges[&(a, b)];
-        if ts.len() != 2 || touched[ts[0]] || touched[ts[1]] {
+    for e in &edges {
+        let (a, b, ts) = (e.a, e.b, e.t);
+        if ts[1] == usize::MAX || touched[ts[0]] || touched[ts[1]] {
             continue;
         }
         let (t0, t1) = (tris[ts[0]], tris[ts[1]]);
@@ -324,7 +389,7 @@ fn flip_edges(p: &[Point<3>], tris: &mut [[usize; 3]], s: &SurfaceRemeshSettings
         let c = t0[(k0 + 2) % 3];
         let Some(k1) = (0..3).find(|&k| t1[k] == b && t1[(k + 1) % 3] == a) else { continue };
         let d = t1[(k1 + 2) % 3];
-        if c == d || exists.contains(&(c.min(d), c.max(d))) {
+        if c == d || edge_index(&edges, c, d).is_some() || added.contains(&(c.min(d), c.max(d))) {
             continue;
         }
         let dev =
@@ -355,8 +420,7 @@ fn flip_edges(p: &[Point<3>], tris: &mut [[usize; 3]], s: &SurfaceRemeshSettings
         tris[i1] = new1;
         touched[i0] = true;
         touched[i1] = true;
-        exists.remove(&(a.min(b), a.max(b)));
-        exists.insert((c.min(d), c.max(d)));
+        added.insert((c.min(d), c.max(d)));
         valence[a] -= 1;
         valence[b] -= 1;
         valence[c] += 1;
@@ -394,7 +458,21 @@ pub fn adapt_surface(mesh: &SurfaceMesh, s: &SurfaceRemeshSettings) -> Option<Su
         }
     }
     let tris: Vec<[usize; 3]> = tris.iter().map(|t| t.map(|v| used[v])).collect();
-    Mesh::new(positions, tris).ok()
+    closed_and_oriented(&positions, &tris).then(|| Mesh::from_trusted_parts(positions, tris))
+}
+
+/// The checks a remeshing pass can break: every edge in exactly two triangles, in
+/// opposite directions, and no degenerate triangle (the link condition of the
+/// collapses keeps vertex stars manifold).
+fn closed_and_oriented(p: &[Point<3>], tris: &[[usize; 3]]) -> bool {
+    let edges = surface_edges(p.len(), tris);
+    if edges.windows(2).any(|w| (w[0].a, w[0].b) == (w[1].a, w[1].b)) {
+        return false;
+    }
+    let forward = |t: &[usize; 3], a: usize, b: usize| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b);
+    let scale: f64 = tris.iter().map(|t| tri_normal(p, t).norm()).sum::<f64>() / tris.len().max(1) as f64;
+    edges.iter().all(|e| e.t[1] != usize::MAX && forward(&tris[e.t[0]], e.a, e.b) != forward(&tris[e.t[1]], e.a, e.b))
+        && tris.iter().all(|t| tri_normal(p, t).norm() > 1e-10 * scale)
 }
 
 #[cfg(test)]
