@@ -131,15 +131,7 @@ impl LumpedSolver {
             }
             // not positive definite: fall back to LU
         }
-        let sym = sys.pattern.symbolic().clone();
-        if self.lu.is_none() {
-            self.lu = Some(SymbolicLu::try_new(sym.as_ref()).map_err(|e| FlowError::Factorization(format!("{e:?}")))?);
-        }
-        let lu = Lu::try_new_with_symbolic(self.lu.clone().unwrap(), SparseColMatRef::new(sym.as_ref(), &s.values))
-            .map_err(|e| FlowError::Factorization(format!("{e:?}")))?;
-        let mut v = s.rhs;
-        let n = v.len();
-        lu.solve_in_place(MatMut::from_column_major_slice_mut(&mut v, n, 1));
+        let (v, lu) = lu_solve(&mut self.lu, sys.pattern.symbolic(), s)?;
         self.last = Last::Lu(Box::new(lu));
         Ok(v)
     }
@@ -200,17 +192,7 @@ impl LumpedSolver {
     /// Sparse LU of the two-ring `S` (fallback of the `H^{-1}` path).
     fn solve_lu(&mut self, s: SchurMatrix) -> Result<Vec<f64>, FlowError> {
         let tr = self.two_ring.as_mut().expect("two-ring pattern built in assemble");
-        if tr.lu.is_none() {
-            tr.lu = Some(
-                SymbolicLu::try_new(tr.symbolic.as_ref()).map_err(|e| FlowError::Factorization(format!("{e:?}")))?,
-            );
-        }
-        let lu =
-            Lu::try_new_with_symbolic(tr.lu.clone().unwrap(), SparseColMatRef::new(tr.symbolic.as_ref(), &s.values))
-                .map_err(|e| FlowError::Factorization(format!("{e:?}")))?;
-        let mut v = s.rhs;
-        let n = v.len();
-        lu.solve_in_place(MatMut::from_column_major_slice_mut(&mut v, n, 1));
+        let (v, lu) = lu_solve(&mut tr.lu, &tr.symbolic, s)?;
         self.last = Last::Lu(Box::new(lu));
         Ok(v)
     }
@@ -251,6 +233,25 @@ impl LumpedSolver {
         rhs.iter_mut().for_each(|r| *r = -*r);
         SchurMatrix { values, rhs, symmetric: false }
     }
+}
+
+/// Sparse LU of `S` on `pattern` (symbolic part created once in `symbolic`), and the
+/// solution of `S V = rhs`.
+fn lu_solve(
+    symbolic: &mut Option<SymbolicLu<usize>>,
+    pattern: &SymbolicSparseColMat<usize>,
+    s: SchurMatrix,
+) -> Result<(Vec<f64>, Lu<usize, f64>), FlowError> {
+    let err = |e: String| FlowError::Factorization(e);
+    if symbolic.is_none() {
+        *symbolic = Some(SymbolicLu::try_new(pattern.as_ref()).map_err(|e| err(format!("{e:?}")))?);
+    }
+    let lu = Lu::try_new_with_symbolic(symbolic.clone().unwrap(), SparseColMatRef::new(pattern.as_ref(), &s.values))
+        .map_err(|e| err(format!("{e:?}")))?;
+    let mut v = s.rhs;
+    let n = v.len();
+    lu.solve_in_place(MatMut::from_column_major_slice_mut(&mut v, n, 1));
+    Ok((v, lu))
 }
 
 /// `x ← B⁻¹ x` with a single-precision factorization (a preconditioner: the outer

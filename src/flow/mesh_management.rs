@@ -24,6 +24,15 @@ pub trait MeshManager<const D: usize>: Send {
     fn manage(&mut self, mesh: &Mesh<D>) -> Result<Managed<D>, FlowError>;
 }
 
+/// What a pass did: a new connectivity wins over moved vertices.
+fn outcome<const D: usize>(remeshed: Option<Mesh<D>>, moved: Option<Mesh<D>>) -> Managed<D> {
+    match (remeshed, moved) {
+        (Some(_), Some(m)) | (Some(m), None) => Managed::Remeshed(m),
+        (None, Some(m)) => Managed::Moved(m),
+        (None, None) => Managed::Unchanged,
+    }
+}
+
 /// Switches and resolved parameters of curve mesh management.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CurveManager {
@@ -83,11 +92,7 @@ impl MeshManager<2> for CurveManager {
         } else {
             None
         };
-        Ok(match (remeshed, moved) {
-            (Some(_), Some(m)) | (Some(m), None) => Managed::Remeshed(m),
-            (None, Some(m)) => Managed::Moved(m),
-            (None, None) => Managed::Unchanged,
-        })
+        Ok(outcome(remeshed, moved))
     }
 }
 
@@ -141,10 +146,6 @@ impl MeshManager<3> for SurfaceManager {
         } else {
             None
         };
-        Ok(match (remeshed, moved) {
-            (Some(_), Some(m)) | (Some(m), None) => Managed::Remeshed(m),
-            (None, Some(m)) => Managed::Moved(m),
-            (None, None) => Managed::Unchanged,
-        })
+        Ok(outcome(remeshed, moved))
     }
 }

@@ -153,23 +153,23 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     Ok(PreparedJob { spec, mesh, problem, settings, checkpoint_every, curve_manager, surface_manager })
 }
 
+/// `(ε, h_min, h_max)`: the spec's values where given, else the defaults; checked.
+fn sizes(m: &super::spec::MeshSpec, defaults: (f64, f64, f64)) -> Result<(f64, f64, f64), SpecError> {
+    let epsilon = m.epsilon.map_or(Ok(defaults.0), |e| positive("mesh.epsilon", e))?;
+    let h_min = m.h_min.map_or(Ok(defaults.1), |h| positive("mesh.h_min", h))?;
+    let h_max = m.h_max.map_or(Ok(defaults.2), |h| positive("mesh.h_max", h))?;
+    if h_min * 2.0 > h_max {
+        return Err(SpecError::new("mesh.h_max", format!("must be at least twice mesh.h_min ({h_min})")));
+    }
+    Ok((epsilon, h_min, h_max))
+}
+
 fn surface_manager(m: &super::spec::MeshSpec, initial: &SurfaceMesh) -> Result<Option<SurfaceManager>, SpecError> {
     if !(m.regularize || m.adapt || m.pinch_off) {
         return Ok(None);
     }
     let (mut params, _) = SurfaceManager::defaults_for(initial);
-    if let Some(e) = m.epsilon {
-        params.epsilon = positive("mesh.epsilon", e)?;
-    }
-    if let Some(h) = m.h_min {
-        params.h_min = positive("mesh.h_min", h)?;
-    }
-    if let Some(h) = m.h_max {
-        params.h_max = positive("mesh.h_max", h)?;
-    }
-    if params.h_min * 2.0 > params.h_max {
-        return Err(SpecError::new("mesh.h_max", format!("must be at least twice mesh.h_min ({})", params.h_min)));
-    }
+    (params.epsilon, params.h_min, params.h_max) = sizes(m, (params.epsilon, params.h_min, params.h_max))?;
     params.max_angle_deg = in_range("mesh.max_angle", m.max_angle, 90.0, 179.0)?;
     let sweeps = in_range("mesh.sweeps", m.sweeps.unwrap_or(3), 0, 1000)?;
     let pinch_curvature = m.pinch_off.then_some(2.0 / params.h_min);
@@ -181,18 +181,7 @@ fn curve_manager(m: &super::spec::MeshSpec, initial: &CurveMesh) -> Result<Optio
         return Ok(None);
     }
     let mut params = CurveManager::defaults_for(initial);
-    if let Some(e) = m.epsilon {
-        params.epsilon = positive("mesh.epsilon", e)?;
-    }
-    if let Some(h) = m.h_min {
-        params.h_min = positive("mesh.h_min", h)?;
-    }
-    if let Some(h) = m.h_max {
-        params.h_max = positive("mesh.h_max", h)?;
-    }
-    if params.h_min * 2.0 > params.h_max {
-        return Err(SpecError::new("mesh.h_max", format!("must be at least twice mesh.h_min ({})", params.h_min)));
-    }
+    (params.epsilon, params.h_min, params.h_max) = sizes(m, (params.epsilon, params.h_min, params.h_max))?;
     if let Some(a) = m.min_area {
         params.min_area = positive("mesh.min_area", a)?;
     }
