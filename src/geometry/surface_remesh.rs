@@ -431,18 +431,36 @@ fn flip_edges(p: &[Point<3>], tris: &mut [[usize; 3]], s: &SurfaceRemeshSettings
 }
 
 /// One adaptation pass: splits (refinement and angle-width control), collapses,
-/// flips. Returns `None` if nothing changed or the result would not be a valid
-/// closed oriented surface (then the mesh is left as it is).
+/// flips, each stage kept only if its result is a valid closed oriented surface (a
+/// stage that would break it is skipped, the others still apply). Returns `None`
+/// if nothing changed.
 pub fn adapt_surface(mesh: &SurfaceMesh, s: &SurfaceRemeshSettings) -> Option<SurfaceMesh> {
     let mut p = mesh.positions().to_vec();
     let mut tris = mesh.elements().to_vec();
     let mut changed = false;
-    if let Some(t) = split_edges(&mut p, &tris, s) {
-        tris = t;
-        changed = true;
-    }
-    changed |= collapse_edges(&mut p, &mut tris, s);
-    changed |= flip_edges(&p, &mut tris, s);
+    let mut stage = |op: &dyn Fn(&mut Vec<Point<3>>, &mut Vec<[usize; 3]>) -> bool,
+                     p: &mut Vec<Point<3>>,
+                     tris: &mut Vec<[usize; 3]>| {
+        let (mut p2, mut t2) = (p.clone(), tris.clone());
+        if op(&mut p2, &mut t2) && closed_and_oriented(&p2, &t2) {
+            *p = p2;
+            *tris = t2;
+            changed = true;
+        }
+    };
+    stage(
+        &|p, t| match split_edges(p, t, s) {
+            Some(new) => {
+                *t = new;
+                true
+            }
+            None => false,
+        },
+        &mut p,
+        &mut tris,
+    );
+    stage(&|p, t| collapse_edges(p, t, s), &mut p, &mut tris);
+    stage(&|p, t| flip_edges(p, t, s), &mut p, &mut tris);
     if !changed {
         return None;
     }
@@ -458,7 +476,7 @@ pub fn adapt_surface(mesh: &SurfaceMesh, s: &SurfaceRemeshSettings) -> Option<Su
         }
     }
     let tris: Vec<[usize; 3]> = tris.iter().map(|t| t.map(|v| used[v])).collect();
-    closed_and_oriented(&positions, &tris).then(|| Mesh::from_trusted_parts(positions, tris))
+    Some(Mesh::from_trusted_parts(positions, tris))
 }
 
 /// The checks a remeshing pass can break: every edge in exactly two triangles, in
