@@ -25,3 +25,4 @@ pub mod flow;
 pub mod geometry;
 pub mod jobs;
 pub mod problems;
+pub mod service;

@@ -36,10 +36,15 @@ enum Command {
     },
     /// Start the HTTP job service.
     Serve {
+        /// Address to listen on.
         #[arg(long, default_value = "127.0.0.1:8080")]
         bind: String,
+        /// SQLite database file (created if missing).
         #[arg(long, default_value = "shapeflow.db")]
         database: PathBuf,
+        /// Worker threads running jobs (default: number of cores).
+        #[arg(long)]
+        workers: Option<usize>,
     },
 }
 
@@ -57,14 +62,51 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
-        Command::Serve { bind, database } => {
-            eprintln!(
-                "error: the HTTP job service is not implemented in this version yet \
-                 (would bind {bind} with database {}); use `shapeflow run SPEC.json --out DIR`",
-                database.display()
-            );
-            ExitCode::from(2)
+        Command::Serve { bind, database, workers } => {
+            let workers = workers.unwrap_or_else(|| std::thread::available_parallelism().map_or(2, |n| n.get()));
+            let result = tokio::runtime::Builder::new_multi_thread()
+                .enable_all()
+                .build()
+                .map_err(anyhow::Error::from)
+                .and_then(|rt| rt.block_on(serve(&bind, &database, workers)));
+            match result {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::from(1)
+                }
+            }
         }
+    }
+}
+
+async fn serve(bind: &str, database: &Path, workers: usize) -> Result<()> {
+    let service = shapeflow::service::Service::start(database, workers)
+        .await
+        .with_context(|| format!("cannot open database {}", database.display()))?;
+    let listener = tokio::net::TcpListener::bind(bind).await.with_context(|| format!("cannot listen on {bind}"))?;
+    tracing::info!(address = %listener.local_addr()?, database = %database.display(), workers, "shapeflow serving");
+    axum::serve(listener, service.router()).with_graceful_shutdown(shutdown_signal()).await?;
+    tracing::info!("shutting down: running jobs checkpoint and resume at the next start");
+    service.stop().await;
+    Ok(())
+}
+
+async fn shutdown_signal() {
+    let ctrl_c = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let term = async {
+        if let Ok(mut s) = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            s.recv().await;
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! {
+        _ = ctrl_c => {},
+        _ = term => {},
     }
 }
 

@@ -1,0 +1,203 @@
+//! The job service of DESIGN.md §3 (first slice): axum routes over a SQLite store
+//! and a fixed pool of worker threads. Routes so far: `POST /v1/jobs` (JSON),
+//! `GET /v1/jobs`, `GET|DELETE /v1/jobs/{id}`, `POST /v1/jobs/{id}/cancel`,
+//! `GET /v1/jobs/{id}/energy` (JSON or `?format=csv`),
+//! `GET /v1/jobs/{id}/results/shape.json`, `GET /healthz`.
+
+mod error;
+pub mod store;
+pub mod worker;
+
+use crate::export::{energy_csv, shape_json};
+use crate::jobs::{parse_spec, prepare};
+use axum::body::Bytes;
+use axum::extract::{Path, Query, State};
+use axum::http::{header, HeaderMap, StatusCode};
+use axum::response::{IntoResponse, Response};
+use axum::routing::{get, post};
+use axum::{Json, Router};
+pub use error::ApiError;
+use serde::Deserialize;
+use serde_json::{json, Value};
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use store::{JobRow, Store};
+use tokio::sync::Notify;
+use worker::{Registry, Worker};
+
+/// Shared state of the handlers.
+#[derive(Clone)]
+pub struct AppState {
+    pub store: Store,
+    pub registry: Registry,
+    pub wake: Arc<Notify>,
+}
+
+/// The HTTP application.
+pub fn router(state: AppState) -> Router {
+    Router::new()
+        .route("/healthz", get(|| async { "ok" }))
+        .route("/v1/jobs", post(create_job).get(list_jobs))
+        .route("/v1/jobs/{id}", get(get_job).delete(delete_job))
+        .route("/v1/jobs/{id}/cancel", post(cancel_job))
+        .route("/v1/jobs/{id}/energy", get(energy))
+        .route("/v1/jobs/{id}/results/shape.json", get(shape))
+        .with_state(state)
+}
+
+fn job_json(j: &JobRow) -> Value {
+    json!({
+        "id": j.id,
+        "status": j.status,
+        "progress": j.progress,
+        "stop_reason": j.stop_reason,
+        "message": j.message,
+        "created": j.created_at,
+        "started": j.started_at,
+        "finished": j.finished_at,
+    })
+}
+
+async fn find(state: &AppState, id: &str) -> Result<JobRow, ApiError> {
+    state.store.job(id).await?.ok_or_else(|| ApiError::NotFound(format!("no job {id}")))
+}
+
+async fn create_job(State(state): State<AppState>, headers: HeaderMap, body: Bytes) -> Result<Response, ApiError> {
+    let ctype = headers.get(header::CONTENT_TYPE).and_then(|v| v.to_str().ok()).unwrap_or("");
+    if !ctype.starts_with("application/json") {
+        return Err(ApiError::UnsupportedMedia(format!("expected Content-Type application/json, got {ctype:?}")));
+    }
+    let text = std::str::from_utf8(&body).map_err(|_| ApiError::BadRequest("body is not UTF-8".into()))?;
+    let spec = parse_spec(text).map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
+    let normalized = serde_json::to_string(&spec).expect("spec serializes");
+    prepare(spec, &HashMap::new()).map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
+    let id = uuid::Uuid::new_v4().to_string();
+    let job = state.store.insert_job(&id, &normalized).await?;
+    state.wake.notify_one();
+    let location = format!("/v1/jobs/{id}");
+    Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(job_json(&job))).into_response())
+}
+
+#[derive(Deserialize)]
+struct ListQuery {
+    status: Option<String>,
+    limit: Option<i64>,
+}
+
+async fn list_jobs(State(state): State<AppState>, Query(q): Query<ListQuery>) -> Result<Json<Value>, ApiError> {
+    let limit = q.limit.unwrap_or(100).clamp(1, 1000);
+    let jobs = state.store.list(q.status.as_deref(), limit).await?;
+    Ok(Json(json!({ "jobs": jobs.iter().map(job_json).collect::<Vec<_>>() })))
+}
+
+async fn get_job(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Value>, ApiError> {
+    Ok(Json(job_json(&find(&state, &id).await?)))
+}
+
+async fn cancel_job(State(state): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
+    let job = find(&state, &id).await?;
+    if matches!(job.status.as_str(), "successful" | "failed" | "dismissed") {
+        return Err(ApiError::Conflict(format!("job {id} is already {}", job.status)));
+    }
+    state.store.request_cancel(&id).await?;
+    if let Some(flag) = state.registry.lock().unwrap().get(&id) {
+        flag.store(true, Ordering::Relaxed);
+    }
+    let job = find(&state, &id).await?;
+    Ok((StatusCode::ACCEPTED, Json(job_json(&job))).into_response())
+}
+
+async fn delete_job(State(state): State<AppState>, Path(id): Path<String>) -> Result<StatusCode, ApiError> {
+    let job = find(&state, &id).await?;
+    if matches!(job.status.as_str(), "accepted" | "running") {
+        return Err(ApiError::Conflict(format!("job {id} is {}; cancel it first", job.status)));
+    }
+    state.store.delete(&id).await?;
+    Ok(StatusCode::NO_CONTENT)
+}
+
+#[derive(Deserialize)]
+struct FormatQuery {
+    format: Option<String>,
+}
+
+async fn energy(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    Query(q): Query<FormatQuery>,
+) -> Result<Response, ApiError> {
+    find(&state, &id).await?;
+    let rows = state.store.history(&id).await?;
+    match q.format.as_deref() {
+        Some("csv") => Ok(([(header::CONTENT_TYPE, "text/csv")], energy_csv(&rows)).into_response()),
+        None | Some("json") => Ok(Json(json!({ "history": rows })).into_response()),
+        Some(other) => {
+            Err(ApiError::Invalid { field: "format".into(), detail: format!("unknown format {other:?} (json or csv)") })
+        }
+    }
+}
+
+async fn shape(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Value>, ApiError> {
+    find(&state, &id).await?;
+    let cp = state
+        .store
+        .last_checkpoint(&id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("job {id} has no result yet")))?;
+    Ok(Json(shape_json(&cp.mesh, cp.energy, cp.iteration)))
+}
+
+/// A running service: the HTTP state and the worker threads.
+pub struct Service {
+    pub state: AppState,
+    shutdown: Arc<AtomicBool>,
+    workers: Vec<std::thread::JoinHandle<()>>,
+}
+
+impl Service {
+    /// Open the database (jobs left running by a crash go back to the queue) and
+    /// start `workers` worker threads. Call from within a tokio runtime.
+    pub async fn start(database: &std::path::Path, workers: usize) -> Result<Self, sqlx::Error> {
+        let store = Store::open(database).await?;
+        let requeued = store.requeue_running().await?;
+        if requeued > 0 {
+            tracing::info!(requeued, "jobs interrupted by a previous stop go back to the queue");
+        }
+        let state = AppState { store, registry: Arc::new(Mutex::new(HashMap::new())), wake: Arc::new(Notify::new()) };
+        let shutdown = Arc::new(AtomicBool::new(false));
+        let rt = tokio::runtime::Handle::current();
+        let workers = (0..workers.max(1))
+            .map(|k| {
+                let w = Worker {
+                    store: state.store.clone(),
+                    rt: rt.clone(),
+                    registry: state.registry.clone(),
+                    wake: state.wake.clone(),
+                    shutdown: shutdown.clone(),
+                };
+                std::thread::Builder::new()
+                    .name(format!("worker-{k}"))
+                    .spawn(move || w.run_forever())
+                    .expect("spawn worker")
+            })
+            .collect();
+        Ok(Service { state, shutdown, workers })
+    }
+
+    pub fn router(&self) -> Router {
+        router(self.state.clone())
+    }
+
+    /// Stop the workers: running jobs stop at their next step, write a checkpoint and
+    /// stay `running` in the store, to resume at the next start.
+    pub async fn stop(self) {
+        self.shutdown.store(true, Ordering::Relaxed);
+        for flag in self.state.registry.lock().unwrap().values() {
+            flag.store(true, Ordering::Relaxed);
+        }
+        self.state.wake.notify_waiters();
+        let workers = self.workers;
+        let _ = tokio::task::spawn_blocking(move || workers.into_iter().for_each(|w| drop(w.join()))).await;
+    }
+}

@@ -1,0 +1,215 @@
+//! The HTTP service over real HTTP on 127.0.0.1 against a temporary SQLite file.
+
+use serde_json::Value;
+use shapeflow::service::Service;
+use std::io::{Read, Write};
+use std::net::{SocketAddr, TcpStream};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+struct Server {
+    rt: tokio::runtime::Runtime,
+    service: Option<Service>,
+    addr: SocketAddr,
+    server: tokio::task::JoinHandle<()>,
+}
+
+impl Server {
+    fn start(db: &Path, workers: usize) -> Server {
+        let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
+        let service = rt.block_on(Service::start(db, workers)).unwrap();
+        let listener = rt.block_on(tokio::net::TcpListener::bind("127.0.0.1:0")).unwrap();
+        let addr = listener.local_addr().unwrap();
+        let app = service.router();
+        let server = rt.spawn(async move {
+            axum::serve(listener, app).await.unwrap();
+        });
+        Server { rt, service: Some(service), addr, server }
+    }
+
+    /// Graceful stop: workers checkpoint running jobs, which stay `running`.
+    fn stop(mut self) {
+        let service = self.service.take().unwrap();
+        self.rt.block_on(service.stop());
+        self.server.abort();
+    }
+
+    fn request(&self, method: &str, path: &str, body: Option<(&str, &str)>) -> (u16, String, String) {
+        let mut s = TcpStream::connect(self.addr).unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+        let mut req = format!("{method} {path} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\n", self.addr);
+        match body {
+            Some((ctype, b)) => req += &format!("Content-Type: {ctype}\r\nContent-Length: {}\r\n\r\n{b}", b.len()),
+            None => req += "Content-Length: 0\r\n\r\n",
+        }
+        s.write_all(req.as_bytes()).unwrap();
+        let mut out = String::new();
+        s.read_to_string(&mut out).unwrap();
+        let (head, body) = out.split_once("\r\n\r\n").unwrap();
+        let status = head.split_whitespace().nth(1).unwrap().parse().unwrap();
+        let body = if head.to_ascii_lowercase().contains("transfer-encoding: chunked") {
+            dechunk(body)
+        } else {
+            body.to_string()
+        };
+        (status, head.to_string(), body)
+    }
+
+    fn json(&self, method: &str, path: &str, body: Option<&str>) -> (u16, Value) {
+        let (status, _, b) = self.request(method, path, body.map(|b| ("application/json", b)));
+        (status, serde_json::from_str(&b).unwrap_or(Value::Null))
+    }
+
+    fn wait_for(&self, id: &str, pred: impl Fn(&Value) -> bool) -> Value {
+        let start = Instant::now();
+        loop {
+            let (_, j) = self.json("GET", &format!("/v1/jobs/{id}"), None);
+            if pred(&j) {
+                return j;
+            }
+            assert!(start.elapsed() < Duration::from_secs(120), "timed out waiting: {j}");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+}
+
+fn dechunk(body: &str) -> String {
+    let mut out = String::new();
+    let mut rest = body;
+    while let Some((size, tail)) = rest.split_once("\r\n") {
+        let n = usize::from_str_radix(size.trim(), 16).unwrap_or(0);
+        if n == 0 {
+            break;
+        }
+        out.push_str(&tail[..n]);
+        rest = &tail[n + 2..];
+    }
+    out
+}
+
+const CIRCLE: &str = r#"{"problem": {"type": "curvature_flow"},
+    "initial": {"shape": "circle", "radius": 1.0, "resolution": 64},
+    "flow": {"tau": 1e-3, "end_time": 0.1, "max_iterations": 100000, "tolerance": 0},
+    "output": {"checkpoint_every": 20}}"#;
+
+const LONG: &str = r#"{"problem": {"type": "surface_diffusion"},
+    "initial": {"shape": "ellipse", "semi_axes": [1.0, 0.5], "resolution": 128},
+    "flow": {"tau": 1e-6, "end_time": 0.02, "max_iterations": 1000000},
+    "mesh": {"adapt": false, "regularize": false, "topology_changes": false},
+    "output": {"checkpoint_every": 200}}"#;
+
+#[test]
+fn submit_poll_download_delete() {
+    let dir = tempfile::tempdir().unwrap();
+    let srv = Server::start(&dir.path().join("jobs.db"), 2);
+    let (status, head, body) = srv.request("POST", "/v1/jobs", Some(("application/json", CIRCLE)));
+    assert_eq!(status, 201, "{body}");
+    let job: Value = serde_json::from_str(&body).unwrap();
+    let id = job["id"].as_str().unwrap().to_string();
+    assert!(head.to_ascii_lowercase().contains(&format!("location: /v1/jobs/{id}")), "{head}");
+    let done = srv.wait_for(&id, |j| j["status"] != "accepted" && j["status"] != "running");
+    assert_eq!(done["status"], "successful", "{done}");
+    assert_eq!(done["stop_reason"], "end_time");
+    assert_eq!(done["progress"]["iteration"], 100);
+    // energy history: every iteration, decreasing
+    let (s, _, csv) = srv.request("GET", &format!("/v1/jobs/{id}/energy?format=csv"), None);
+    assert_eq!(s, 200);
+    let rows: Vec<&str> = csv.lines().collect();
+    assert_eq!(rows.len(), 102, "header + iterations 0..=100");
+    let (_, hist) = srv.json("GET", &format!("/v1/jobs/{id}/energy"), None);
+    let energies: Vec<f64> =
+        hist["history"].as_array().unwrap().iter().map(|r| r["energy"].as_f64().unwrap()).collect();
+    assert_eq!(energies.len(), 101);
+    assert!(energies.windows(2).all(|w| w[1] < w[0]));
+    // the shape: a circle of radius √(1 − 2t)
+    let (s, shape) = srv.json("GET", &format!("/v1/jobs/{id}/results/shape.json"), None);
+    assert_eq!(s, 200);
+    let exact = (1.0f64 - 0.2).sqrt();
+    for v in shape["components"][0]["vertices"].as_array().unwrap() {
+        let r = v[0].as_f64().unwrap().hypot(v[1].as_f64().unwrap());
+        assert!((r - exact).abs() < 5e-3, "radius {r}");
+    }
+    let (s, list) = srv.json("GET", "/v1/jobs?status=successful", None);
+    assert_eq!(s, 200);
+    assert_eq!(list["jobs"].as_array().unwrap().len(), 1);
+    assert_eq!(srv.request("DELETE", &format!("/v1/jobs/{id}"), None).0, 204);
+    assert_eq!(srv.request("GET", &format!("/v1/jobs/{id}"), None).0, 404);
+    srv.stop();
+}
+
+#[test]
+fn bad_inputs_are_problem_json_naming_the_field_and_the_server_keeps_serving() {
+    let dir = tempfile::tempdir().unwrap();
+    let srv = Server::start(&dir.path().join("jobs.db"), 1);
+    let cases = [
+        ("{\"problem\": ", "(document)"),
+        (
+            r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1}, "flow": {"taux": 1}}"#,
+            "flow.taux",
+        ),
+        (
+            r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1}, "flow": {"tau": -1}}"#,
+            "flow.tau",
+        ),
+        (
+            r#"{"problem": {"type": "curvature_flow", "gamma": -2}, "initial": {"shape": "circle", "radius": 1}}"#,
+            "problem.gamma",
+        ),
+        (
+            r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "polygon", "points": [[0,0],[1,1],[1,0],[0,1]]}}"#,
+            "initial",
+        ),
+        (r#"{"problem": {"type": "nonsense"}, "initial": {"shape": "circle", "radius": 1}}"#, "problem.type"),
+    ];
+    for (body, field) in cases {
+        let (status, head, b) = srv.request("POST", "/v1/jobs", Some(("application/json", body)));
+        assert_eq!(status, 422, "{body}: {b}");
+        assert!(head.to_ascii_lowercase().contains("content-type: application/problem+json"), "{head}");
+        let p: Value = serde_json::from_str(&b).unwrap();
+        assert_eq!(p["status"], 422);
+        assert_eq!(p["errors"][0]["field"], field, "{b}");
+    }
+    assert_eq!(srv.request("POST", "/v1/jobs", Some(("text/plain", CIRCLE))).0, 415);
+    assert_eq!(srv.request("GET", "/v1/jobs/does-not-exist", None).0, 404);
+    assert_eq!(srv.request("GET", "/healthz", None).0, 200);
+    let (_, list) = srv.json("GET", "/v1/jobs", None);
+    assert_eq!(list["jobs"].as_array().unwrap().len(), 0, "nothing was stored");
+    srv.stop();
+}
+
+#[test]
+fn cancel_a_running_job_and_refuse_to_delete_it_while_running() {
+    let dir = tempfile::tempdir().unwrap();
+    let srv = Server::start(&dir.path().join("jobs.db"), 1);
+    let (_, job) = srv.json("POST", "/v1/jobs", Some(LONG));
+    let id = job["id"].as_str().unwrap().to_string();
+    srv.wait_for(&id, |j| j["status"] == "running" && j["progress"]["iteration"].as_u64().unwrap_or(0) > 200);
+    assert_eq!(srv.request("DELETE", &format!("/v1/jobs/{id}"), None).0, 409);
+    assert_eq!(srv.request("POST", &format!("/v1/jobs/{id}/cancel"), None).0, 202);
+    let done = srv.wait_for(&id, |j| j["status"] != "running");
+    assert_eq!(done["status"], "dismissed", "{done}");
+    // its checkpoints are kept
+    assert_eq!(srv.request("GET", &format!("/v1/jobs/{id}/results/shape.json"), None).0, 200);
+    assert_eq!(srv.request("POST", &format!("/v1/jobs/{id}/cancel"), None).0, 409);
+    assert_eq!(srv.request("DELETE", &format!("/v1/jobs/{id}"), None).0, 204);
+    srv.stop();
+}
+
+#[test]
+fn a_stopped_server_resumes_its_running_job_on_restart_without_losing_history() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("jobs.db");
+    let srv = Server::start(&db, 1);
+    let (_, job) = srv.json("POST", "/v1/jobs", Some(LONG));
+    let id = job["id"].as_str().unwrap().to_string();
+    srv.wait_for(&id, |j| j["progress"]["iteration"].as_u64().unwrap_or(0) > 500);
+    srv.stop();
+    let srv = Server::start(&db, 1);
+    let done = srv.wait_for(&id, |j| j["status"] != "accepted" && j["status"] != "running");
+    assert_eq!(done["status"], "successful", "{done}");
+    let (_, hist) = srv.json("GET", &format!("/v1/jobs/{id}/energy"), None);
+    let its: Vec<u64> = hist["history"].as_array().unwrap().iter().map(|r| r["iteration"].as_u64().unwrap()).collect();
+    let last = done["progress"]["iteration"].as_u64().unwrap();
+    assert_eq!(its, (0..=last).collect::<Vec<_>>(), "every iteration once");
+    srv.stop();
+}
