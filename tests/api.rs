@@ -213,3 +213,75 @@ fn a_stopped_server_resumes_its_running_job_on_restart_without_losing_history() 
     assert_eq!(its, (0..=last).collect::<Vec<_>>(), "every iteration once");
     srv.stop();
 }
+
+/// kill -9 of the real binary mid-job, then a restart on the same database: the job
+/// resumes from its last checkpoint and finishes; no history row is lost or doubled.
+#[test]
+fn kill_9_mid_job_then_restart_resumes_and_finishes() {
+    use std::process::{Child, Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("jobs.db");
+    let port = {
+        let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        l.local_addr().unwrap().port()
+    };
+    let addr: SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
+    let spawn = || -> Child {
+        let child = Command::new(env!("CARGO_BIN_EXE_shapeflow"))
+            .args(["serve", "--bind", &addr.to_string(), "--workers", "1", "--database"])
+            .arg(&db)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let start = Instant::now();
+        while TcpStream::connect(addr).is_err() {
+            assert!(start.elapsed() < Duration::from_secs(20), "server did not come up");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        child
+    };
+    // a client that talks to the subprocess (reuse the request code with a dummy runtime-less server)
+    let call = |method: &str, path: &str, body: Option<&str>| -> (u16, Value) {
+        let mut s = TcpStream::connect(addr).unwrap();
+        let mut req = format!("{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n");
+        match body {
+            Some(b) => req += &format!("Content-Type: application/json\r\nContent-Length: {}\r\n\r\n{b}", b.len()),
+            None => req += "Content-Length: 0\r\n\r\n",
+        }
+        s.write_all(req.as_bytes()).unwrap();
+        let mut out = String::new();
+        s.read_to_string(&mut out).unwrap();
+        let (head, b) = out.split_once("\r\n\r\n").unwrap();
+        let b =
+            if head.to_ascii_lowercase().contains("transfer-encoding: chunked") { dechunk(b) } else { b.to_string() };
+        (head.split_whitespace().nth(1).unwrap().parse().unwrap(), serde_json::from_str(&b).unwrap_or(Value::Null))
+    };
+    let wait = |id: &str, pred: &dyn Fn(&Value) -> bool| -> Value {
+        let start = Instant::now();
+        loop {
+            let (_, j) = call("GET", &format!("/v1/jobs/{id}"), None);
+            if pred(&j) {
+                return j;
+            }
+            assert!(start.elapsed() < Duration::from_secs(120), "timed out: {j}");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    };
+    let mut first = spawn();
+    let (s, job) = call("POST", "/v1/jobs", Some(LONG));
+    assert_eq!(s, 201);
+    let id = job["id"].as_str().unwrap().to_string();
+    wait(&id, &|j| j["progress"]["iteration"].as_u64().unwrap_or(0) > 700);
+    first.kill().unwrap(); // SIGKILL
+    first.wait().unwrap();
+    let mut second = spawn();
+    let done = wait(&id, &|j| j["status"] != "accepted" && j["status"] != "running");
+    assert_eq!(done["status"], "successful", "{done}");
+    let (_, hist) = call("GET", &format!("/v1/jobs/{id}/energy"), None);
+    let its: Vec<u64> = hist["history"].as_array().unwrap().iter().map(|r| r["iteration"].as_u64().unwrap()).collect();
+    let last = done["progress"]["iteration"].as_u64().unwrap();
+    assert_eq!(its, (0..=last).collect::<Vec<_>>(), "every iteration exactly once");
+    second.kill().unwrap();
+    second.wait().unwrap();
+}

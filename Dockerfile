@@ -1,0 +1,19 @@
+# Multi-stage build: compile in the Rust image, run in a small Debian image.
+FROM rust:1-bookworm AS build
+WORKDIR /src
+COPY Cargo.toml Cargo.lock build.rs rustfmt.toml ./
+COPY src src
+COPY migrations migrations
+COPY benches benches
+COPY examples examples
+RUN cargo build --release --bin shapeflow
+
+FROM debian:bookworm-slim
+RUN useradd --system --home /data shapeflow && mkdir -p /data && chown shapeflow /data
+COPY --from=build /src/target/release/shapeflow /usr/local/bin/shapeflow
+COPY examples /usr/share/shapeflow/examples
+USER shapeflow
+VOLUME /data
+EXPOSE 8080
+ENTRYPOINT ["shapeflow"]
+CMD ["serve", "--bind", "0.0.0.0:8080", "--database", "/data/shapeflow.db"]
