@@ -285,3 +285,43 @@ fn kill_9_mid_job_then_restart_resumes_and_finishes() {
     second.kill().unwrap();
     second.wait().unwrap();
 }
+
+/// The routes of the router, `service::ROUTES` and `api/openapi.yaml` agree.
+#[test]
+fn router_and_openapi_document_list_the_same_routes() {
+    let yaml = std::fs::read_to_string("api/openapi.yaml").unwrap();
+    let mut documented = Vec::new();
+    let mut path: Option<String> = None;
+    for line in yaml.lines() {
+        if let Some(p) = line.strip_prefix("  /").and_then(|l| l.strip_suffix(':')) {
+            path = Some(format!("/{p}"));
+        } else if !line.starts_with("    ") && !line.starts_with("  /") {
+            path = None;
+        } else if let Some(p) = &path {
+            for m in ["get", "post", "delete", "put", "patch"] {
+                if line.starts_with(&format!("    {m}:")) {
+                    documented.push((m.to_uppercase(), p.clone()));
+                }
+            }
+        }
+    }
+    let mut listed: Vec<(String, String)> =
+        shapeflow::service::ROUTES.iter().map(|(m, p)| (m.to_string(), p.to_string())).collect();
+    documented.sort();
+    listed.sort();
+    assert_eq!(documented, listed, "api/openapi.yaml vs service::ROUTES");
+    // and every listed route exists in the router: an unknown job gives our own
+    // problem+json 404 (or a success), never axum's empty 404/405
+    let dir = tempfile::tempdir().unwrap();
+    let srv = Server::start(&dir.path().join("jobs.db"), 1);
+    for (m, p) in &listed {
+        let path = p.replace("{id}", "00000000-0000-0000-0000-000000000000");
+        let body = (m == "POST" && p == "/v1/jobs").then_some(("application/json", CIRCLE));
+        let (status, head, _) = srv.request(m, &path, body);
+        assert!(status != 405, "{m} {p}: 405");
+        if status == 404 {
+            assert!(head.to_ascii_lowercase().contains("application/problem+json"), "{m} {p} is not routed");
+        }
+    }
+    srv.stop();
+}

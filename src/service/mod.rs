@@ -34,6 +34,19 @@ pub struct AppState {
     pub wake: Arc<Notify>,
 }
 
+/// Every route of [`router`] as (method, path): the contract test checks it against
+/// `api/openapi.yaml` and against the router itself.
+pub const ROUTES: &[(&str, &str)] = &[
+    ("GET", "/healthz"),
+    ("POST", "/v1/jobs"),
+    ("GET", "/v1/jobs"),
+    ("GET", "/v1/jobs/{id}"),
+    ("DELETE", "/v1/jobs/{id}"),
+    ("POST", "/v1/jobs/{id}/cancel"),
+    ("GET", "/v1/jobs/{id}/energy"),
+    ("GET", "/v1/jobs/{id}/results/shape.json"),
+];
+
 /// The HTTP application.
 pub fn router(state: AppState) -> Router {
     Router::new()
