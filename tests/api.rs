@@ -325,3 +325,29 @@ fn router_and_openapi_document_list_the_same_routes() {
     }
     srv.stop();
 }
+
+#[test]
+fn twenty_jobs_on_two_workers_all_finish_with_complete_histories() {
+    let dir = tempfile::tempdir().unwrap();
+    let srv = Server::start(&dir.path().join("jobs.db"), 2);
+    let spec = r#"{"problem": {"type": "curvature_flow"},
+        "initial": {"shape": "circle", "radius": 1.0, "resolution": 48},
+        "flow": {"tau": 1e-3, "end_time": 0.05, "max_iterations": 1000, "tolerance": 0},
+        "output": {"checkpoint_every": 10}}"#;
+    let ids: Vec<String> = (0..20)
+        .map(|_| {
+            let (s, j) = srv.json("POST", "/v1/jobs", Some(spec));
+            assert_eq!(s, 201);
+            j["id"].as_str().unwrap().to_string()
+        })
+        .collect();
+    for id in &ids {
+        let done = srv.wait_for(id, |j| j["status"] != "accepted" && j["status"] != "running");
+        assert_eq!(done["status"], "successful", "{done}");
+        let (_, hist) = srv.json("GET", &format!("/v1/jobs/{id}/energy"), None);
+        let its: Vec<u64> =
+            hist["history"].as_array().unwrap().iter().map(|r| r["iteration"].as_u64().unwrap()).collect();
+        assert_eq!(its, (0..=50).collect::<Vec<_>>(), "job {id}");
+    }
+    srv.stop();
+}
