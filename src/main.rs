@@ -45,6 +45,9 @@ enum Command {
         /// Worker threads running jobs (default: number of cores).
         #[arg(long)]
         workers: Option<usize>,
+        /// Require `Authorization: Bearer TOKEN` on every route but /healthz.
+        #[arg(long)]
+        token: Option<String>,
     },
 }
 
@@ -62,13 +65,13 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
-        Command::Serve { bind, database, workers } => {
+        Command::Serve { bind, database, workers, token } => {
             let workers = workers.unwrap_or_else(|| std::thread::available_parallelism().map_or(2, |n| n.get()));
             let result = tokio::runtime::Builder::new_multi_thread()
                 .enable_all()
                 .build()
                 .map_err(anyhow::Error::from)
-                .and_then(|rt| rt.block_on(serve(&bind, &database, workers)));
+                .and_then(|rt| rt.block_on(serve(&bind, &database, workers, token)));
             match result {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
@@ -80,8 +83,8 @@ fn main() -> ExitCode {
     }
 }
 
-async fn serve(bind: &str, database: &Path, workers: usize) -> Result<()> {
-    let service = shapeflow::service::Service::start(database, workers)
+async fn serve(bind: &str, database: &Path, workers: usize, token: Option<String>) -> Result<()> {
+    let service = shapeflow::service::Service::start(database, workers, token)
         .await
         .with_context(|| format!("cannot open database {}", database.display()))?;
     let listener = tokio::net::TcpListener::bind(bind).await.with_context(|| format!("cannot listen on {bind}"))?;

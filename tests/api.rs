@@ -16,8 +16,12 @@ struct Server {
 
 impl Server {
     fn start(db: &Path, workers: usize) -> Server {
+        Self::start_with(db, workers, None)
+    }
+
+    fn start_with(db: &Path, workers: usize, token: Option<&str>) -> Server {
         let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
-        let service = rt.block_on(Service::start(db, workers)).unwrap();
+        let service = rt.block_on(Service::start(db, workers, token.map(String::from))).unwrap();
         let listener = rt.block_on(tokio::net::TcpListener::bind("127.0.0.1:0")).unwrap();
         let addr = listener.local_addr().unwrap();
         let app = service.router();
@@ -349,5 +353,29 @@ fn twenty_jobs_on_two_workers_all_finish_with_complete_histories() {
             hist["history"].as_array().unwrap().iter().map(|r| r["iteration"].as_u64().unwrap()).collect();
         assert_eq!(its, (0..=50).collect::<Vec<_>>(), "job {id}");
     }
+    srv.stop();
+}
+
+#[test]
+fn oversized_bodies_get_413_with_the_limit_and_tokens_are_enforced() {
+    let dir = tempfile::tempdir().unwrap();
+    let srv = Server::start(&dir.path().join("jobs.db"), 1);
+    let huge = format!("{{\"pad\": \"{}\"}}", "x".repeat(shapeflow::service::MAX_BODY_BYTES + 10));
+    let (status, head, body) = srv.request("POST", "/v1/jobs", Some(("application/json", &huge)));
+    assert_eq!(status, 413);
+    assert!(head.to_ascii_lowercase().contains("application/problem+json"));
+    assert!(body.contains(&shapeflow::service::MAX_BODY_BYTES.to_string()), "{body}");
+    assert_eq!(srv.request("GET", "/healthz", None).0, 200);
+    srv.stop();
+
+    let srv = Server::start_with(&dir.path().join("secure.db"), 1, Some("s3cret"));
+    assert_eq!(srv.request("GET", "/healthz", None).0, 200);
+    let (status, _, body) = srv.request("GET", "/v1/jobs", None);
+    assert_eq!(status, 401, "{body}");
+    let mut s = TcpStream::connect(srv.addr).unwrap();
+    write!(s, "GET /v1/jobs HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer s3cret\r\nConnection: close\r\n\r\n").unwrap();
+    let mut out = String::new();
+    s.read_to_string(&mut out).unwrap();
+    assert!(out.starts_with("HTTP/1.1 200"), "{out}");
     srv.stop();
 }

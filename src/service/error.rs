@@ -17,6 +17,10 @@ pub enum ApiError {
     BadRequest(String),
     /// 415: the body's media type is not accepted.
     UnsupportedMedia(String),
+    /// 413 with the limit in bytes.
+    TooLarge(usize),
+    /// 401: missing or wrong bearer token.
+    Unauthorized,
     Internal(String),
 }
 
@@ -39,6 +43,18 @@ impl IntoResponse for ApiError {
             ApiError::Conflict(d) => (StatusCode::CONFLICT, "Conflict", d, None),
             ApiError::BadRequest(d) => (StatusCode::BAD_REQUEST, "Bad request", d, None),
             ApiError::UnsupportedMedia(d) => (StatusCode::UNSUPPORTED_MEDIA_TYPE, "Unsupported media type", d, None),
+            ApiError::TooLarge(limit) => (
+                StatusCode::PAYLOAD_TOO_LARGE,
+                "Payload too large",
+                format!("the request body exceeds the limit of {limit} bytes"),
+                None,
+            ),
+            ApiError::Unauthorized => (
+                StatusCode::UNAUTHORIZED,
+                "Unauthorized",
+                "missing or wrong `Authorization: Bearer` token".into(),
+                None,
+            ),
             ApiError::Internal(d) => {
                 tracing::error!("internal error: {d}");
                 (

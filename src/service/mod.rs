@@ -10,9 +10,10 @@ pub mod worker;
 
 use crate::export::{energy_csv, shape_json};
 use crate::jobs::{parse_spec, prepare};
-use axum::body::Bytes;
-use axum::extract::{Path, Query, State};
+use axum::body::Body;
+use axum::extract::{DefaultBodyLimit, Path, Query, Request, State};
 use axum::http::{header, HeaderMap, StatusCode};
+use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
@@ -26,12 +27,17 @@ use store::{JobRow, Store};
 use tokio::sync::Notify;
 use worker::{Registry, Worker};
 
+/// Largest accepted request body (a JSON job spec).
+pub const MAX_BODY_BYTES: usize = 2 * 1024 * 1024;
+
 /// Shared state of the handlers.
 #[derive(Clone)]
 pub struct AppState {
     pub store: Store,
     pub registry: Registry,
     pub wake: Arc<Notify>,
+    /// With a token, every route but `/healthz` needs `Authorization: Bearer <token>`.
+    pub token: Option<Arc<str>>,
 }
 
 /// Every route of [`router`] as (method, path): the contract test checks it against
@@ -56,7 +62,21 @@ pub fn router(state: AppState) -> Router {
         .route("/v1/jobs/{id}/cancel", post(cancel_job))
         .route("/v1/jobs/{id}/energy", get(energy))
         .route("/v1/jobs/{id}/results/shape.json", get(shape))
+        .layer(DefaultBodyLimit::disable())
+        .layer(middleware::from_fn_with_state(state.clone(), authorize))
         .with_state(state)
+}
+
+async fn authorize(State(state): State<AppState>, req: Request, next: Next) -> Result<Response, ApiError> {
+    if let Some(token) = &state.token {
+        if req.uri().path() != "/healthz" {
+            let given = req.headers().get(header::AUTHORIZATION).and_then(|v| v.to_str().ok());
+            if given.and_then(|g| g.strip_prefix("Bearer ")) != Some(token.as_ref()) {
+                return Err(ApiError::Unauthorized);
+            }
+        }
+    }
+    Ok(next.run(req).await)
 }
 
 fn job_json(j: &JobRow) -> Value {
@@ -76,11 +96,12 @@ async fn find(state: &AppState, id: &str) -> Result<JobRow, ApiError> {
     state.store.job(id).await?.ok_or_else(|| ApiError::NotFound(format!("no job {id}")))
 }
 
-async fn create_job(State(state): State<AppState>, headers: HeaderMap, body: Bytes) -> Result<Response, ApiError> {
+async fn create_job(State(state): State<AppState>, headers: HeaderMap, body: Body) -> Result<Response, ApiError> {
     let ctype = headers.get(header::CONTENT_TYPE).and_then(|v| v.to_str().ok()).unwrap_or("");
     if !ctype.starts_with("application/json") {
         return Err(ApiError::UnsupportedMedia(format!("expected Content-Type application/json, got {ctype:?}")));
     }
+    let body = axum::body::to_bytes(body, MAX_BODY_BYTES).await.map_err(|_| ApiError::TooLarge(MAX_BODY_BYTES))?;
     let text = std::str::from_utf8(&body).map_err(|_| ApiError::BadRequest("body is not UTF-8".into()))?;
     let spec = parse_spec(text).map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
     let normalized = serde_json::to_string(&spec).expect("spec serializes");
@@ -171,13 +192,18 @@ pub struct Service {
 impl Service {
     /// Open the database (jobs left running by a crash go back to the queue) and
     /// start `workers` worker threads. Call from within a tokio runtime.
-    pub async fn start(database: &std::path::Path, workers: usize) -> Result<Self, sqlx::Error> {
+    pub async fn start(database: &std::path::Path, workers: usize, token: Option<String>) -> Result<Self, sqlx::Error> {
         let store = Store::open(database).await?;
         let requeued = store.requeue_running().await?;
         if requeued > 0 {
             tracing::info!(requeued, "jobs interrupted by a previous stop go back to the queue");
         }
-        let state = AppState { store, registry: Arc::new(Mutex::new(HashMap::new())), wake: Arc::new(Notify::new()) };
+        let state = AppState {
+            store,
+            registry: Arc::new(Mutex::new(HashMap::new())),
+            wake: Arc::new(Notify::new()),
+            token: token.map(Arc::from),
+        };
         let shutdown = Arc::new(AtomicBool::new(false));
         let rt = tokio::runtime::Handle::current();
         let workers = (0..workers.max(1))
