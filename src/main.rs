@@ -89,7 +89,14 @@ async fn serve(bind: &str, database: &Path, workers: usize, token: Option<String
         .with_context(|| format!("cannot open database {}", database.display()))?;
     let listener = tokio::net::TcpListener::bind(bind).await.with_context(|| format!("cannot listen on {bind}"))?;
     tracing::info!(address = %listener.local_addr()?, database = %database.display(), workers, "shapeflow serving");
-    axum::serve(listener, service.router()).with_graceful_shutdown(shutdown_signal()).await?;
+    let closing = service.state.closing.clone();
+    axum::serve(listener, service.router())
+        .with_graceful_shutdown(async move {
+            shutdown_signal().await;
+            // end open event streams, or graceful shutdown would wait for them
+            closing.store(true, std::sync::atomic::Ordering::Relaxed);
+        })
+        .await?;
     tracing::info!("shutting down: running jobs checkpoint and resume at the next start");
     service.stop().await;
     Ok(())

@@ -379,3 +379,58 @@ fn oversized_bodies_get_413_with_the_limit_and_tokens_are_enforced() {
     assert!(out.starts_with("HTTP/1.1 200"), "{out}");
     srv.stop();
 }
+
+/// Parse an SSE body into (event, id, data) triples.
+fn sse_events(body: &str) -> Vec<(String, Option<String>, String)> {
+    body.split("\n\n")
+        .filter_map(|block| {
+            let (mut ev, mut id, mut data) = (String::from("message"), None, String::new());
+            let mut any = false;
+            for line in block.lines() {
+                if let Some(v) = line.strip_prefix("event:") {
+                    ev = v.trim().to_string();
+                    any = true;
+                } else if let Some(v) = line.strip_prefix("id:") {
+                    id = Some(v.trim().to_string());
+                } else if let Some(v) = line.strip_prefix("data:") {
+                    data += v.trim();
+                    any = true;
+                }
+            }
+            any.then_some((ev, id, data))
+        })
+        .collect()
+}
+
+#[test]
+fn events_stream_every_iteration_then_the_status_and_resume_after_last_event_id() {
+    let dir = tempfile::tempdir().unwrap();
+    let srv = Server::start(&dir.path().join("jobs.db"), 1);
+    let (_, job) = srv.json("POST", "/v1/jobs", Some(CIRCLE));
+    let id = job["id"].as_str().unwrap().to_string();
+    let (status, head, body) = srv.request("GET", &format!("/v1/jobs/{id}/events"), None);
+    assert_eq!(status, 200);
+    assert!(head.to_ascii_lowercase().contains("text/event-stream"), "{head}");
+    let events = sse_events(&body);
+    let progress: Vec<u64> =
+        events.iter().filter(|e| e.0 == "progress").map(|e| e.1.as_ref().unwrap().parse().unwrap()).collect();
+    assert_eq!(progress, (0..=100).collect::<Vec<_>>());
+    let last = events.last().unwrap();
+    assert_eq!(last.0, "status");
+    let j: Value = serde_json::from_str(&last.2).unwrap();
+    assert_eq!(j["status"], "successful");
+    // reconnect after iteration 50
+    let mut s = TcpStream::connect(srv.addr).unwrap();
+    write!(s, "GET /v1/jobs/{id}/events HTTP/1.1\r\nHost: x\r\nLast-Event-ID: 50\r\nConnection: close\r\n\r\n")
+        .unwrap();
+    let mut out = String::new();
+    s.read_to_string(&mut out).unwrap();
+    let (_, b) = out.split_once("\r\n\r\n").unwrap();
+    let again: Vec<u64> = sse_events(&dechunk(b))
+        .iter()
+        .filter(|e| e.0 == "progress")
+        .map(|e| e.1.as_ref().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(again, (51..=100).collect::<Vec<_>>());
+    srv.stop();
+}

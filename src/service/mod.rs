@@ -1,7 +1,7 @@
 //! The job service of DESIGN.md §3 (first slice): axum routes over a SQLite store
 //! and a fixed pool of worker threads. Routes so far: `POST /v1/jobs` (JSON),
 //! `GET /v1/jobs`, `GET|DELETE /v1/jobs/{id}`, `POST /v1/jobs/{id}/cancel`,
-//! `GET /v1/jobs/{id}/energy` (JSON or `?format=csv`),
+//! `GET /v1/jobs/{id}/events` (SSE), `GET /v1/jobs/{id}/energy` (JSON or `?format=csv`),
 //! `GET /v1/jobs/{id}/results/shape.json`, `GET /healthz`.
 
 mod error;
@@ -38,6 +38,8 @@ pub struct AppState {
     pub wake: Arc<Notify>,
     /// With a token, every route but `/healthz` needs `Authorization: Bearer <token>`.
     pub token: Option<Arc<str>>,
+    /// Set when the server shuts down: open event streams end.
+    pub closing: Arc<AtomicBool>,
 }
 
 /// Every route of [`router`] as (method, path): the contract test checks it against
@@ -49,6 +51,7 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("GET", "/v1/jobs/{id}"),
     ("DELETE", "/v1/jobs/{id}"),
     ("POST", "/v1/jobs/{id}/cancel"),
+    ("GET", "/v1/jobs/{id}/events"),
     ("GET", "/v1/jobs/{id}/energy"),
     ("GET", "/v1/jobs/{id}/results/shape.json"),
 ];
@@ -60,6 +63,7 @@ pub fn router(state: AppState) -> Router {
         .route("/v1/jobs", post(create_job).get(list_jobs))
         .route("/v1/jobs/{id}", get(get_job).delete(delete_job))
         .route("/v1/jobs/{id}/cancel", post(cancel_job))
+        .route("/v1/jobs/{id}/events", get(events))
         .route("/v1/jobs/{id}/energy", get(energy))
         .route("/v1/jobs/{id}/results/shape.json", get(shape))
         .layer(DefaultBodyLimit::disable())
@@ -151,6 +155,60 @@ async fn delete_job(State(state): State<AppState>, Path(id): Path<String>) -> Re
     Ok(StatusCode::NO_CONTENT)
 }
 
+/// Server-Sent Events: one `progress` event per iteration (`id` = iteration, so a
+/// reconnect with `Last-Event-ID` continues after it), then one `status` event with
+/// the finished job, and the stream ends. Keep-alive comments every 15 s; streams end
+/// when the server shuts down.
+async fn events(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+) -> Result<Response, ApiError> {
+    use axum::response::sse::{Event, KeepAlive, Sse};
+    find(&state, &id).await?;
+    let after: Option<usize> =
+        headers.get("last-event-id").and_then(|v| v.to_str().ok()).and_then(|v| v.trim().parse().ok());
+    struct Cursor {
+        state: AppState,
+        id: String,
+        next: usize,
+        pending: std::collections::VecDeque<Event>,
+        done: bool,
+    }
+    let cursor = Cursor { state, id, next: after.map_or(0, |a| a + 1), pending: Default::default(), done: false };
+    let stream = futures_util::stream::unfold(cursor, |mut c| async move {
+        loop {
+            if let Some(e) = c.pending.pop_front() {
+                return Some((Ok::<Event, std::convert::Infallible>(e), c));
+            }
+            if c.done || c.state.closing.load(Ordering::Relaxed) {
+                return None;
+            }
+            let job = c.state.store.job(&c.id).await.ok().flatten();
+            let rows = c.state.store.history_from(&c.id, c.next).await.unwrap_or_default();
+            for p in rows {
+                c.next = p.iteration + 1;
+                let data = serde_json::to_string(&p).expect("progress serializes");
+                c.pending.push_back(Event::default().event("progress").id(p.iteration.to_string()).data(data));
+            }
+            match job {
+                Some(j) if !matches!(j.status.as_str(), "accepted" | "running") && c.pending.is_empty() => {
+                    c.pending.push_back(Event::default().event("status").data(job_json(&j).to_string()));
+                    c.done = true;
+                }
+                None => c.done = true,
+                _ => {
+                    if c.pending.is_empty() {
+                        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+                    }
+                }
+            }
+        }
+    });
+    let sse = Sse::new(stream).keep_alive(KeepAlive::new().interval(std::time::Duration::from_secs(15)));
+    Ok(([("x-accel-buffering", "no")], sse).into_response())
+}
+
 #[derive(Deserialize)]
 struct FormatQuery {
     format: Option<String>,
@@ -203,6 +261,7 @@ impl Service {
             registry: Arc::new(Mutex::new(HashMap::new())),
             wake: Arc::new(Notify::new()),
             token: token.map(Arc::from),
+            closing: Arc::new(AtomicBool::new(false)),
         };
         let shutdown = Arc::new(AtomicBool::new(false));
         let rt = tokio::runtime::Handle::current();
@@ -231,6 +290,7 @@ impl Service {
     /// Stop the workers: running jobs stop at their next step, write a checkpoint and
     /// stay `running` in the store, to resume at the next start.
     pub async fn stop(self) {
+        self.state.closing.store(true, Ordering::Relaxed);
         self.shutdown.store(true, Ordering::Relaxed);
         for flag in self.state.registry.lock().unwrap().values() {
             flag.store(true, Ordering::Relaxed);

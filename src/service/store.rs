@@ -237,8 +237,14 @@ impl Store {
     }
 
     pub async fn history(&self, id: &str) -> Result<Vec<Progress>, sqlx::Error> {
-        let rows = sqlx::query("SELECT * FROM history WHERE job_id = ?1 ORDER BY iteration")
+        self.history_from(id, 0).await
+    }
+
+    /// History rows from iteration `from` on.
+    pub async fn history_from(&self, id: &str, from: usize) -> Result<Vec<Progress>, sqlx::Error> {
+        let rows = sqlx::query("SELECT * FROM history WHERE job_id = ?1 AND iteration >= ?2 ORDER BY iteration")
             .bind(id)
+            .bind(from as i64)
             .fetch_all(&self.pool)
             .await?;
         Ok(rows
