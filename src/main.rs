@@ -3,7 +3,7 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use shapeflow::export::{energy_csv, shape_json};
+use shapeflow::export::{energy_csv, energy_svg, shape_json};
 use shapeflow::flow::{Checkpoint, Progress};
 use shapeflow::jobs::{parse_spec, prepare, run_prepared, RunEvents};
 use std::collections::HashMap;
@@ -186,7 +186,8 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
     };
     write("shape.json", serde_json::to_string_pretty(&shape_json(&last.mesh, last.energy, last.iteration))?)?;
     write("energy.csv", energy_csv(&rep.history))?;
+    write("energy.svg", energy_svg(&rep.history, &spec_path.display().to_string()))?;
     write("checkpoint.json", serde_json::to_string(&last)?)?;
-    println!("wrote {}/shape.json, energy.csv, checkpoint.json", out.display());
+    println!("wrote {}/shape.json, energy.csv, energy.svg, checkpoint.json", out.display());
     Ok(code)
 }

@@ -133,6 +133,10 @@ fn submit_poll_download_delete() {
         let r = v[0].as_f64().unwrap().hypot(v[1].as_f64().unwrap());
         assert!((r - exact).abs() < 5e-3, "radius {r}");
     }
+    let (s, head, svg) = srv.request("GET", &format!("/v1/jobs/{id}/energy.svg"), None);
+    assert_eq!(s, 200);
+    assert!(head.to_ascii_lowercase().contains("image/svg+xml"));
+    assert_eq!(svg.split("points=\"").nth(1).unwrap().split('"').next().unwrap().split(' ').count(), 101);
     let (s, list) = srv.json("GET", "/v1/jobs?status=successful", None);
     assert_eq!(s, 200);
     assert_eq!(list["jobs"].as_array().unwrap().len(), 1);

@@ -8,7 +8,7 @@ mod error;
 pub mod store;
 pub mod worker;
 
-use crate::export::{energy_csv, shape_json};
+use crate::export::{energy_csv, energy_svg, shape_json};
 use crate::jobs::{parse_spec, prepare};
 use axum::body::Body;
 use axum::extract::{DefaultBodyLimit, Path, Query, Request, State};
@@ -53,6 +53,7 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("POST", "/v1/jobs/{id}/cancel"),
     ("GET", "/v1/jobs/{id}/events"),
     ("GET", "/v1/jobs/{id}/energy"),
+    ("GET", "/v1/jobs/{id}/energy.svg"),
     ("GET", "/v1/jobs/{id}/results/shape.json"),
 ];
 
@@ -65,6 +66,7 @@ pub fn router(state: AppState) -> Router {
         .route("/v1/jobs/{id}/cancel", post(cancel_job))
         .route("/v1/jobs/{id}/events", get(events))
         .route("/v1/jobs/{id}/energy", get(energy))
+        .route("/v1/jobs/{id}/energy.svg", get(energy_plot))
         .route("/v1/jobs/{id}/results/shape.json", get(shape))
         .layer(DefaultBodyLimit::disable())
         .layer(middleware::from_fn_with_state(state.clone(), authorize))
@@ -228,6 +230,12 @@ async fn energy(
             Err(ApiError::Invalid { field: "format".into(), detail: format!("unknown format {other:?} (json or csv)") })
         }
     }
+}
+
+async fn energy_plot(State(state): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
+    find(&state, &id).await?;
+    let rows = state.store.history(&id).await?;
+    Ok(([(header::CONTENT_TYPE, "image/svg+xml")], energy_svg(&rows, &format!("job {id}"))).into_response())
 }
 
 async fn shape(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Value>, ApiError> {
