@@ -23,6 +23,30 @@ fn time_it(mut f: impl FnMut()) -> f64 {
     start.elapsed().as_secs_f64() / n as f64
 }
 
+/// Mean time of one L2 step (assembly + Schur solve) on `mesh`.
+fn l2_step_time<const D: usize>(mesh: &shapeflow::geometry::Mesh<D>) -> f64 {
+    let n = mesh.num_vertices();
+    let pattern = Pattern::new(n, mesh.elements());
+    let mut m = Matrices::assemble(mesh, &pattern);
+    let (g, f) = (vec![1.0; n], vec![0.0; n]);
+    let mut step = SemiImplicitStep::new(SolverKind::Lumped);
+    time_it(|| {
+        m.assemble_into(mesh, &pattern, false);
+        let ax = m.stiffness_times_positions(mesh, &pattern);
+        let sys = LinearSystem {
+            mesh,
+            pattern: &pattern,
+            matrices: &m,
+            ax: &ax,
+            g: &g,
+            f: &f,
+            product: &ProductWeights::L2,
+            tau: 1e-4,
+        };
+        black_box(step.velocity(&sys).unwrap());
+    })
+}
+
 fn main() {
     println!("| curve vertices | L2 step (ms) | management (ms) | management / step |");
     println!("|---:|---:|---:|---:|");
@@ -36,26 +60,7 @@ fn main() {
             })
             .collect();
         let mesh = polygon(&pts, None).unwrap();
-        let pattern = Pattern::new(mesh.num_vertices(), mesh.elements());
-        let mut m = Matrices::assemble(&mesh, &pattern);
-        let g = vec![1.0; n];
-        let f = vec![0.0; n];
-        let mut step = SemiImplicitStep::new(SolverKind::Lumped);
-        let t_step = time_it(|| {
-            m.assemble_into(&mesh, &pattern, false);
-            let ax = m.stiffness_times_positions(&mesh, &pattern);
-            let sys = LinearSystem {
-                mesh: &mesh,
-                pattern: &pattern,
-                matrices: &m,
-                ax: &ax,
-                g: &g,
-                f: &f,
-                product: &ProductWeights::L2,
-                tau: 1e-4,
-            };
-            black_box(step.velocity(&sys).unwrap());
-        });
+        let t_step = l2_step_time(&mesh);
         let mut manager = CurveManager {
             regularize: true,
             sweeps: 1,
@@ -89,25 +94,7 @@ fn main() {
     println!("|---:|---:|---:|---:|");
     let mesh = icosphere([0.0; 3], 1.0, 6).unwrap();
     let n = mesh.num_vertices();
-    let pattern = Pattern::new(n, mesh.elements());
-    let mut m = Matrices::assemble(&mesh, &pattern);
-    let (g, f) = (vec![1.0; n], vec![0.0; n]);
-    let mut step = SemiImplicitStep::new(SolverKind::Lumped);
-    let t_step = time_it(|| {
-        m.assemble_into(&mesh, &pattern, false);
-        let ax = m.stiffness_times_positions(&mesh, &pattern);
-        let sys = LinearSystem {
-            mesh: &mesh,
-            pattern: &pattern,
-            matrices: &m,
-            ax: &ax,
-            g: &g,
-            f: &f,
-            product: &ProductWeights::L2,
-            tau: 1e-4,
-        };
-        black_box(step.velocity(&sys).unwrap());
-    });
+    let t_step = l2_step_time(&mesh);
     let (params, pinch) = SurfaceManager::defaults_for(&mesh);
     let mut manager = SurfaceManager { regularize: true, sweeps: 3, adapt: true, params, pinch_curvature: Some(pinch) };
     let t_manage = time_it(|| {
