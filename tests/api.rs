@@ -39,41 +39,59 @@ impl Server {
     }
 
     fn request(&self, method: &str, path: &str, body: Option<(&str, &str)>) -> (u16, String, String) {
-        let mut s = TcpStream::connect(self.addr).unwrap();
-        s.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
-        let mut req = format!("{method} {path} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\n", self.addr);
-        match body {
-            Some((ctype, b)) => req += &format!("Content-Type: {ctype}\r\nContent-Length: {}\r\n\r\n{b}", b.len()),
-            None => req += "Content-Length: 0\r\n\r\n",
-        }
-        s.write_all(req.as_bytes()).unwrap();
-        let mut out = String::new();
-        s.read_to_string(&mut out).unwrap();
-        let (head, body) = out.split_once("\r\n\r\n").unwrap();
-        let status = head.split_whitespace().nth(1).unwrap().parse().unwrap();
-        let body = if head.to_ascii_lowercase().contains("transfer-encoding: chunked") {
-            dechunk(body)
-        } else {
-            body.to_string()
-        };
-        (status, head.to_string(), body)
+        http(self.addr, method, path, body, "")
     }
 
     fn json(&self, method: &str, path: &str, body: Option<&str>) -> (u16, Value) {
-        let (status, _, b) = self.request(method, path, body.map(|b| ("application/json", b)));
-        (status, serde_json::from_str(&b).unwrap_or(Value::Null))
+        http_json(self.addr, method, path, body)
     }
 
     fn wait_for(&self, id: &str, pred: impl Fn(&Value) -> bool) -> Value {
-        let start = Instant::now();
-        loop {
-            let (_, j) = self.json("GET", &format!("/v1/jobs/{id}"), None);
-            if pred(&j) {
-                return j;
-            }
-            assert!(start.elapsed() < Duration::from_secs(120), "timed out waiting: {j}");
-            std::thread::sleep(Duration::from_millis(20));
+        wait_for(self.addr, id, pred)
+    }
+}
+
+/// One HTTP/1.1 request (`Connection: close`) with optional body and extra header
+/// lines (each ending in `\r\n`): status, head, body (de-chunked).
+fn http(
+    addr: SocketAddr,
+    method: &str,
+    path: &str,
+    body: Option<(&str, &str)>,
+    headers: &str,
+) -> (u16, String, String) {
+    let mut s = TcpStream::connect(addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+    let mut req = format!("{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n{headers}");
+    match body {
+        Some((ctype, b)) => req += &format!("Content-Type: {ctype}\r\nContent-Length: {}\r\n\r\n{b}", b.len()),
+        None => req += "Content-Length: 0\r\n\r\n",
+    }
+    s.write_all(req.as_bytes()).unwrap();
+    let mut out = String::new();
+    s.read_to_string(&mut out).unwrap();
+    let (head, body) = out.split_once("\r\n\r\n").unwrap();
+    let status = head.split_whitespace().nth(1).unwrap().parse().unwrap();
+    let body =
+        if head.to_ascii_lowercase().contains("transfer-encoding: chunked") { dechunk(body) } else { body.to_string() };
+    (status, head.to_string(), body)
+}
+
+fn http_json(addr: SocketAddr, method: &str, path: &str, body: Option<&str>) -> (u16, Value) {
+    let (status, _, b) = http(addr, method, path, body.map(|b| ("application/json", b)), "");
+    (status, serde_json::from_str(&b).unwrap_or(Value::Null))
+}
+
+/// Poll a job until `pred` holds (two minutes at most).
+fn wait_for(addr: SocketAddr, id: &str, pred: impl Fn(&Value) -> bool) -> Value {
+    let start = Instant::now();
+    loop {
+        let (_, j) = http_json(addr, "GET", &format!("/v1/jobs/{id}"), None);
+        if pred(&j) {
+            return j;
         }
+        assert!(start.elapsed() < Duration::from_secs(120), "timed out waiting: {j}");
+        std::thread::sleep(Duration::from_millis(20));
     }
 }
 
@@ -249,33 +267,8 @@ fn kill_9_mid_job_then_restart_resumes_and_finishes() {
         }
         child
     };
-    // a client that talks to the subprocess (reuse the request code with a dummy runtime-less server)
-    let call = |method: &str, path: &str, body: Option<&str>| -> (u16, Value) {
-        let mut s = TcpStream::connect(addr).unwrap();
-        let mut req = format!("{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n");
-        match body {
-            Some(b) => req += &format!("Content-Type: application/json\r\nContent-Length: {}\r\n\r\n{b}", b.len()),
-            None => req += "Content-Length: 0\r\n\r\n",
-        }
-        s.write_all(req.as_bytes()).unwrap();
-        let mut out = String::new();
-        s.read_to_string(&mut out).unwrap();
-        let (head, b) = out.split_once("\r\n\r\n").unwrap();
-        let b =
-            if head.to_ascii_lowercase().contains("transfer-encoding: chunked") { dechunk(b) } else { b.to_string() };
-        (head.split_whitespace().nth(1).unwrap().parse().unwrap(), serde_json::from_str(&b).unwrap_or(Value::Null))
-    };
-    let wait = |id: &str, pred: &dyn Fn(&Value) -> bool| -> Value {
-        let start = Instant::now();
-        loop {
-            let (_, j) = call("GET", &format!("/v1/jobs/{id}"), None);
-            if pred(&j) {
-                return j;
-            }
-            assert!(start.elapsed() < Duration::from_secs(120), "timed out: {j}");
-            std::thread::sleep(Duration::from_millis(20));
-        }
-    };
+    let call = |method: &str, path: &str, body: Option<&str>| http_json(addr, method, path, body);
+    let wait = |id: &str, pred: &dyn Fn(&Value) -> bool| wait_for(addr, id, pred);
     let mut first = spawn();
     let (s, job) = call("POST", "/v1/jobs", Some(LONG));
     assert_eq!(s, 201);
@@ -376,11 +369,7 @@ fn oversized_bodies_get_413_with_the_limit_and_tokens_are_enforced() {
     assert_eq!(srv.request("GET", "/healthz", None).0, 200);
     let (status, _, body) = srv.request("GET", "/v1/jobs", None);
     assert_eq!(status, 401, "{body}");
-    let mut s = TcpStream::connect(srv.addr).unwrap();
-    write!(s, "GET /v1/jobs HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer s3cret\r\nConnection: close\r\n\r\n").unwrap();
-    let mut out = String::new();
-    s.read_to_string(&mut out).unwrap();
-    assert!(out.starts_with("HTTP/1.1 200"), "{out}");
+    assert_eq!(http(srv.addr, "GET", "/v1/jobs", None, "Authorization: Bearer s3cret\r\n").0, 200);
     srv.stop();
 }
 

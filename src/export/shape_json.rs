@@ -4,32 +4,17 @@
 //! surfaces, plus `"energy"` and `"iteration"`.
 
 use crate::flow::MeshData;
+use crate::geometry::segment_cycles;
 use serde_json::{json, Value};
 
 /// The JSON document of a shape at some iteration.
 pub fn shape_json(mesh: &MeshData, energy: f64, iteration: usize) -> Value {
     let energy = if energy.is_finite() { json!(energy) } else { Value::Null };
     if mesh.dimension == 2 {
-        let n = mesh.positions.len();
-        let mut next = vec![usize::MAX; n];
-        for e in &mesh.elements {
-            next[e[0]] = e[1];
-        }
-        let mut seen = vec![false; n];
-        let mut components = Vec::new();
-        for start in 0..n {
-            if seen[start] || next[start] == usize::MAX {
-                continue;
-            }
-            let mut verts = Vec::new();
-            let mut v = start;
-            while !seen[v] && v != usize::MAX {
-                seen[v] = true;
-                verts.push(json!([mesh.positions[v][0], mesh.positions[v][1]]));
-                v = next[v];
-            }
-            components.push(json!({ "vertices": verts }));
-        }
+        let components: Vec<Value> = segment_cycles(mesh.positions.len(), mesh.elements.iter().map(|e| (e[0], e[1])))
+            .iter()
+            .map(|c| json!({ "vertices": c.iter().map(|&v| json!([mesh.positions[v][0], mesh.positions[v][1]])).collect::<Vec<_>>() }))
+            .collect();
         json!({ "dimension": 2, "components": components, "energy": energy, "iteration": iteration })
     } else {
         json!({

@@ -38,6 +38,7 @@ use super::cyclic::{cyclic_solve, cyclic_solve_checked, CyclicComponent};
 use super::system::{LinearSystem, ProductWeights};
 use super::FlowError;
 use crate::fem::Pattern;
+use crate::geometry::segment_cycles;
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
@@ -265,39 +266,24 @@ pub(super) fn solve_f32(chol: &SparseCholesky<f32>, x: &mut [f64]) {
 /// Cycle order and value positions of every curve component (`D = 2`).
 fn cyclic_components<const D: usize>(sys: &LinearSystem<'_, D>) -> Vec<CyclicComponent> {
     let p: &Pattern<D> = sys.pattern;
-    let n = p.size();
-    let mut next = vec![usize::MAX; n];
-    for e in sys.mesh.elements() {
-        next[e[0]] = e[1];
-    }
     // value position of entry (row, col)
     let at = |row: usize, col: usize| {
         let r = &p.row_idx()[p.col_ptr()[col]..p.col_ptr()[col + 1]];
         p.col_ptr()[col] + r.binary_search(&row).expect("neighbour entry in pattern")
     };
-    let mut seen = vec![false; n];
-    let mut out = Vec::new();
-    for start in 0..n {
-        if seen[start] {
-            continue;
-        }
-        let mut vertices = Vec::new();
-        let mut v = start;
-        while !seen[v] {
-            seen[v] = true;
-            vertices.push(v);
-            v = next[v];
-        }
-        let m = vertices.len();
-        let positions = (0..m)
-            .map(|k| {
-                let (prev, cur, nxt) = (vertices[(k + m - 1) % m], vertices[k], vertices[(k + 1) % m]);
-                [at(cur, prev), p.diag()[cur], at(cur, nxt)]
-            })
-            .collect();
-        out.push(CyclicComponent { vertices, positions });
-    }
-    out
+    segment_cycles(p.size(), sys.mesh.elements().iter().map(|e| (e[0], e[1])))
+        .into_iter()
+        .map(|vertices| {
+            let m = vertices.len();
+            let positions = (0..m)
+                .map(|k| {
+                    let (prev, cur, nxt) = (vertices[(k + m - 1) % m], vertices[k], vertices[(k + 1) % m]);
+                    [at(cur, prev), p.diag()[cur], at(cur, nxt)]
+                })
+                .collect();
+            CyclicComponent { vertices, positions }
+        })
+        .collect()
 }
 
 fn assemble_l2_h1<const D: usize>(sys: &LinearSystem<'_, D>) -> SchurMatrix {

@@ -162,26 +162,32 @@ impl Mesh<2> {
     /// direction of its segments (counter-clockwise for outer boundaries), ordered by
     /// their smallest vertex index.
     pub fn cycles(&self) -> Vec<Vec<usize>> {
-        let n = self.positions.len();
-        let mut next = vec![usize::MAX; n];
-        for el in &self.elements {
-            next[el[0]] = el[1];
-        }
-        let mut seen = vec![false; n];
-        let mut out = Vec::new();
-        for start in 0..n {
-            if seen[start] || next[start] == usize::MAX {
-                continue;
-            }
-            let mut cyc = Vec::new();
-            let mut v = start;
-            while !seen[v] {
-                seen[v] = true;
-                cyc.push(v);
-                v = next[v];
-            }
-            out.push(cyc);
-        }
-        out
+        segment_cycles(self.positions.len(), self.elements.iter().map(|e| (e[0], e[1])))
     }
+}
+
+/// Vertex cycles of closed polylines given as directed segments `(a, b)` over `n`
+/// vertices: each cycle follows the segments, cycles ordered by their smallest
+/// vertex; vertices on no segment are skipped.
+pub fn segment_cycles(n: usize, segments: impl Iterator<Item = (usize, usize)>) -> Vec<Vec<usize>> {
+    let mut next = vec![usize::MAX; n];
+    for (a, b) in segments {
+        next[a] = b;
+    }
+    let mut seen = vec![false; n];
+    let mut out = Vec::new();
+    for start in 0..n {
+        if seen[start] || next[start] == usize::MAX {
+            continue;
+        }
+        let mut cyc = Vec::new();
+        let mut v = start;
+        while v != usize::MAX && !seen[v] {
+            seen[v] = true;
+            cyc.push(v);
+            v = next[v];
+        }
+        out.push(cyc);
+    }
+    out
 }

@@ -16,7 +16,7 @@ pub use curve_remesh::{adapt_curve, regularize_curve, resolve_intersections, Cur
 pub use curves::{circle, ellipse, polygon, rectangle, union};
 pub use intersect::{find_segment_intersections, SegmentHit};
 pub use measures::MeshQuality;
-pub use mesh::{CurveMesh, Mesh, MeshError, SurfaceMesh};
+pub use mesh::{segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};
 pub use surface_remesh::{
     adapt_surface, edge_statistics, regularize_surface, surface_edges, SurfaceEdge, SurfaceRemeshSettings,
 };

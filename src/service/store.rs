@@ -163,16 +163,15 @@ impl Store {
                 .await?;
         }
         if let Some(p) = rows.last() {
-            sqlx::query("UPDATE jobs SET iteration = ?2, time = ?3, tau = ?4, energy = ?5, vertices = ?6, components = ?7 WHERE id = ?1")
-                .bind(id)
-                .bind(p.iteration as i64)
-                .bind(p.time)
-                .bind(p.tau)
-                .bind(p.energy)
-                .bind(p.vertices as i64)
-                .bind(p.components as i64)
-                .execute(&mut *tx)
-                .await?;
+            sqlx::query(
+                "UPDATE jobs SET (iteration, time, tau, energy, vertices, components) = \
+                 (SELECT iteration, time, tau, energy, vertices, components FROM history \
+                  WHERE job_id = ?1 AND iteration = ?2) WHERE id = ?1",
+            )
+            .bind(id)
+            .bind(p.iteration as i64)
+            .execute(&mut *tx)
+            .await?;
         }
         if let Some(c) = checkpoint {
             sqlx::query("INSERT OR REPLACE INTO checkpoints VALUES (?1, ?2, ?3, ?4)")
