@@ -23,6 +23,7 @@ pub mod export;
 pub mod fem;
 pub mod flow;
 pub mod geometry;
+pub mod imaging;
 pub mod jobs;
 pub mod problems;
 pub mod service;

@@ -3,7 +3,7 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use shapeflow::export::{energy_csv, energy_svg, shape_json};
+use shapeflow::export::{energy_csv, energy_svg, mask_nrrd, mask_png, overlay_png, shape_json};
 use shapeflow::flow::{Checkpoint, Progress};
 use shapeflow::jobs::{parse_spec, prepare, run_prepared, RunEvents};
 use std::collections::HashMap;
@@ -184,10 +184,26 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
         let p = out.join(name);
         std::fs::write(&p, data).with_context(|| format!("cannot write {}", p.display()))
     };
-    write("shape.json", serde_json::to_string_pretty(&shape_json(&last.mesh, last.energy, last.iteration))?)?;
+    let image = job.image.as_deref();
+    write("shape.json", serde_json::to_string_pretty(&shape_json(&last.mesh, last.energy, last.iteration, image))?)?;
     write("energy.csv", energy_csv(&rep.history))?;
     write("energy.svg", energy_svg(&rep.history, &spec_path.display().to_string()))?;
     write("checkpoint.json", serde_json::to_string(&last)?)?;
-    println!("wrote {}/shape.json, energy.csv, energy.svg, checkpoint.json", out.display());
+    let mut written = vec!["shape.json", "energy.csv", "energy.svg", "checkpoint.json"];
+    if let Some(img) = image {
+        let write_bytes = |name: &str, data: Vec<u8>| -> Result<()> {
+            let p = out.join(name);
+            std::fs::write(&p, data).with_context(|| format!("cannot write {}", p.display()))
+        };
+        if img.dimension == 2 {
+            write_bytes("mask.png", mask_png(img, &last.mesh))?;
+            write_bytes("overlay.png", overlay_png(img, &last.mesh))?;
+            written.extend(["mask.png", "overlay.png"]);
+        } else {
+            write_bytes("mask.nrrd", mask_nrrd(img, &last.mesh))?;
+            written.push("mask.nrrd");
+        }
+    }
+    println!("wrote {} in {}", written.join(", "), out.display());
     Ok(code)
 }

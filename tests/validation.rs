@@ -47,8 +47,11 @@ fn spec_errors_name_the_field() {
         (r#"{"problem": {"type": "nonsense"}, "initial": {"shape": "circle", "radius": 1}}"#, "problem.type"),
         (
             r#"{"problem": {"type": "segmentation", "image": "input:image"}, "initial": {"shape": "circle", "radius": 1}}"#,
-            "problem.type",
+            "problem.image",
         ),
+        (r#"{"problem": {"type": "segmentation", "image": "image.png"}}"#, "problem.image"),
+        (r#"{"problem": {"type": "segmentation", "image": 3}}"#, "problem.image"),
+        (r#"{"problem": {"type": "curvature_flow"}}"#, "initial"),
         (
             r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "polygon", "points": [[0,0],[1,1],[1,0],[0,1]]}}"#,
             "initial",
@@ -87,6 +90,62 @@ fn spec_errors_name_the_field() {
     }
     assert!(wrong.is_empty(), "{wrong:#?}");
     assert!(spec_error(r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "polygon", "points": [[0,0],[1,1],[1,0],[0,1]]}}"#).contains("intersect"));
+}
+
+fn image_error(json: &str, inputs: &[(&str, Vec<u8>)]) -> String {
+    let files: HashMap<String, Vec<u8>> = inputs.iter().map(|(k, v)| (k.to_string(), v.clone())).collect();
+    prepare(parse_spec(json).unwrap(), &files).expect_err("should be rejected").to_string()
+}
+
+fn gray_png(w: u32, h: u32, data: &[u8]) -> Vec<u8> {
+    use image::ImageEncoder;
+    let mut out = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut out).write_image(data, w, h, image::ExtendedColorType::L8).unwrap();
+    out
+}
+
+#[test]
+fn bad_images_give_errors_naming_the_input() {
+    let spec = r#"{"problem": {"type": "segmentation", "image": "input:picture"}}"#;
+    let good = gray_png(16, 16, &(0..=255).collect::<Vec<u8>>());
+    // corrupt: a PNG cut in half
+    let e = image_error(spec, &[("picture", good[..good.len() / 2].to_vec())]);
+    assert!(e.starts_with("problem.image: input `picture`:"), "{e}");
+    // not an image at all
+    let e = image_error(spec, &[("picture", b"hello world".to_vec())]);
+    assert!(e.contains("input `picture`") && e.contains("PNG"), "{e}");
+    // 0×0: a PNG header claiming zero size
+    let mut zero = good.clone();
+    zero[16..24].copy_from_slice(&[0; 8]);
+    let e = image_error(spec, &[("picture", zero)]);
+    assert!(e.contains("input `picture`"), "{e}");
+    // too small, constant, empty
+    let e = image_error(spec, &[("picture", gray_png(2, 9, &[7; 18]))]);
+    assert!(e.contains("at least 4"), "{e}");
+    let e = image_error(spec, &[("picture", gray_png(8, 8, &[7; 64]))]);
+    assert!(e.contains("constant"), "{e}");
+    let e = image_error(spec, &[("picture", Vec::new())]);
+    assert!(e.contains("empty"), "{e}");
+    // NRRD with a wrong payload size, and a 2D image with a 3D initial shape
+    let nrrd = b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 8 8 8\nencoding: raw\n\n0123".to_vec();
+    let e = image_error(spec, &[("picture", nrrd)]);
+    assert!(e.contains("input `picture`") && e.contains("512 expected"), "{e}");
+    let e = image_error(
+        r#"{"problem": {"type": "segmentation", "image": "input:picture"}, "initial": {"shape": "sphere", "radius": 0.3}}"#,
+        &[("picture", good.clone())],
+    );
+    assert!(e.starts_with("initial:"), "{e}");
+    let e = image_error(
+        r#"{"problem": {"type": "segmentation", "image": "input:picture", "sigma": -1}}"#,
+        &[("picture", good.clone())],
+    );
+    assert!(e.starts_with("problem.sigma:"), "{e}");
+    // slice stacks: sizes must agree, and the failing slice is named
+    let e = image_error(
+        r#"{"problem": {"type": "segmentation", "image": ["input:a", "input:b", "input:c", "input:d"]}}"#,
+        &[("a", good.clone()), ("b", good.clone()), ("c", gray_png(8, 8, &[1; 64])), ("d", good)],
+    );
+    assert!(e.contains("input `c`") && e.contains("16×16"), "{e}");
 }
 
 fn p2(x: f64, y: f64) -> Point<2> {

@@ -2,11 +2,13 @@
 //! initial mesh, the problem and the flow settings.
 
 use super::mesh_io::read_mesh_file;
-use super::spec::{InitialSpec, JobSpec, ProblemSpec, SpecError};
-use crate::flow::{CurveManager, FlowSettings, Problem, SurfaceManager};
+use super::spec::{ImageSource, InitialSpec, JobSpec, ProblemSpec, SpecError};
+use crate::flow::{CurveManager, FlowSettings, Problem, ScalarProduct, SurfaceManager};
 use crate::geometry::{self, CurveMesh, Mesh, MeshError, Point, SurfaceMesh};
-use crate::problems::{CurvatureFlow, SurfaceDiffusion};
+use crate::imaging::{decode_image, decode_slices, decode_volume, EdgeField, Grid, ImageLimits};
+use crate::problems::{CurvatureFlow, Segmentation, SurfaceDiffusion};
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// Largest number of vertices an initial mesh may have.
 pub const MAX_VERTICES: usize = 2_000_000;
@@ -32,6 +34,7 @@ impl AnyMesh {
 pub enum ProblemKind {
     CurvatureFlow(CurvatureFlow),
     SurfaceDiffusion(SurfaceDiffusion),
+    Segmentation(Segmentation),
 }
 
 impl ProblemKind {
@@ -39,6 +42,7 @@ impl ProblemKind {
         match self {
             ProblemKind::CurvatureFlow(p) => p,
             ProblemKind::SurfaceDiffusion(p) => p,
+            ProblemKind::Segmentation(p) => p,
         }
     }
     fn physical(&self) -> bool {
@@ -59,6 +63,8 @@ pub struct PreparedJob {
     pub curve_manager: Option<CurveManager>,
     /// Mesh management of surfaces, likewise.
     pub surface_manager: Option<SurfaceManager>,
+    /// The decoded input image of a segmentation job (for masks and overlays).
+    pub image: Option<Arc<Grid>>,
 }
 
 fn positive(field: &str, v: f64) -> Result<f64, SpecError> {
@@ -91,26 +97,68 @@ fn mesh_err(field: &str, e: MeshError) -> SpecError {
 /// Validate `spec` and build the job. `inputs` maps `NAME` of `"input:NAME"` to the
 /// file's bytes.
 pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<PreparedJob, SpecError> {
-    let problem = match spec.problem {
+    let mut image = None;
+    let problem = match &spec.problem {
         ProblemSpec::CurvatureFlow { gamma, lambda } => {
-            positive("problem.gamma", gamma)?;
-            finite("problem.lambda", &[lambda])
+            positive("problem.gamma", *gamma)?;
+            finite("problem.lambda", &[*lambda])
                 .map_err(|_| SpecError::new("problem.lambda", "must be a finite number"))?;
-            ProblemKind::CurvatureFlow(CurvatureFlow { gamma, lambda })
+            ProblemKind::CurvatureFlow(CurvatureFlow { gamma: *gamma, lambda: *lambda })
         }
         ProblemSpec::SurfaceDiffusion { gamma } => {
-            positive("problem.gamma", gamma)?;
-            ProblemKind::SurfaceDiffusion(SurfaceDiffusion { gamma })
+            positive("problem.gamma", *gamma)?;
+            ProblemKind::SurfaceDiffusion(SurfaceDiffusion { gamma: *gamma })
+        }
+        ProblemSpec::Segmentation { image: source, sigma, lambda, epsilon } => {
+            positive("problem.epsilon", *epsilon)?;
+            let grid = load_image(source, inputs)?;
+            let sigma = &sigma.unwrap_or(super::spec::default_sigma(grid.dimension));
+            if !(sigma.is_finite() && *sigma >= 0.0 && *sigma <= 64.0) {
+                return Err(SpecError::new("problem.sigma", format!("must be between 0 and 64 pixels, got {sigma}")));
+            }
+            let lambda = &lambda.unwrap_or(super::spec::default_lambda(grid.dimension));
+            if !(lambda.is_finite() && *lambda >= 0.0) {
+                return Err(SpecError::new("problem.lambda", format!("must be a nonnegative number, got {lambda}")));
+            }
+            let field = EdgeField::new(&grid, *sigma)
+                .ok_or_else(|| SpecError::new("problem.image", "the image is constant: there is nothing to segment"))?;
+            image = Some(Arc::new(grid));
+            ProblemKind::Segmentation(Segmentation { field: Arc::new(field), lambda: *lambda, epsilon: *epsilon })
         }
     };
-    let mesh = build_initial("initial", &spec.initial, inputs)?;
+    let mesh = match (&spec.initial, &image) {
+        (Some(initial), _) => build_initial("initial", initial, inputs)?,
+        (None, Some(grid)) => inscribed(grid)?,
+        (None, None) => return Err(SpecError::new("initial", "missing field `initial`")),
+    };
+    if let Some(grid) = &image {
+        if grid.dimension != mesh.dimension() {
+            return Err(SpecError::new(
+                "initial",
+                format!(
+                    "a {}D image needs a {}",
+                    grid.dimension,
+                    if grid.dimension == 2 { "curve" } else { "surface" }
+                ),
+            ));
+        }
+    }
     let f = &spec.flow;
     let default_product = match &problem {
         ProblemKind::CurvatureFlow(p) => Problem::<2>::default_scalar_product(p),
         ProblemKind::SurfaceDiffusion(p) => Problem::<2>::default_scalar_product(p),
+        ProblemKind::Segmentation(p) => Problem::<2>::default_scalar_product(p),
     };
+    let scalar_product = f.scalar_product.unwrap_or(default_product);
     let d = FlowSettings::default();
-    let tau = positive("flow.tau", f.tau.unwrap_or(d.tau))?;
+    let default_tau = match (&problem, scalar_product) {
+        // the Newton-type product scales V like a Newton step (τ = 1); far from edges
+        // β is clipped at ε and V = -G/ε, so a larger cap lets the step control decide
+        (ProblemKind::Segmentation(_), ScalarProduct::H1Newton) => SEGMENTATION_NEWTON_TAU,
+        (ProblemKind::Segmentation(_), _) => SEGMENTATION_L2_TAU,
+        _ => d.tau,
+    };
+    let tau = positive("flow.tau", f.tau.unwrap_or(default_tau))?;
     let tau_min = positive("flow.tau_min", f.tau_min.unwrap_or(d.tau_min.min(tau)))?;
     if tau_min > tau {
         return Err(SpecError::new("flow.tau_min", format!("must not exceed flow.tau ({tau})")));
@@ -131,7 +179,6 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     }
     let beta = positive("flow.beta", f.beta.unwrap_or(d.beta))?;
     let max_iterations = in_range("flow.max_iterations", f.max_iterations.unwrap_or(d.max_iterations), 1, 100_000_000)?;
-    let scalar_product = f.scalar_product.unwrap_or(default_product);
     let settings = FlowSettings {
         scalar_product,
         solver: f.solver.unwrap_or_default(),
@@ -150,7 +197,64 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
         AnyMesh::Surface(m) => (None, surface_manager(&spec.mesh, m)?),
     };
-    Ok(PreparedJob { spec, mesh, problem, settings, checkpoint_every, curve_manager, surface_manager })
+    Ok(PreparedJob { spec, mesh, problem, settings, checkpoint_every, curve_manager, surface_manager, image })
+}
+
+/// Default `flow.tau` of segmentation with the Newton-type H1 product.
+pub const SEGMENTATION_NEWTON_TAU: f64 = 10.0;
+
+/// Default `flow.tau` of segmentation with the L2 (and plain H1) product.
+pub const SEGMENTATION_L2_TAU: f64 = 1e-3;
+
+fn input<'a>(field: &str, name: &str, inputs: &'a HashMap<String, Vec<u8>>) -> Result<(&'a str, &'a [u8]), SpecError> {
+    let key = name
+        .strip_prefix("input:")
+        .ok_or_else(|| SpecError::new(field, format!("must name an uploaded input as \"input:NAME\", got {name:?}")))?;
+    inputs
+        .get_key_value(key)
+        .map(|(k, v)| (k.as_str(), v.as_slice()))
+        .ok_or_else(|| SpecError::new(field, format!("no input named {key:?} was supplied")))
+}
+
+/// Decode the image of a segmentation job: 2D raster, NRRD volume or slice stack.
+fn load_image(source: &ImageSource, inputs: &HashMap<String, Vec<u8>>) -> Result<Grid, SpecError> {
+    let limits = ImageLimits::default();
+    match source {
+        ImageSource::One(name) => {
+            let (key, bytes) = input("problem.image", name, inputs)?;
+            let grid = if bytes.starts_with(b"NRRD") {
+                decode_volume(key, bytes, &limits)
+            } else {
+                decode_image(key, bytes, &limits)
+            };
+            grid.map_err(|e| SpecError::new("problem.image", e.to_string()))
+        }
+        ImageSource::Slices(names) => {
+            let slices = names
+                .iter()
+                .enumerate()
+                .map(|(k, n)| input(&format!("problem.image[{k}]"), n, inputs))
+                .collect::<Result<Vec<_>, _>>()?;
+            decode_slices(&slices, &limits).map_err(|e| SpecError::new("problem.image", e.to_string()))
+        }
+    }
+}
+
+/// The default initial shape of segmentation: a circle (sphere) inscribed in the
+/// image box, two pixels inside it, with vertices about two pixels apart (an
+/// icosphere with edges of about three pixels).
+fn inscribed(grid: &Grid) -> Result<AnyMesh, SpecError> {
+    let ext = grid.extent();
+    let l = grid.scale();
+    if grid.dimension == 2 {
+        let r = 0.5 * ext[0].min(ext[1]) - 2.0 / l;
+        let n = ((std::f64::consts::TAU * r * l / 2.0).round() as usize).clamp(32, 4096);
+        curve("initial", geometry::circle([0.5 * ext[0], 0.5 * ext[1]], r, n))
+    } else {
+        let r = 0.5 * ext[0].min(ext[1]).min(ext[2]) - 2.0 / l;
+        let level = (1.05 * r * l / 3.0).log2().round().clamp(1.0, 6.0) as u32;
+        surface("initial", geometry::icosphere([0.5 * ext[0], 0.5 * ext[1], 0.5 * ext[2]], r, level))
+    }
 }
 
 /// `(ε, h_min, h_max)`: the spec's values where given, else the defaults; checked.

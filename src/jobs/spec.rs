@@ -23,7 +23,9 @@ impl SpecError {
 #[serde(deny_unknown_fields)]
 pub struct JobSpec {
     pub problem: ProblemSpec,
-    pub initial: InitialSpec,
+    /// Required, except for segmentation (default: a circle/sphere inscribed in the image box).
+    #[serde(default)]
+    pub initial: Option<InitialSpec>,
     #[serde(default)]
     pub flow: FlowSpec,
     #[serde(default)]
@@ -52,6 +54,75 @@ pub enum ProblemSpec {
         #[serde(default = "one")]
         gamma: f64,
     },
+    /// Geodesic active contours `J = ∫_Γ H + λ∫_Ω H` on an image.
+    Segmentation {
+        /// `"input:NAME"` (PNG/JPEG/TIFF → 2D, NRRD → 3D) or a list of them (a stack
+        /// of 2D slices → 3D, first slice at the bottom).
+        image: ImageSource,
+        /// Gaussian smoothing in pixels; default 1.5 for 2D images, 1 for volumes.
+        #[serde(default)]
+        sigma: Option<f64>,
+        /// Weight of the region term (balloon force); default 30 for 2D images, 10
+        /// for volumes (see `default_lambda`).
+        #[serde(default)]
+        lambda: Option<f64>,
+        /// Threshold ε of the Newton weight β (paper §4.2.1).
+        #[serde(default = "default_beta_epsilon")]
+        epsilon: f64,
+    },
+}
+
+/// One input file, or a stack of 2D slices.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum ImageSource {
+    One(String),
+    Slices(Vec<String>),
+}
+
+/// Prefix of the message of a malformed `problem.image` (see [`parse_spec`]).
+const IMAGE_MESSAGE: &str = "`image` must be \"input:NAME\" or a list of them";
+
+impl<'de> Deserialize<'de> for ImageSource {
+    fn deserialize<De: serde::Deserializer<'de>>(d: De) -> Result<Self, De::Error> {
+        match serde_json::Value::deserialize(d)? {
+            serde_json::Value::String(s) => Ok(ImageSource::One(s)),
+            serde_json::Value::Array(items) if !items.is_empty() => items
+                .into_iter()
+                .map(|v| match v {
+                    serde_json::Value::String(s) => Ok(s),
+                    other => Err(serde::de::Error::custom(format!("{IMAGE_MESSAGE}, found {other} in the list"))),
+                })
+                .collect::<Result<_, _>>()
+                .map(ImageSource::Slices),
+            other => Err(serde::de::Error::custom(format!("{IMAGE_MESSAGE}, got {other}"))),
+        }
+    }
+}
+
+/// Default `problem.sigma` (pixels) in dimension `d`: volumes average over more
+/// neighbours, so noise needs less smoothing there.
+pub fn default_sigma(d: usize) -> f64 {
+    if d == 2 {
+        1.5
+    } else {
+        1.0
+    }
+}
+/// Default `problem.lambda` of segmentation in dimension `d`. The balloon force
+/// shifts the contour inwards by about `(λ + κ) s² / 2L` pixels (`s²` the variance of
+/// the edge profile, `L` the image size), and `κ` of a surface is twice that of a
+/// curve of the same radius: volumes get the smaller default.
+pub fn default_lambda(d: usize) -> f64 {
+    if d == 2 {
+        30.0
+    } else {
+        10.0
+    }
+}
+/// Default `problem.epsilon` of segmentation.
+pub fn default_beta_epsilon() -> f64 {
+    1e3
 }
 
 fn origin2() -> [f64; 2] {
@@ -219,10 +290,7 @@ impl Default for OutputSpec {
     }
 }
 
-const PLANNED: [(&str, &str); 2] = [
-    ("segmentation", "image segmentation is not available yet in this version"),
-    ("shape_design", "optimal shape design is not available yet in this version"),
-];
+const PLANNED: [(&str, &str); 1] = [("shape_design", "optimal shape design is not available yet in this version")];
 
 /// Parse a spec from JSON text. Errors name the field path.
 pub fn parse_spec(text: &str) -> Result<JobSpec, SpecError> {
@@ -236,7 +304,14 @@ pub fn parse_spec(text: &str) -> Result<JobSpec, SpecError> {
     let spec: JobSpec = serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
         let field = if path == "." || path.is_empty() { "(document)".to_string() } else { path };
-        SpecError::new(field, e.into_inner().to_string())
+        let message = e.into_inner().to_string();
+        // fields of the internally tagged `problem` are reported at `problem`
+        match message.strip_prefix(IMAGE_MESSAGE) {
+            Some(rest) if field == "problem" => {
+                SpecError::new("problem.image", format!("must be \"input:NAME\" or a list of them{rest}"))
+            }
+            _ => SpecError::new(field, message),
+        }
     })?;
     Ok(spec)
 }

@@ -1,7 +1,9 @@
 //! The applications, one module each, behind the [`crate::flow::Problem`] trait.
 
 mod curvature_flow;
+mod segmentation;
 mod surface_diffusion;
 
 pub use curvature_flow::CurvatureFlow;
+pub use segmentation::Segmentation;
 pub use surface_diffusion::SurfaceDiffusion;

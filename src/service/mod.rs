@@ -245,7 +245,7 @@ async fn shape(State(state): State<AppState>, Path(id): Path<String>) -> Result<
         .last_checkpoint(&id)
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("job {id} has no result yet")))?;
-    Ok(Json(shape_json(&cp.mesh, cp.energy, cp.iteration)))
+    Ok(Json(shape_json(&cp.mesh, cp.energy, cp.iteration, None)))
 }
 
 /// A running service: the HTTP state and the worker threads.

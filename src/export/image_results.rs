@@ -1,0 +1,68 @@
+//! Results of image jobs: the segmentation mask (PNG in 2D, gzip NRRD in 3D), the
+//! contours drawn over the image (PNG), and pixel coordinates for shape.json.
+
+use crate::flow::MeshData;
+use crate::geometry::Point;
+use crate::imaging::{draw_overlay, encode_nrrd_mask, rasterize_curve, rasterize_surface, Grid};
+use image::codecs::png::PngEncoder;
+use image::{ExtendedColorType, ImageEncoder};
+
+fn points<const D: usize>(mesh: &MeshData) -> Vec<Point<D>> {
+    mesh.positions.iter().map(|p| Point::<D>::from_fn(|i, _| p[i])).collect()
+}
+
+fn elements<const D: usize>(mesh: &MeshData) -> Vec<[usize; D]> {
+    mesh.elements.iter().map(|e| std::array::from_fn(|k| e[k])).collect()
+}
+
+fn png(width: usize, height: usize, data: &[u8], color: ExtendedColorType) -> Vec<u8> {
+    let mut out = Vec::new();
+    PngEncoder::new(&mut out).write_image(data, width as u32, height as u32, color).expect("encoding to memory");
+    out
+}
+
+/// The inside/outside mask of `mesh` on the grid of `image`, grid order (2D rows
+/// from the bottom).
+pub fn mask(image: &Grid, mesh: &MeshData) -> Vec<bool> {
+    let d = image.dims;
+    if mesh.dimension == 2 {
+        rasterize_curve(&points::<2>(mesh), &elements::<2>(mesh), [d[0], d[1]])
+    } else {
+        rasterize_surface(&points::<3>(mesh), &elements::<3>(mesh), d)
+    }
+}
+
+/// mask.png: 8-bit gray, 255 inside, 0 outside, the size of the input image.
+pub fn mask_png(image: &Grid, mesh: &MeshData) -> Vec<u8> {
+    let [w, h, _] = image.dims;
+    let m = mask(image, mesh);
+    let mut rows = vec![0u8; w * h];
+    for j in 0..h {
+        for i in 0..w {
+            rows[i + w * (h - 1 - j)] = if m[i + w * j] { 255 } else { 0 };
+        }
+    }
+    png(w, h, &rows, ExtendedColorType::L8)
+}
+
+/// mask.nrrd: the 3D mask as uint8 0/1, gzip-encoded NRRD, the size of the volume.
+pub fn mask_nrrd(image: &Grid, mesh: &MeshData) -> Vec<u8> {
+    encode_nrrd_mask(image.dims, &mask(image, mesh))
+}
+
+/// overlay.png: the image in gray with the contours in red (2D only).
+pub fn overlay_png(image: &Grid, mesh: &MeshData) -> Vec<u8> {
+    let rgb = draw_overlay(image, &points::<2>(mesh), &elements::<2>(mesh));
+    png(image.dims[0], image.dims[1], &rgb, ExtendedColorType::Rgb8)
+}
+
+/// Unit-box coordinates to image coordinates: 2D `(column, row)` with rows counted
+/// from the top as in the file (pixel centres at integers), 3D voxel indices `(i, j, k)`.
+pub fn to_pixel(image: &Grid, x: &[f64]) -> Vec<f64> {
+    let l = image.scale();
+    if image.dimension == 2 {
+        vec![x[0] * l - 0.5, image.dims[1] as f64 - 0.5 - x[1] * l]
+    } else {
+        x.iter().map(|v| v * l - 0.5).collect()
+    }
+}

@@ -1,0 +1,138 @@
+//! Decoding input files into grids: 2D rasters (PNG, JPEG, TIFF; 8 or 16 bit; gray,
+//! gray+alpha, RGB, RGBA — colour reduced to luminance), 3D NRRD volumes and stacks
+//! of 2D slices. Every error names the input.
+
+use super::grid::{Grid, SampleKind};
+use super::nrrd::parse_nrrd;
+use super::ImageError;
+use image::{DynamicImage, ImageReader};
+use std::io::Cursor;
+
+/// Size limits for decoded inputs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImageLimits {
+    /// Largest number of pixels of a 2D image.
+    pub max_pixels: usize,
+    /// Largest number of voxels of a 3D volume.
+    pub max_voxels: usize,
+    /// Smallest number of samples along any axis.
+    pub min_side: usize,
+}
+
+impl Default for ImageLimits {
+    fn default() -> Self {
+        ImageLimits { max_pixels: 4096 * 4096, max_voxels: 256 * 256 * 256, min_side: 4 }
+    }
+}
+
+impl ImageLimits {
+    pub(crate) fn check(&self, input: &str, dims: &[usize]) -> Result<(), ImageError> {
+        let shape = dims.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("×");
+        if let Some(d) = dims.iter().find(|&&d| d < self.min_side) {
+            return Err(ImageError::new(
+                input,
+                format!("is {shape}: every side needs at least {} samples, one has {d}", self.min_side),
+            ));
+        }
+        let total = dims.iter().try_fold(1usize, |acc, &d| acc.checked_mul(d)).unwrap_or(usize::MAX);
+        let limit = if dims.len() == 2 { self.max_pixels } else { self.max_voxels };
+        if total > limit {
+            return Err(ImageError::new(input, format!("is {shape} = {total} samples, more than the limit {limit}")));
+        }
+        Ok(())
+    }
+}
+
+/// Rec. 709 luminance of linear `(r, g, b)`.
+#[inline]
+fn luminance(r: f64, g: f64, b: f64) -> f64 {
+    0.2126 * r + 0.7152 * g + 0.0722 * b
+}
+
+/// Decode a 2D image (PNG, JPEG or TIFF) named `input`. Rows are flipped so that
+/// `j = 0` is the bottom row.
+pub fn decode_image(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Grid, ImageError> {
+    let fail = |m: String| ImageError::new(input, m);
+    if bytes.is_empty() {
+        return Err(fail("is empty".into()));
+    }
+    let reader = |b: &[u8]| -> Result<ImageReader<Cursor<Vec<u8>>>, ImageError> {
+        let r = ImageReader::new(Cursor::new(b.to_vec()))
+            .with_guessed_format()
+            .map_err(|e| ImageError::new(input, format!("cannot be read: {e}")))?;
+        match r.format() {
+            Some(image::ImageFormat::Png | image::ImageFormat::Jpeg | image::ImageFormat::Tiff) => Ok(r),
+            Some(f) => Err(ImageError::new(input, format!("is a {f:?} image; supported are PNG, JPEG and TIFF"))),
+            None => Err(ImageError::new(input, "is not a PNG, JPEG or TIFF image (unknown format)")),
+        }
+    };
+    let (w, h) = reader(bytes)?.into_dimensions().map_err(|e| fail(format!("has a corrupt header: {e}")))?;
+    limits.check(input, &[w as usize, h as usize])?;
+    let img = reader(bytes)?.decode().map_err(|e| fail(format!("is corrupt: {e}")))?;
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let (values, kind): (Vec<f64>, SampleKind) = match img {
+        DynamicImage::ImageLuma8(b) => (b.pixels().map(|p| p.0[0] as f64).collect(), SampleKind::U8),
+        DynamicImage::ImageLumaA8(b) => (b.pixels().map(|p| p.0[0] as f64).collect(), SampleKind::U8),
+        DynamicImage::ImageLuma16(b) => (b.pixels().map(|p| p.0[0] as f64).collect(), SampleKind::U16),
+        DynamicImage::ImageLumaA16(b) => (b.pixels().map(|p| p.0[0] as f64).collect(), SampleKind::U16),
+        DynamicImage::ImageRgb8(b) => {
+            (b.pixels().map(|p| luminance(p.0[0] as f64, p.0[1] as f64, p.0[2] as f64)).collect(), SampleKind::U8)
+        }
+        DynamicImage::ImageRgba8(b) => {
+            (b.pixels().map(|p| luminance(p.0[0] as f64, p.0[1] as f64, p.0[2] as f64)).collect(), SampleKind::U8)
+        }
+        DynamicImage::ImageRgb16(b) => {
+            (b.pixels().map(|p| luminance(p.0[0] as f64, p.0[1] as f64, p.0[2] as f64)).collect(), SampleKind::U16)
+        }
+        DynamicImage::ImageRgba16(b) => {
+            (b.pixels().map(|p| luminance(p.0[0] as f64, p.0[1] as f64, p.0[2] as f64)).collect(), SampleKind::U16)
+        }
+        other => (
+            other.to_rgb32f().pixels().map(|p| luminance(p.0[0] as f64, p.0[1] as f64, p.0[2] as f64)).collect(),
+            SampleKind::F32,
+        ),
+    };
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err(fail(format!("pixel {} of row {} is not a finite number", i % w, i / w)));
+    }
+    // flip rows: file row r becomes grid row h - 1 - r
+    let mut flipped = vec![0.0; w * h];
+    for r in 0..h {
+        flipped[(h - 1 - r) * w..(h - r) * w].copy_from_slice(&values[r * w..(r + 1) * w]);
+    }
+    Ok(Grid::new(2, [w, h, 1], flipped, kind))
+}
+
+/// Decode a 3D volume: an NRRD file (attached data; raw or gzip).
+pub fn decode_volume(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Grid, ImageError> {
+    if !bytes.starts_with(b"NRRD") {
+        return Err(ImageError::new(input, "is not an NRRD volume (no `NRRD000x` magic line)"));
+    }
+    parse_nrrd(input, bytes, limits)
+}
+
+/// A volume from a stack of 2D slices (`z` = slice index), all of one size.
+pub fn decode_slices(slices: &[(&str, &[u8])], limits: &ImageLimits) -> Result<Grid, ImageError> {
+    let Some(((first, _), _)) = slices.split_first() else {
+        return Err(ImageError::new("(slices)", "a slice stack needs at least one slice"));
+    };
+    let relaxed = ImageLimits { max_pixels: limits.max_voxels, ..*limits };
+    let mut values = Vec::new();
+    let mut dims = [0, 0];
+    let mut kind = SampleKind::U8;
+    for (k, (name, bytes)) in slices.iter().enumerate() {
+        let g = decode_image(name, bytes, &relaxed)?;
+        if k == 0 {
+            dims = [g.dims[0], g.dims[1]];
+            kind = g.kind;
+        } else if [g.dims[0], g.dims[1]] != dims {
+            return Err(ImageError::new(
+                name,
+                format!("is {}×{}, but slice `{first}` is {}×{}", g.dims[0], g.dims[1], dims[0], dims[1]),
+            ));
+        }
+        values.extend_from_slice(&g.values);
+    }
+    limits.check(first, &[dims[0], dims[1], slices.len()])?;
+    Ok(Grid::new(3, [dims[0], dims[1], slices.len()], values, kind))
+}

@@ -1,0 +1,279 @@
+//! The edge indicator of geodesic active contours (paper §1.1):
+//! `H = 1/(1 + |∇I_σ|²)`, where `I` is the image mapped onto `[0, 100]` (so that
+//! 8-bit, 16-bit and float inputs behave alike; 100 levels per pixel of gradient is
+//! the scale of the paper's 100×100 images) and `I_σ` its Gaussian smoothing; the
+//! gradient is taken per sample by central differences.
+//!
+//! `H` is represented on the whole plane/space by the cubic B-spline with the grid
+//! values as coefficients, `H(x) = Σ c_ijk B(u-i) B(v-j) B(w-k)`, `u = xL - ½` etc.
+//! (C², so `∇H` and `D²H` are continuous), extended by replicating the border
+//! samples. For the domain integral `∫_Ω H` the field also provides the exact
+//! antiderivative in `x`, `Φ(x) = ∫^x H dx₁` (row-wise prefix sums of the
+//! coefficients and the integrated spline), so that `∫_Ω H = ∫_Γ Φ ν₁` by the
+//! divergence theorem.
+
+use super::bspline;
+use super::grid::Grid;
+use super::smooth::gaussian_smooth;
+use nalgebra::{SMatrix, SVector};
+
+/// Padding (in samples) of the row prefix sums on each side.
+const PAD: isize = 4;
+
+/// `H`, `∇H` and `D²H` at a point (unit-box coordinates).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EdgeSample<const D: usize> {
+    pub h: f64,
+    pub grad: SVector<f64, D>,
+    pub hess: SMatrix<f64, D, D>,
+}
+
+/// The interpolated edge indicator of an image (2D or 3D).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EdgeField {
+    dimension: usize,
+    dims: [usize; 3],
+    scale: f64,
+    coef: Vec<f64>,
+    /// Per row `(j, k)`: `R(m) = Σ_{i=-PAD}^{m} c_(clamp i) j k`, `m = -PAD … n_x+PAD-1`.
+    prefix: Vec<f64>,
+}
+
+/// One axis of an evaluation: first tap, local coordinate, whether `u` was clamped.
+struct Axis {
+    i0: isize,
+    t: f64,
+    excess: f64,
+}
+
+impl EdgeField {
+    /// The edge indicator of `grid` smoothed with `sigma` samples. `None` when the
+    /// image is constant (no edges at all).
+    pub fn new(grid: &Grid, sigma: f64) -> Option<EdgeField> {
+        let norm = grid.normalized(100.0)?;
+        let s = gaussian_smooth(&norm, sigma);
+        let d = grid.dims;
+        let at = |i: isize, j: isize, k: isize| {
+            let c = |x: isize, n: usize| x.clamp(0, n as isize - 1) as usize;
+            s.values[grid.index(c(i, d[0]), c(j, d[1]), c(k, d[2]))]
+        };
+        let mut coef = vec![0.0; grid.len()];
+        for k in 0..d[2] as isize {
+            for j in 0..d[1] as isize {
+                for i in 0..d[0] as isize {
+                    let gx = 0.5 * (at(i + 1, j, k) - at(i - 1, j, k));
+                    let gy = 0.5 * (at(i, j + 1, k) - at(i, j - 1, k));
+                    let gz = if grid.dimension == 3 { 0.5 * (at(i, j, k + 1) - at(i, j, k - 1)) } else { 0.0 };
+                    coef[grid.index(i as usize, j as usize, k as usize)] = 1.0 / (1.0 + gx * gx + gy * gy + gz * gz);
+                }
+            }
+        }
+        Some(Self::from_coefficients(grid.dimension, d, coef))
+    }
+
+    /// A field with the given spline coefficients (`H` at the samples).
+    pub fn from_coefficients(dimension: usize, dims: [usize; 3], coef: Vec<f64>) -> EdgeField {
+        let nx = dims[0];
+        let width = nx + 2 * PAD as usize;
+        let rows = dims[1] * dims[2];
+        let mut prefix = vec![0.0; rows * width];
+        for r in 0..rows {
+            let mut acc = 0.0;
+            for m in 0..width {
+                let i = (m as isize - PAD).clamp(0, nx as isize - 1) as usize;
+                acc += coef[i + nx * r];
+                prefix[r * width + m] = acc;
+            }
+        }
+        let scale = dims.iter().copied().max().unwrap_or(1) as f64;
+        EdgeField { dimension, dims, scale, coef, prefix }
+    }
+
+    pub fn dimension(&self) -> usize {
+        self.dimension
+    }
+
+    /// `L`: samples per unit length.
+    pub fn scale(&self) -> f64 {
+        self.scale
+    }
+
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    fn axis(&self, x: f64, a: usize) -> Axis {
+        let n = self.dims[a] as f64;
+        let u = x * self.scale - 0.5;
+        let uc = u.clamp(-2.0, n + 1.0);
+        let i0 = uc.floor();
+        Axis { i0: i0 as isize, t: uc - i0, excess: u - uc }
+    }
+
+    #[inline]
+    fn c(&self, i: isize, j: isize, k: isize) -> f64 {
+        let cl = |x: isize, n: usize| x.clamp(0, n as isize - 1) as usize;
+        self.coef[cl(i, self.dims[0]) + self.dims[0] * (cl(j, self.dims[1]) + self.dims[1] * cl(k, self.dims[2]))]
+    }
+
+    /// Taps along axis `a` (`1` with weight 1 for the unused third axis of a 2D field).
+    fn taps(&self, x: &[f64], a: usize) -> (isize, usize, [[f64; 4]; 3]) {
+        if a >= self.dimension {
+            return (0, 1, [[1.0, 0.0, 0.0, 0.0], [0.0; 4], [0.0; 4]]);
+        }
+        let ax = self.axis(x[a], a);
+        let clamped = ax.excess != 0.0;
+        let (d1, d2) = if clamped { ([0.0; 4], [0.0; 4]) } else { (bspline::dw(ax.t), bspline::ddw(ax.t)) };
+        (ax.i0 - 1, 4, [bspline::w(ax.t), d1, d2])
+    }
+
+    /// `H`, `∇H`, `D²H` at `p` (unit-box coordinates; `D` must be the field's dimension).
+    pub fn sample<const D: usize>(&self, p: &SVector<f64, D>) -> EdgeSample<D> {
+        debug_assert_eq!(D, self.dimension);
+        let x: [f64; 3] = std::array::from_fn(|a| if a < D { p[a] } else { 0.0 });
+        let tx = self.taps(&x, 0);
+        let ty = self.taps(&x, 1);
+        let tz = self.taps(&x, 2);
+        // value, gradient (3), Hessian (xx, yy, zz, xy, xz, yz)
+        let mut acc = [0.0f64; 10];
+        for c in 0..tz.1 {
+            for b in 0..ty.1 {
+                for a in 0..tx.1 {
+                    let v = self.c(tx.0 + a as isize, ty.0 + b as isize, tz.0 + c as isize);
+                    let (wx, wy, wz) = (&tx.2, &ty.2, &tz.2);
+                    acc[0] += v * wx[0][a] * wy[0][b] * wz[0][c];
+                    acc[1] += v * wx[1][a] * wy[0][b] * wz[0][c];
+                    acc[2] += v * wx[0][a] * wy[1][b] * wz[0][c];
+                    acc[3] += v * wx[0][a] * wy[0][b] * wz[1][c];
+                    acc[4] += v * wx[2][a] * wy[0][b] * wz[0][c];
+                    acc[5] += v * wx[0][a] * wy[2][b] * wz[0][c];
+                    acc[6] += v * wx[0][a] * wy[0][b] * wz[2][c];
+                    acc[7] += v * wx[1][a] * wy[1][b] * wz[0][c];
+                    acc[8] += v * wx[1][a] * wy[0][b] * wz[1][c];
+                    acc[9] += v * wx[0][a] * wy[1][b] * wz[1][c];
+                }
+            }
+        }
+        let l = self.scale;
+        let mut grad = SVector::<f64, D>::zeros();
+        let mut hess = SMatrix::<f64, D, D>::zeros();
+        let full = [[acc[4], acc[7], acc[8]], [acc[7], acc[5], acc[9]], [acc[8], acc[9], acc[6]]];
+        for a in 0..D {
+            grad[a] = l * acc[1 + a];
+            for b in 0..D {
+                hess[(a, b)] = l * l * full[a][b];
+            }
+        }
+        EdgeSample { h: acc[0], grad, hess }
+    }
+
+    /// `H(p)` only.
+    pub fn value<const D: usize>(&self, p: &SVector<f64, D>) -> f64 {
+        let x: [f64; 3] = std::array::from_fn(|a| if a < D { p[a] } else { 0.0 });
+        let (tx, ty, tz) = (self.taps(&x, 0), self.taps(&x, 1), self.taps(&x, 2));
+        let mut s = 0.0;
+        for c in 0..tz.1 {
+            for b in 0..ty.1 {
+                let wyz = ty.2[0][b] * tz.2[0][c];
+                for a in 0..tx.1 {
+                    s += wyz * tx.2[0][a] * self.c(tx.0 + a as isize, ty.0 + b as isize, tz.0 + c as isize);
+                }
+            }
+        }
+        s
+    }
+
+    /// `Φ(p) = ∫^{p₁} H(s, p₂, p₃) ds` (an antiderivative in the first coordinate, up
+    /// to a constant that does not matter for closed boundaries).
+    pub fn antiderivative<const D: usize>(&self, p: &SVector<f64, D>) -> f64 {
+        let x: [f64; 3] = std::array::from_fn(|a| if a < D { p[a] } else { 0.0 });
+        let ax = self.axis(x[0], 0);
+        let (ty, tz) = (self.taps(&x, 1), self.taps(&x, 2));
+        let (iw, w) = (bspline::iw(ax.t), bspline::w(ax.t));
+        let width = self.dims[0] + 2 * PAD as usize;
+        let mut s = 0.0;
+        for c in 0..tz.1 {
+            for b in 0..ty.1 {
+                let cl = |x: isize, n: usize| x.clamp(0, n as isize - 1);
+                let (j, k) = (cl(ty.0 + b as isize, self.dims[1]), cl(tz.0 + c as isize, self.dims[2]));
+                let row = (j + self.dims[1] as isize * k) as usize;
+                let m = ax.i0 - 2 + PAD;
+                let mut psi = if m >= 0 { self.prefix[row * width + m as usize] } else { 0.0 };
+                let mut slope = 0.0;
+                for q in 0..4 {
+                    let v = self.c(ax.i0 - 1 + q as isize, j, k);
+                    psi += v * iw[q];
+                    slope += v * w[q];
+                }
+                s += ty.2[0][b] * tz.2[0][c] * (psi + ax.excess * slope);
+            }
+        }
+        s / self.scale
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Vector2, Vector3};
+
+    fn field(dimension: usize, dims: [usize; 3]) -> EdgeField {
+        let n = dims[0] * dims[1] * dims[2];
+        let coef = (0..n).map(|i| 1.0 + ((i * 7919) % 13) as f64 / 13.0).collect();
+        EdgeField::from_coefficients(dimension, dims, coef)
+    }
+
+    #[test]
+    fn derivatives_match_finite_differences_2d_and_3d() {
+        let f2 = field(2, [9, 7, 1]);
+        let p = Vector2::new(0.43, 0.61);
+        let s = f2.sample(&p);
+        let h = 1e-6;
+        for a in 0..2 {
+            let e = Vector2::ith(a, h);
+            let fd = (f2.value(&(p + e)) - f2.value(&(p - e))) / (2.0 * h);
+            assert!((fd - s.grad[a]).abs() < 1e-5 * s.grad.norm().max(1.0), "{fd} {}", s.grad[a]);
+            let fd2 = (f2.sample(&(p + e)).grad - f2.sample(&(p - e)).grad) / (2.0 * h);
+            for b in 0..2 {
+                assert!((fd2[b] - s.hess[(a, b)]).abs() < 1e-4 * s.hess.norm().max(1.0));
+            }
+            // dΦ/dx = H
+        }
+        let fd = (f2.antiderivative(&(p + Vector2::new(h, 0.0))) - f2.antiderivative(&(p - Vector2::new(h, 0.0))))
+            / (2.0 * h);
+        assert!((fd - s.h).abs() < 1e-6, "{fd} {}", s.h);
+        // outside the grid: the extension is continuous and Φ' = H still holds
+        let q = Vector2::new(-0.2, 1.3);
+        let fd = (f2.antiderivative(&(q + Vector2::new(h, 0.0))) - f2.antiderivative(&(q - Vector2::new(h, 0.0))))
+            / (2.0 * h);
+        assert!((fd - f2.value(&q)).abs() < 1e-6);
+
+        let f3 = field(3, [6, 5, 7]);
+        let p = Vector3::new(0.31, 0.52, 0.77);
+        let s = f3.sample(&p);
+        for a in 0..3 {
+            let e = Vector3::ith(a, h);
+            let fd = (f3.value(&(p + e)) - f3.value(&(p - e))) / (2.0 * h);
+            assert!((fd - s.grad[a]).abs() < 1e-5 * s.grad.norm().max(1.0));
+            let fd2 = (f3.sample(&(p + e)).grad - f3.sample(&(p - e)).grad) / (2.0 * h);
+            for b in 0..3 {
+                assert!((fd2[b] - s.hess[(a, b)]).abs() < 1e-4 * s.hess.norm().max(1.0));
+            }
+        }
+        let ex = Vector3::new(h, 0.0, 0.0);
+        let fd = (f3.antiderivative(&(p + ex)) - f3.antiderivative(&(p - ex))) / (2.0 * h);
+        assert!((fd - s.h).abs() < 1e-6);
+    }
+
+    #[test]
+    fn constant_image_has_no_field_and_a_step_gives_a_valley() {
+        use crate::imaging::SampleKind;
+        let g = Grid::new(2, [16, 16, 1], vec![5.0; 256], SampleKind::U8);
+        assert!(EdgeField::new(&g, 1.0).is_none());
+        let v = (0..256).map(|i| if i % 16 < 8 { 0.0 } else { 255.0 }).collect();
+        let f = EdgeField::new(&Grid::new(2, [16, 16, 1], v, SampleKind::U8), 1.0).unwrap();
+        // the valley of H is at the edge x = 8/16
+        let at = |x: f64| f.value(&Vector2::new(x, 0.5));
+        assert!(at(0.5) < 0.01 && at(0.1) > 0.9 && at(0.9) > 0.9, "{} {} {}", at(0.5), at(0.1), at(0.9));
+    }
+}

@@ -1,0 +1,65 @@
+//! A regular grid of samples in 2D or 3D.
+
+/// The sample type of the file a grid was decoded from (for reporting; the values
+/// are always `f64`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SampleKind {
+    U8,
+    U16,
+    F32,
+}
+
+/// Samples on `dims[0] × dims[1] × dims[2]` points, `x` fastest:
+/// `values[i + n_x (j + n_y k)]`. A 2D grid has `dims[2] = 1` and `dimension = 2`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grid {
+    pub dimension: usize,
+    pub dims: [usize; 3],
+    pub values: Vec<f64>,
+    pub kind: SampleKind,
+}
+
+impl Grid {
+    /// A grid from its parts; `values.len()` must equal the product of `dims`.
+    pub fn new(dimension: usize, dims: [usize; 3], values: Vec<f64>, kind: SampleKind) -> Grid {
+        assert_eq!(values.len(), dims[0] * dims[1] * dims[2], "grid size");
+        assert!(dimension == 3 || dims[2] == 1, "a 2D grid has one slice");
+        Grid { dimension, dims, values, kind }
+    }
+
+    /// `L = max(n_x, n_y, n_z)`: one unit of the unit box is `L` samples.
+    pub fn scale(&self) -> f64 {
+        self.dims.iter().copied().max().unwrap_or(1) as f64
+    }
+
+    #[inline]
+    pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
+        i + self.dims[0] * (j + self.dims[1] * k)
+    }
+
+    pub fn len(&self) -> usize {
+        self.values.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+
+    /// The extent of the grid in the unit box: `(n_x/L, n_y/L, n_z/L)` (2D: `n_z` = 0).
+    pub fn extent(&self) -> [f64; 3] {
+        let l = self.scale();
+        let z = if self.dimension == 2 { 0.0 } else { self.dims[2] as f64 / l };
+        [self.dims[0] as f64 / l, self.dims[1] as f64 / l, z]
+    }
+
+    /// Values mapped affinely onto `[0, top]` (a constant grid maps to 0). Returns
+    /// `None` for a constant grid.
+    pub fn normalized(&self, top: f64) -> Option<Grid> {
+        let (lo, hi) = self.values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        if !(hi > lo) {
+            return None;
+        }
+        let s = top / (hi - lo);
+        Some(Grid { values: self.values.iter().map(|v| (v - lo) * s).collect(), ..self.clone() })
+    }
+}

@@ -1,0 +1,38 @@
+//! Images as sampled scalar fields: decoding (PNG, JPEG, TIFF; NRRD volumes and
+//! slice stacks), Gaussian smoothing, the edge indicator `H = 1/(1 + |∇I|²)` of
+//! geodesic active contours with a C² interpolant, and rasterization of shapes into
+//! masks. Pure functions over bytes and arrays; nothing here touches files.
+//!
+//! Coordinates (DESIGN.md §3): a grid of `n_x × n_y (× n_z)` samples lives in the
+//! unit box, `L = max(n_x, n_y, n_z)`; sample `(i, j, k)` has its centre at
+//! `((i+½)/L, (j+½)/L, (k+½)/L)`. 2D images are stored with their rows flipped
+//! (`j = 0` is the bottom row of the picture), so that y points up.
+
+mod bspline;
+mod decode;
+mod edge;
+mod grid;
+mod nrrd;
+mod raster;
+mod smooth;
+
+pub use decode::{decode_image, decode_slices, decode_volume, ImageLimits};
+pub use edge::{EdgeField, EdgeSample};
+pub use grid::{Grid, SampleKind};
+pub use nrrd::{encode_nrrd_mask, parse_nrrd};
+pub use raster::{draw_overlay, rasterize_curve, rasterize_surface};
+pub use smooth::gaussian_smooth;
+
+/// A bad or unsupported input file; `input` names it (the multipart part or file).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("input `{input}`: {message}")]
+pub struct ImageError {
+    pub input: String,
+    pub message: String,
+}
+
+impl ImageError {
+    pub fn new(input: &str, message: impl Into<String>) -> Self {
+        ImageError { input: input.to_string(), message: message.into() }
+    }
+}

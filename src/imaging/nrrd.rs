@@ -1,0 +1,181 @@
+//! NRRD volumes (<http://teem.sourceforge.net/nrrd/format.html>): a text header
+//! (`NRRD000x`, `field: value` lines, a blank line) followed by the attached data.
+//! Read: `dimension: 3`, types uint8/uint16/float32 (any of their NRRD spellings),
+//! `raw` or `gzip` encoding, either endianness. Written: uint8 masks, gzip.
+
+use super::decode::ImageLimits;
+use super::grid::{Grid, SampleKind};
+use super::ImageError;
+use flate2::read::GzDecoder;
+use flate2::write::GzEncoder;
+use std::io::{Read, Write};
+
+fn sample_kind(t: &str) -> Option<SampleKind> {
+    match t {
+        "uchar" | "unsigned char" | "uint8" | "uint8_t" => Some(SampleKind::U8),
+        "ushort" | "unsigned short" | "unsigned short int" | "uint16" | "uint16_t" => Some(SampleKind::U16),
+        "float" | "float32" => Some(SampleKind::F32),
+        _ => None,
+    }
+}
+
+/// Parse an NRRD volume named `input` into a 3D grid (index order as in the file:
+/// the first axis is `x`).
+pub fn parse_nrrd(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Grid, ImageError> {
+    let fail = |m: String| ImageError::new(input, m);
+    // header: lines up to the first empty line
+    let mut pos = 0;
+    let mut fields: Vec<(String, String)> = Vec::new();
+    let mut first = true;
+    loop {
+        let Some(len) = bytes[pos..].iter().position(|&b| b == b'\n') else {
+            return Err(fail("has an NRRD header with no blank line before the data".into()));
+        };
+        let line = std::str::from_utf8(&bytes[pos..pos + len])
+            .map_err(|_| fail("has an NRRD header that is not text".into()))?
+            .trim_end_matches('\r');
+        pos += len + 1;
+        if first {
+            if !line.starts_with("NRRD000") {
+                return Err(fail(format!("has a bad NRRD magic line {line:?}")));
+            }
+            first = false;
+            continue;
+        }
+        if line.is_empty() {
+            break;
+        }
+        if line.starts_with('#') {
+            continue;
+        }
+        if let Some((k, v)) = line.split_once(": ") {
+            fields.push((k.trim().to_ascii_lowercase(), v.trim().to_string()));
+        } else if line.contains(":=") {
+            continue; // key/value comments
+        } else {
+            return Err(fail(format!("has a malformed NRRD header line {line:?}")));
+        }
+    }
+    let get = |k: &str| fields.iter().find(|(f, _)| f == k).map(|(_, v)| v.as_str());
+    if get("data file").or(get("datafile")).is_some() {
+        return Err(fail("refers to a detached data file; only attached data is supported".into()));
+    }
+    let ty = get("type").ok_or_else(|| fail("has no NRRD `type` field".into()))?;
+    let kind = sample_kind(ty)
+        .ok_or_else(|| fail(format!("has NRRD type `{ty}`; supported are uint8, uint16 and float32")))?;
+    let dim: usize = get("dimension")
+        .ok_or_else(|| fail("has no NRRD `dimension` field".into()))?
+        .parse()
+        .map_err(|_| fail("has a non-numeric NRRD `dimension`".into()))?;
+    if dim != 3 {
+        return Err(fail(format!("has NRRD dimension {dim}; a volume needs 3")));
+    }
+    let sizes: Vec<usize> = get("sizes")
+        .ok_or_else(|| fail("has no NRRD `sizes` field".into()))?
+        .split_whitespace()
+        .map(|s| s.parse().map_err(|_| fail(format!("has a bad NRRD size {s:?}"))))
+        .collect::<Result<_, _>>()?;
+    if sizes.len() != 3 {
+        return Err(fail(format!("has {} NRRD sizes for dimension 3", sizes.len())));
+    }
+    limits.check(input, &sizes)?;
+    let n = sizes[0] * sizes[1] * sizes[2];
+    let width = match kind {
+        SampleKind::U8 => 1,
+        SampleKind::U16 => 2,
+        SampleKind::F32 => 4,
+    };
+    let big = match get("endian") {
+        None | Some("little") => false,
+        Some("big") => true,
+        Some(e) => return Err(fail(format!("has an unknown NRRD endian `{e}`"))),
+    };
+    let payload = &bytes[pos..];
+    let data: Vec<u8> = match get("encoding") {
+        Some("raw") => payload.to_vec(),
+        Some("gzip" | "gz") => {
+            let mut out = Vec::with_capacity(n * width);
+            GzDecoder::new(payload)
+                .take((n * width) as u64 + 1)
+                .read_to_end(&mut out)
+                .map_err(|e| fail(format!("has corrupt gzip data: {e}")))?;
+            out
+        }
+        Some(e) => return Err(fail(format!("has NRRD encoding `{e}`; supported are raw and gzip"))),
+        None => return Err(fail("has no NRRD `encoding` field".into())),
+    };
+    if data.len() < n * width {
+        return Err(fail(format!("has {} bytes of data, {} expected for {sizes:?} {ty}", data.len(), n * width)));
+    }
+    let values: Vec<f64> = data[..n * width]
+        .chunks_exact(width)
+        .map(|c| match kind {
+            SampleKind::U8 => c[0] as f64,
+            SampleKind::U16 => {
+                let a = [c[0], c[1]];
+                (if big { u16::from_be_bytes(a) } else { u16::from_le_bytes(a) }) as f64
+            }
+            SampleKind::F32 => {
+                let a = [c[0], c[1], c[2], c[3]];
+                (if big { f32::from_be_bytes(a) } else { f32::from_le_bytes(a) }) as f64
+            }
+        })
+        .collect();
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err(fail(format!("voxel {i} is not a finite number")));
+    }
+    Ok(Grid::new(3, [sizes[0], sizes[1], sizes[2]], values, kind))
+}
+
+/// A 0/1 uint8 mask of `dims` as a gzip NRRD file.
+pub fn encode_nrrd_mask(dims: [usize; 3], mask: &[bool]) -> Vec<u8> {
+    let mut out = format!(
+        "NRRD0004\n# shapeflow segmentation mask\ntype: uint8\ndimension: 3\nsizes: {} {} {}\nencoding: gzip\n\n",
+        dims[0], dims[1], dims[2]
+    )
+    .into_bytes();
+    let mut gz = GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    let raw: Vec<u8> = mask.iter().map(|&m| m as u8).collect();
+    gz.write_all(&raw).expect("writing to memory");
+    out.extend(gz.finish().expect("writing to memory"));
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn header(ty: &str, enc: &str) -> Vec<u8> {
+        format!("NRRD0004\n# c\ntype: {ty}\ndimension: 3\nsizes: 4 5 6\nendian: little\nencoding: {enc}\n\n")
+            .into_bytes()
+    }
+
+    #[test]
+    fn raw_u16_and_gzip_mask_roundtrip() {
+        let mut b = header("unsigned short", "raw");
+        for i in 0..120u16 {
+            b.extend(i.to_le_bytes());
+        }
+        let g = parse_nrrd("v", &b, &ImageLimits::default()).unwrap();
+        assert_eq!(g.dims, [4, 5, 6]);
+        assert_eq!(g.values[119], 119.0);
+        let mask: Vec<bool> = (0..120).map(|i| i % 3 == 0).collect();
+        let m = parse_nrrd("m", &encode_nrrd_mask([4, 5, 6], &mask), &ImageLimits::default()).unwrap();
+        assert_eq!(m.values.iter().filter(|&&v| v == 1.0).count(), 40);
+        assert_eq!(m.kind, SampleKind::U8);
+    }
+
+    #[test]
+    fn errors_name_the_input() {
+        let mut b = header("float", "raw");
+        b.extend([0u8; 10]);
+        let e = parse_nrrd("vol", &b, &ImageLimits::default()).unwrap_err();
+        assert_eq!(e.input, "vol");
+        assert!(e.message.contains("480 expected"), "{e}");
+        let e = parse_nrrd("vol", &header("double", "raw"), &ImageLimits::default()).unwrap_err();
+        assert!(e.message.contains("double"), "{e}");
+        let mut b = header("uint8", "gzip");
+        b.extend([1, 2, 3]);
+        assert!(parse_nrrd("vol", &b, &ImageLimits::default()).unwrap_err().message.contains("gzip"));
+    }
+}
