@@ -107,3 +107,58 @@ fn uploaded_mesh_runs_through_input() {
     assert_eq!(shape["dimension"], 3);
     assert_eq!(shape["triangles"].as_array().unwrap().len(), 12);
 }
+
+/// Segmentation from the command line: mask.png, overlay.png and pixel coordinates.
+#[test]
+fn run_segments_an_image_and_writes_mask_and_overlay() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = shapeflow()
+        .args(["run", "examples/segment_star.json", "--input", "image=examples/data/star.png", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout} {}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("stopped: converged"), "{stdout}");
+    let mask = image::open(dir.path().join("mask.png")).unwrap().to_luma8();
+    assert_eq!(mask.dimensions(), (128, 128));
+    // the star r = 34 (1 + 0.3 cos 5θ) has area π 34² (1 + 0.3²/2)
+    let area = mask.pixels().filter(|p| p.0[0] == 255).count() as f64;
+    let exact = std::f64::consts::PI * 34.0 * 34.0 * 1.045;
+    assert!((area / exact - 1.0).abs() < 0.03, "{area} {exact}");
+    // the mask is upright: the star's tip at angle 0 points right (column 102, row 64)
+    assert_eq!(mask.get_pixel(100, 64).0[0], 255);
+    assert_eq!(mask.get_pixel(64, 100).0[0], 0);
+    let overlay = image::open(dir.path().join("overlay.png")).unwrap().to_rgb8();
+    assert_eq!(overlay.dimensions(), (128, 128));
+    assert!(overlay.pixels().filter(|p| p.0 == [230, 30, 30]).count() > 200);
+    let shape: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("shape.json")).unwrap()).unwrap();
+    assert_eq!(shape["image"]["width"], 128);
+    let c = &shape["components"][0];
+    let (v, p) = (&c["vertices"][0], &c["pixels"][0]);
+    assert!((p[0].as_f64().unwrap() - (v[0].as_f64().unwrap() * 128.0 - 0.5)).abs() < 1e-9);
+    assert!((p[1].as_f64().unwrap() - (127.5 - v[1].as_f64().unwrap() * 128.0)).abs() < 1e-9);
+}
+
+/// A 3D volume from NRRD: mask.nrrd of the two balls.
+#[test]
+fn run_segments_a_volume_and_writes_an_nrrd_mask() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = shapeflow()
+        .args(["run", "examples/segment_balls.json", "--input", "volume=examples/data/balls.nrrd", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let bytes = std::fs::read(dir.path().join("mask.nrrd")).unwrap();
+    let grid = shapeflow::imaging::parse_nrrd("mask", &bytes, &Default::default()).unwrap();
+    assert_eq!(grid.dims, [48, 48, 48]);
+    let inside = grid.values.iter().filter(|&&v| v == 1.0).count() as f64;
+    // two balls of radius 8.5 whose centres are 15 apart: 2 V - lens
+    let (r, d) = (8.5f64, 15.0f64);
+    let lens = std::f64::consts::PI * (2.0 * r - d).powi(2) * (d * d + 4.0 * d * r) / (12.0 * d);
+    let exact = 2.0 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) - lens;
+    // (the balloon force keeps the surface about 0.4 px inside on this small volume)
+    assert!((inside / exact - 1.0).abs() < 0.15, "{inside} {exact}");
+}

@@ -110,48 +110,63 @@ impl EdgeField {
         Axis { i0: i0 as isize, t: uc - i0, excess: u - uc }
     }
 
+    /// Taps along axis `a`: clamped sample indices, weights `[w, w', w'']` and the
+    /// number of taps (`1` with weight 1 for the unused third axis of a 2D field).
     #[inline]
-    fn c(&self, i: isize, j: isize, k: isize) -> f64 {
-        let cl = |x: isize, n: usize| x.clamp(0, n as isize - 1) as usize;
-        self.coef[cl(i, self.dims[0]) + self.dims[0] * (cl(j, self.dims[1]) + self.dims[1] * cl(k, self.dims[2]))]
-    }
-
-    /// Taps along axis `a` (`1` with weight 1 for the unused third axis of a 2D field).
-    fn taps(&self, x: &[f64], a: usize) -> (isize, usize, [[f64; 4]; 3]) {
+    fn taps(&self, x: &[f64; 3], a: usize, derivatives: bool) -> Taps {
         if a >= self.dimension {
-            return (0, 1, [[1.0, 0.0, 0.0, 0.0], [0.0; 4], [0.0; 4]]);
+            return Taps { index: [0; 4], w: [[1.0, 0.0, 0.0, 0.0], [0.0; 4], [0.0; 4]], count: 1, axis: None };
         }
         let ax = self.axis(x[a], a);
+        let n = self.dims[a] as isize;
+        let index = std::array::from_fn(|q| (ax.i0 - 1 + q as isize).clamp(0, n - 1) as usize);
         let clamped = ax.excess != 0.0;
-        let (d1, d2) = if clamped { ([0.0; 4], [0.0; 4]) } else { (bspline::dw(ax.t), bspline::ddw(ax.t)) };
-        (ax.i0 - 1, 4, [bspline::w(ax.t), d1, d2])
+        let w = if !derivatives {
+            [bspline::w(ax.t), [0.0; 4], [0.0; 4]]
+        } else if clamped {
+            [bspline::w(ax.t), [0.0; 4], [0.0; 4]]
+        } else {
+            [bspline::w(ax.t), bspline::dw(ax.t), bspline::ddw(ax.t)]
+        };
+        Taps { index, w, count: 4, axis: Some(ax) }
+    }
+
+    #[inline]
+    fn strides(&self) -> (usize, usize) {
+        (self.dims[0], self.dims[0] * self.dims[1])
     }
 
     /// `H`, `∇H`, `D²H` at `p` (unit-box coordinates; `D` must be the field's dimension).
     pub fn sample<const D: usize>(&self, p: &SVector<f64, D>) -> EdgeSample<D> {
         debug_assert_eq!(D, self.dimension);
         let x: [f64; 3] = std::array::from_fn(|a| if a < D { p[a] } else { 0.0 });
-        let tx = self.taps(&x, 0);
-        let ty = self.taps(&x, 1);
-        let tz = self.taps(&x, 2);
+        let (tx, ty, tz) = (self.taps(&x, 0, true), self.taps(&x, 1, true), self.taps(&x, 2, true));
+        let (sy, sz) = self.strides();
         // value, gradient (3), Hessian (xx, yy, zz, xy, xz, yz)
         let mut acc = [0.0f64; 10];
-        for c in 0..tz.1 {
-            for b in 0..ty.1 {
-                for a in 0..tx.1 {
-                    let v = self.c(tx.0 + a as isize, ty.0 + b as isize, tz.0 + c as isize);
-                    let (wx, wy, wz) = (&tx.2, &ty.2, &tz.2);
-                    acc[0] += v * wx[0][a] * wy[0][b] * wz[0][c];
-                    acc[1] += v * wx[1][a] * wy[0][b] * wz[0][c];
-                    acc[2] += v * wx[0][a] * wy[1][b] * wz[0][c];
-                    acc[3] += v * wx[0][a] * wy[0][b] * wz[1][c];
-                    acc[4] += v * wx[2][a] * wy[0][b] * wz[0][c];
-                    acc[5] += v * wx[0][a] * wy[2][b] * wz[0][c];
-                    acc[6] += v * wx[0][a] * wy[0][b] * wz[2][c];
-                    acc[7] += v * wx[1][a] * wy[1][b] * wz[0][c];
-                    acc[8] += v * wx[1][a] * wy[0][b] * wz[1][c];
-                    acc[9] += v * wx[0][a] * wy[1][b] * wz[1][c];
+        for c in 0..tz.count {
+            for b in 0..ty.count {
+                let base = sy * ty.index[b] + sz * tz.index[c];
+                let (y0, y1, y2) = (ty.w[0][b], ty.w[1][b], ty.w[2][b]);
+                let (z0, z1, z2) = (tz.w[0][c], tz.w[1][c], tz.w[2][c]);
+                // sums over x of v w, v w', v w''
+                let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
+                for a in 0..4 {
+                    let v = self.coef[base + tx.index[a]];
+                    s0 += v * tx.w[0][a];
+                    s1 += v * tx.w[1][a];
+                    s2 += v * tx.w[2][a];
                 }
+                acc[0] += s0 * y0 * z0;
+                acc[1] += s1 * y0 * z0;
+                acc[2] += s0 * y1 * z0;
+                acc[3] += s0 * y0 * z1;
+                acc[4] += s2 * y0 * z0;
+                acc[5] += s0 * y2 * z0;
+                acc[6] += s0 * y0 * z2;
+                acc[7] += s1 * y1 * z0;
+                acc[8] += s1 * y0 * z1;
+                acc[9] += s0 * y1 * z1;
             }
         }
         let l = self.scale;
@@ -167,49 +182,52 @@ impl EdgeField {
         EdgeSample { h: acc[0], grad, hess }
     }
 
-    /// `H(p)` only.
-    pub fn value<const D: usize>(&self, p: &SVector<f64, D>) -> f64 {
+    /// `H(p)` and `Φ(p) = ∫^{p₁} H(s, p₂, p₃) ds` (an antiderivative in the first
+    /// coordinate, up to a constant that does not matter for closed boundaries).
+    pub fn value_and_antiderivative<const D: usize>(&self, p: &SVector<f64, D>) -> (f64, f64) {
         let x: [f64; 3] = std::array::from_fn(|a| if a < D { p[a] } else { 0.0 });
-        let (tx, ty, tz) = (self.taps(&x, 0), self.taps(&x, 1), self.taps(&x, 2));
-        let mut s = 0.0;
-        for c in 0..tz.1 {
-            for b in 0..ty.1 {
-                let wyz = ty.2[0][b] * tz.2[0][c];
-                for a in 0..tx.1 {
-                    s += wyz * tx.2[0][a] * self.c(tx.0 + a as isize, ty.0 + b as isize, tz.0 + c as isize);
+        let (tx, ty, tz) = (self.taps(&x, 0, false), self.taps(&x, 1, false), self.taps(&x, 2, false));
+        let ax = tx.axis.expect("x is always an axis");
+        let iw = bspline::iw(ax.t);
+        let (sy, sz) = self.strides();
+        let width = self.dims[0] + 2 * PAD as usize;
+        let m = (ax.i0 - 2 + PAD) as usize;
+        let (mut h, mut phi) = (0.0, 0.0);
+        for c in 0..tz.count {
+            for b in 0..ty.count {
+                let row = ty.index[b] + self.dims[1] * tz.index[c];
+                let base = sy * ty.index[b] + sz * tz.index[c];
+                let (mut s0, mut si) = (0.0, self.prefix[row * width + m]);
+                for a in 0..4 {
+                    let v = self.coef[base + tx.index[a]];
+                    s0 += v * tx.w[0][a];
+                    si += v * iw[a];
                 }
+                let wyz = ty.w[0][b] * tz.w[0][c];
+                h += wyz * s0;
+                phi += wyz * (si + ax.excess * s0);
             }
         }
-        s
+        (h, phi / self.scale)
     }
 
-    /// `Φ(p) = ∫^{p₁} H(s, p₂, p₃) ds` (an antiderivative in the first coordinate, up
-    /// to a constant that does not matter for closed boundaries).
-    pub fn antiderivative<const D: usize>(&self, p: &SVector<f64, D>) -> f64 {
-        let x: [f64; 3] = std::array::from_fn(|a| if a < D { p[a] } else { 0.0 });
-        let ax = self.axis(x[0], 0);
-        let (ty, tz) = (self.taps(&x, 1), self.taps(&x, 2));
-        let (iw, w) = (bspline::iw(ax.t), bspline::w(ax.t));
-        let width = self.dims[0] + 2 * PAD as usize;
-        let mut s = 0.0;
-        for c in 0..tz.1 {
-            for b in 0..ty.1 {
-                let cl = |x: isize, n: usize| x.clamp(0, n as isize - 1);
-                let (j, k) = (cl(ty.0 + b as isize, self.dims[1]), cl(tz.0 + c as isize, self.dims[2]));
-                let row = (j + self.dims[1] as isize * k) as usize;
-                let m = ax.i0 - 2 + PAD;
-                let mut psi = if m >= 0 { self.prefix[row * width + m as usize] } else { 0.0 };
-                let mut slope = 0.0;
-                for q in 0..4 {
-                    let v = self.c(ax.i0 - 1 + q as isize, j, k);
-                    psi += v * iw[q];
-                    slope += v * w[q];
-                }
-                s += ty.2[0][b] * tz.2[0][c] * (psi + ax.excess * slope);
-            }
-        }
-        s / self.scale
+    /// `H(p)` only.
+    pub fn value<const D: usize>(&self, p: &SVector<f64, D>) -> f64 {
+        self.value_and_antiderivative(p).0
     }
+
+    /// `Φ(p)` only (see [`Self::value_and_antiderivative`]).
+    pub fn antiderivative<const D: usize>(&self, p: &SVector<f64, D>) -> f64 {
+        self.value_and_antiderivative(p).1
+    }
+}
+
+/// The taps of one axis of an evaluation.
+struct Taps {
+    index: [usize; 4],
+    w: [[f64; 4]; 3],
+    count: usize,
+    axis: Option<Axis>,
 }
 
 #[cfg(test)]

@@ -110,13 +110,14 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             ProblemKind::SurfaceDiffusion(SurfaceDiffusion { gamma: *gamma })
         }
         ProblemSpec::Segmentation { image: source, sigma, lambda, epsilon } => {
-            positive("problem.epsilon", *epsilon)?;
             let grid = load_image(source, inputs)?;
+            let epsilon = &epsilon.unwrap_or(super::spec::default_beta_epsilon(grid.scale()));
+            positive("problem.epsilon", *epsilon)?;
             let sigma = &sigma.unwrap_or(super::spec::default_sigma(grid.dimension));
             if !(sigma.is_finite() && *sigma >= 0.0 && *sigma <= 64.0) {
                 return Err(SpecError::new("problem.sigma", format!("must be between 0 and 64 pixels, got {sigma}")));
             }
-            let lambda = &lambda.unwrap_or(super::spec::default_lambda(grid.dimension));
+            let lambda = &lambda.unwrap_or(super::spec::default_lambda(grid.dimension, grid.scale()));
             if !(lambda.is_finite() && *lambda >= 0.0) {
                 return Err(SpecError::new("problem.lambda", format!("must be a nonnegative number, got {lambda}")));
             }
@@ -195,7 +196,10 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     let checkpoint_every = in_range("output.checkpoint_every", spec.output.checkpoint_every, 1, usize::MAX)?;
     let (curve_manager, surface_manager) = match &mesh {
         AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
-        AnyMesh::Surface(m) => (None, surface_manager(&spec.mesh, m)?),
+        AnyMesh::Surface(m) => {
+            let pinch_off = spec.mesh.pinch_off.unwrap_or(!matches!(problem, ProblemKind::Segmentation(_)));
+            (None, surface_manager(&spec.mesh, m, pinch_off)?)
+        }
     };
     Ok(PreparedJob { spec, mesh, problem, settings, checkpoint_every, curve_manager, surface_manager, image })
 }
@@ -241,14 +245,16 @@ fn load_image(source: &ImageSource, inputs: &HashMap<String, Vec<u8>>) -> Result
 }
 
 /// The default initial shape of segmentation: a circle (sphere) inscribed in the
-/// image box, two pixels inside it, with vertices about two pixels apart (an
-/// icosphere with edges of about three pixels).
+/// image box, two pixels inside it, with vertices `max(4, L/128)` pixels apart (an
+/// icosphere with edges of about three pixels); adaptivity refines it where the
+/// contour bends.
 fn inscribed(grid: &Grid) -> Result<AnyMesh, SpecError> {
     let ext = grid.extent();
     let l = grid.scale();
     if grid.dimension == 2 {
         let r = 0.5 * ext[0].min(ext[1]) - 2.0 / l;
-        let n = ((std::f64::consts::TAU * r * l / 2.0).round() as usize).clamp(32, 4096);
+        let spacing = (l / 128.0).max(4.0);
+        let n = ((std::f64::consts::TAU * r * l / spacing).round() as usize).clamp(32, 4096);
         curve("initial", geometry::circle([0.5 * ext[0], 0.5 * ext[1]], r, n))
     } else {
         let r = 0.5 * ext[0].min(ext[1]).min(ext[2]) - 2.0 / l;
@@ -268,15 +274,19 @@ fn sizes(m: &super::spec::MeshSpec, defaults: (f64, f64, f64)) -> Result<(f64, f
     Ok((epsilon, h_min, h_max))
 }
 
-fn surface_manager(m: &super::spec::MeshSpec, initial: &SurfaceMesh) -> Result<Option<SurfaceManager>, SpecError> {
-    if !(m.regularize || m.adapt || m.pinch_off) {
+fn surface_manager(
+    m: &super::spec::MeshSpec,
+    initial: &SurfaceMesh,
+    pinch_off: bool,
+) -> Result<Option<SurfaceManager>, SpecError> {
+    if !(m.regularize || m.adapt || pinch_off) {
         return Ok(None);
     }
     let (mut params, _) = SurfaceManager::defaults_for(initial);
     (params.epsilon, params.h_min, params.h_max) = sizes(m, (params.epsilon, params.h_min, params.h_max))?;
     params.max_angle_deg = in_range("mesh.max_angle", m.max_angle, 90.0, 179.0)?;
     let sweeps = in_range("mesh.sweeps", m.sweeps.unwrap_or(3), 0, 1000)?;
-    let pinch_curvature = m.pinch_off.then_some(2.0 / params.h_min);
+    let pinch_curvature = pinch_off.then_some(2.0 / params.h_min);
     Ok(Some(SurfaceManager { regularize: m.regularize, sweeps, adapt: m.adapt, params, pinch_curvature }))
 }
 

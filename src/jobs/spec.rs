@@ -62,13 +62,13 @@ pub enum ProblemSpec {
         /// Gaussian smoothing in pixels; default 1.5 for 2D images, 1 for volumes.
         #[serde(default)]
         sigma: Option<f64>,
-        /// Weight of the region term (balloon force); default 30 for 2D images, 10
-        /// for volumes (see `default_lambda`).
+        /// Weight of the region term (balloon force); default scales with the
+        /// image size (see [`default_lambda`]).
         #[serde(default)]
         lambda: Option<f64>,
-        /// Threshold ε of the Newton weight β (paper §4.2.1).
-        #[serde(default = "default_beta_epsilon")]
-        epsilon: f64,
+        /// Threshold ε of the Newton weight β (paper §4.2.1); default `0.1 L²`.
+        #[serde(default)]
+        epsilon: Option<f64>,
     },
 }
 
@@ -109,20 +109,24 @@ pub fn default_sigma(d: usize) -> f64 {
         1.0
     }
 }
-/// Default `problem.lambda` of segmentation in dimension `d`. The balloon force
-/// shifts the contour inwards by about `(λ + κ) s² / 2L` pixels (`s²` the variance of
-/// the edge profile, `L` the image size), and `κ` of a surface is twice that of a
-/// curve of the same radius: volumes get the smaller default.
-pub fn default_lambda(d: usize) -> f64 {
+/// Default `problem.lambda` of segmentation for an image of `L` samples along its
+/// longest side, in dimension `d`: `0.3 L` (2D) and `0.15 L` (3D). The paper's
+/// λ = 30 on 100×100 images is 0.3 per pixel; keeping λ/L fixed makes the balance
+/// of balloon force, edge attraction and pixel noise the same at every resolution.
+/// The balloon force shifts the contour inwards by about `(λ + κ) s² / 2L` pixels
+/// (`s²` the variance of the edge profile), and `κ` of a surface is twice that of a
+/// curve of the same radius: volumes get the smaller factor.
+pub fn default_lambda(d: usize, l: f64) -> f64 {
     if d == 2 {
-        30.0
+        0.3 * l
     } else {
-        10.0
+        0.15 * l
     }
 }
-/// Default `problem.epsilon` of segmentation.
-pub fn default_beta_epsilon() -> f64 {
-    1e3
+/// Default `problem.epsilon` of segmentation: `0.1 L²`, the paper's ε = 0.1 per
+/// squared pixel (1e3 on its 100×100 images in the unit box).
+pub fn default_beta_epsilon(l: f64) -> f64 {
+    0.1 * l * l
 }
 
 fn origin2() -> [f64; 2] {
@@ -255,8 +259,9 @@ pub struct MeshSpec {
     pub min_area: Option<f64>,
     /// Angle-width control (surfaces): split edges opposite wider angles (degrees).
     pub max_angle: f64,
-    /// Surfaces: stop with `pinch_off` when a neck radius falls below `h_min/2`.
-    pub pinch_off: bool,
+    /// Surfaces: stop with `pinch_off` when a neck radius falls below `h_min/2`
+    /// (default on, except for segmentation, whose creases are not necks).
+    pub pinch_off: Option<bool>,
 }
 
 impl Default for MeshSpec {
@@ -271,7 +276,7 @@ impl Default for MeshSpec {
             h_max: None,
             min_area: None,
             max_angle: 120.0,
-            pinch_off: true,
+            pinch_off: None,
         }
     }
 }

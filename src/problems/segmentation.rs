@@ -61,8 +61,9 @@ impl Segmentation {
             for s in 0..m {
                 for g in GAUSS2 {
                     let x = p[0] + e * ((s as f64 + g) / m as f64);
-                    sh += f.value(&x);
-                    sphi += f.antiderivative(&x);
+                    let (h, phi) = f.value_and_antiderivative(&x);
+                    sh += h;
+                    sphi += phi;
                 }
             }
             let n = (2 * m) as f64;
@@ -72,7 +73,8 @@ impl Segmentation {
             let (u3, v3) = (nalgebra::Vector3::new(u[0], u[1], u[2]), nalgebra::Vector3::new(v[0], v[1], v[2]));
             let area_vec = u3.cross(&v3) * 0.5;
             let hmax = u.norm().max(v.norm()).max((p[2] - p[1]).norm());
-            let m = (hmax * l).ceil().clamp(1.0, 256.0) as usize;
+            // sub-triangles of about two pixels (the spline of H is smooth on that scale)
+            let m = (0.5 * hmax * l).ceil().clamp(1.0, 256.0) as usize;
             let step = 1.0 / m as f64;
             let (mut sh, mut sphi, mut count) = (0.0, 0.0, 0usize);
             // the m² sub-triangles of the barycentric lattice, 3-point rule on each
@@ -85,8 +87,9 @@ impl Segmentation {
                     let s = wa * a.0 + wb * b.0 + wc * c.0;
                     let t = wa * a.1 + wb * b.1 + wc * c.1;
                     let x = p[0] + u * s + v * t;
-                    sh += f.value(&x);
-                    sphi += f.antiderivative(&x);
+                    let (h, phi) = f.value_and_antiderivative(&x);
+                    sh += h;
+                    sphi += phi;
                     count += 1;
                 }
             };
