@@ -236,24 +236,11 @@ impl<'p, const D: usize> Flow<'p, D> {
         }
     }
 
-    /// Take one step (with its retries), or report why the run is over.
-    pub fn step(&mut self) -> Result<StepReport, FlowError> {
+    /// Assemble on `Γ_n`: `A X`, the discrete curvature, the shape gradient and the
+    /// weights of the scalar product.
+    fn linearize(&mut self) -> Result<Linearization<D>, FlowError> {
         let s = &self.settings;
-        let mut report = StepReport { stop: None, accepted: false, backtracks: 0, reductions: 0 };
-        if self.iteration >= s.max_iterations {
-            report.stop = Some(StopReason::MaxIterations);
-            return Ok(report);
-        }
-        let mut tau = s.tau.min(2.0 * self.tau);
-        if let Some(end) = s.end_time {
-            let left = end - self.time;
-            if left <= 1e-12 * end.abs().max(1.0) {
-                report.stop = Some(StopReason::EndTime);
-                return Ok(report);
-            }
-            tau = tau.min(left);
-        }
-        self.matrices.assemble_into(&self.mesh, &self.pattern, self.settings.solver == SolverKind::Consistent);
+        self.matrices.assemble_into(&self.mesh, &self.pattern, s.solver == SolverKind::Consistent);
         let matrices = &self.matrices;
         let ax = matrices.stiffness_times_positions(&self.mesh, &self.pattern);
         let curvature: Vec<f64> = (0..self.mesh.num_vertices())
@@ -283,6 +270,49 @@ impl<'p, const D: usize> Flow<'p, D> {
                 None => ProductWeights::H1 { alpha: Weight::Constant(s.alpha), beta: Weight::Constant(s.beta) },
             },
         };
+        Ok(Linearization { ax, curvature, grad, product })
+    }
+
+    /// Per-vertex fields of the current state for output: the discrete curvature
+    /// `κ_i` and the normal velocity `V_i` of the next step with the last `τ`
+    /// (nothing moves).
+    pub fn vertex_fields(&mut self) -> Result<(Vec<f64>, Vec<f64>), FlowError> {
+        let lin = self.linearize()?;
+        let sys = LinearSystem {
+            mesh: &self.mesh,
+            pattern: &self.pattern,
+            matrices: &self.matrices,
+            ax: &lin.ax,
+            g: &lin.grad.g,
+            f: &lin.grad.f,
+            product: &lin.product,
+            tau: self.tau,
+        };
+        let vel = self.solver.velocity(&sys)?;
+        Ok((lin.curvature, vel.normal))
+    }
+
+    /// Take one step (with its retries), or report why the run is over.
+    pub fn step(&mut self) -> Result<StepReport, FlowError> {
+        let s = &self.settings;
+        let mut report = StepReport { stop: None, accepted: false, backtracks: 0, reductions: 0 };
+        if self.iteration >= s.max_iterations {
+            report.stop = Some(StopReason::MaxIterations);
+            return Ok(report);
+        }
+        let mut tau = s.tau.min(2.0 * self.tau);
+        if let Some(end) = s.end_time {
+            let left = end - self.time;
+            if left <= 1e-12 * end.abs().max(1.0) {
+                report.stop = Some(StopReason::EndTime);
+                return Ok(report);
+            }
+            tau = tau.min(left);
+        }
+        let lin = self.linearize()?;
+        let s = &self.settings;
+        let matrices = &self.matrices;
+        let (ax, grad, product) = (&lin.ax, &lin.grad, &lin.product);
         loop {
             if tau < s.tau_min {
                 report.stop = Some(StopReason::TauMin);
@@ -292,10 +322,10 @@ impl<'p, const D: usize> Flow<'p, D> {
                 mesh: &self.mesh,
                 pattern: &self.pattern,
                 matrices,
-                ax: &ax,
+                ax,
                 g: &grad.g,
                 f: &grad.f,
-                product: &product,
+                product,
                 tau,
             };
             let vel = self.solver.velocity(&sys)?;
@@ -422,6 +452,14 @@ fn relative_motion<const D: usize>(mesh: &Mesh<D>, v: &[Point<D>]) -> f64 {
         }
     }
     worst
+}
+
+/// What a step needs from `Γ_n`.
+struct Linearization<const D: usize> {
+    ax: Vec<Point<D>>,
+    curvature: Vec<f64>,
+    grad: super::problem::ShapeGradient,
+    product: ProductWeights,
 }
 
 /// First element that degenerated or flipped between `old` and `new`.
