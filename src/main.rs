@@ -5,7 +5,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use shapeflow::export::{energy_csv, energy_svg, mask_nrrd, mask_png, overlay_png, shape_json};
 use shapeflow::flow::{Checkpoint, Progress};
-use shapeflow::jobs::{parse_spec, prepare, run_prepared, RunEvents};
+use shapeflow::jobs::{parse_spec, prepare, run_prepared, state_glb, states_glb, RunEvents};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -123,6 +123,7 @@ async fn shutdown_signal() {
 struct Reporter {
     bar: ProgressBar,
     history: Vec<Progress>,
+    checkpoints: Vec<Checkpoint>,
     end_time: Option<f64>,
 }
 
@@ -134,6 +135,9 @@ impl RunEvents for Reporter {
             None => self.bar.set_position(p.iteration as u64),
         }
         self.bar.set_message(format!("J={:.6e} τ={:.2e} t={:.4e} n={}", p.energy, p.tau, p.time, p.vertices));
+    }
+    fn checkpoint(&mut self, c: &Checkpoint) {
+        self.checkpoints.push(c.clone());
     }
 }
 
@@ -160,7 +164,7 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
     let len = if s.end_time.is_some() { 1000 } else { s.max_iterations as u64 };
     let bar = ProgressBar::new(len);
     bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} {msg} [{elapsed}]").expect("template"));
-    let mut rep = Reporter { bar, history: Vec::new(), end_time: s.end_time };
+    let mut rep = Reporter { bar, history: Vec::new(), checkpoints: Vec::new(), end_time: s.end_time };
     let cancel = AtomicBool::new(false);
     let result = run_prepared(&job, checkpoint.as_ref(), &cancel, &mut rep);
     rep.bar.finish_and_clear();
@@ -189,12 +193,17 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
     write("energy.csv", energy_csv(&rep.history))?;
     write("energy.svg", energy_svg(&rep.history, &spec_path.display().to_string()))?;
     write("checkpoint.json", serde_json::to_string(&last)?)?;
-    let mut written = vec!["shape.json", "energy.csv", "energy.svg", "checkpoint.json"];
+    let mut written = vec!["shape.json", "energy.csv", "energy.svg", "checkpoint.json", "shape.glb"];
+    let write_bytes = |name: &str, data: Vec<u8>| -> Result<()> {
+        let p = out.join(name);
+        std::fs::write(&p, data).with_context(|| format!("cannot write {}", p.display()))
+    };
+    write_bytes("shape.glb", state_glb(&job, &last))?;
+    if let Some(glb) = states_glb(&job, &rep.checkpoints) {
+        write_bytes("evolution.glb", glb)?;
+        written.push("evolution.glb");
+    }
     if let Some(img) = image {
-        let write_bytes = |name: &str, data: Vec<u8>| -> Result<()> {
-            let p = out.join(name);
-            std::fs::write(&p, data).with_context(|| format!("cannot write {}", p.display()))
-        };
         if img.dimension == 2 {
             write_bytes("mask.png", mask_png(img, &last.mesh))?;
             write_bytes("overlay.png", overlay_png(img, &last.mesh))?;

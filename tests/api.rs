@@ -77,6 +77,34 @@ fn http(
     (status, head.to_string(), body)
 }
 
+/// GET `path` as bytes (for binary results; the server sends Content-Length).
+fn download(addr: SocketAddr, path: &str) -> (u16, String, Vec<u8>) {
+    let mut s = TcpStream::connect(addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
+    let req = format!("GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nContent-Length: 0\r\n\r\n");
+    s.write_all(req.as_bytes()).unwrap();
+    let mut out = Vec::new();
+    s.read_to_end(&mut out).unwrap();
+    let split = out.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+    let head = String::from_utf8_lossy(&out[..split]).to_string();
+    let status = head.split_whitespace().nth(1).unwrap().parse().unwrap();
+    (status, head, out[split + 4..].to_vec())
+}
+
+/// The Khronos glTF-Validator (installed by `npm ci`) on `files`: no errors, no warnings.
+fn validate_gltf(files: &[std::path::PathBuf]) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    assert!(root.join("node_modules/gltf-validator").exists(), "the glTF validator is missing: run `npm ci` first");
+    let out = std::process::Command::new("node")
+        .arg(root.join("scripts/validate_gltf.mjs"))
+        .args(files)
+        .output()
+        .expect("node");
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "validator: {report} {}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(report.lines().count(), files.len(), "{report}");
+}
+
 fn http_json(addr: SocketAddr, method: &str, path: &str, body: Option<&str>) -> (u16, Value) {
     let (status, _, b) = http(addr, method, path, body.map(|b| ("application/json", b)), "");
     (status, serde_json::from_str(&b).unwrap_or(Value::Null))
@@ -155,6 +183,41 @@ fn submit_poll_download_delete() {
     assert_eq!(s, 200);
     assert!(head.to_ascii_lowercase().contains("image/svg+xml"));
     assert_eq!(svg.split("points=\"").nth(1).unwrap().split('"').next().unwrap().split(' ').count(), 101);
+    // the manifest, the glTF results and the checkpoints: every file downloads and
+    // every glb passes the Khronos validator
+    let (s, manifest) = srv.json("GET", &format!("/v1/jobs/{id}/results"), None);
+    assert_eq!(s, 200);
+    assert_eq!(manifest["final"], true);
+    let names: Vec<&str> = manifest["files"].as_array().unwrap().iter().map(|f| f["name"].as_str().unwrap()).collect();
+    for want in ["shape.json", "shape.glb", "evolution.glb", "energy.csv", "energy.svg"] {
+        assert!(names.contains(&want), "{names:?}");
+    }
+    let mut glbs = Vec::new();
+    for f in manifest["files"].as_array().unwrap() {
+        let (s, head, bytes) = download(srv.addr, f["href"].as_str().unwrap());
+        assert_eq!(s, 200, "{f}");
+        assert!(head.to_ascii_lowercase().contains(f["type"].as_str().unwrap()), "{head}");
+        if f["name"].as_str().unwrap().ends_with(".glb") {
+            assert_eq!(&bytes[..4], b"glTF");
+            let p = dir.path().join(f["name"].as_str().unwrap());
+            std::fs::write(&p, &bytes).unwrap();
+            glbs.push(p);
+        }
+    }
+    let (s, cps) = srv.json("GET", &format!("/v1/jobs/{id}/checkpoints"), None);
+    assert_eq!(s, 200);
+    let cps = cps["checkpoints"].as_array().unwrap().clone();
+    let its: Vec<i64> = cps.iter().map(|c| c["iteration"].as_i64().unwrap()).collect();
+    assert_eq!(its.first(), Some(&0));
+    assert_eq!(its.last(), Some(&100));
+    let (s, _, bytes) = download(srv.addr, cps[1]["href"].as_str().unwrap());
+    assert_eq!(s, 200);
+    let p = dir.path().join("checkpoint.glb");
+    std::fs::write(&p, &bytes).unwrap();
+    glbs.push(p);
+    assert_eq!(srv.request("GET", &format!("/v1/jobs/{id}/checkpoints/7.glb"), None).0, 404);
+    assert_eq!(srv.request("GET", &format!("/v1/jobs/{id}/checkpoints/x.png"), None).0, 404);
+    validate_gltf(&glbs);
     let (s, list) = srv.json("GET", "/v1/jobs?status=successful", None);
     assert_eq!(s, 200);
     assert_eq!(list["jobs"].as_array().unwrap().len(), 1);

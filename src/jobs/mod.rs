@@ -5,10 +5,12 @@
 
 mod build;
 mod mesh_io;
+mod results;
 mod run;
 mod spec;
 
 pub use build::{prepare, AnyMesh, PreparedJob, ProblemKind};
 pub use mesh_io::{read_mesh_file, MeshFileError};
-pub use run::{run_prepared, JobFailure, JobOutcome, RunEvents};
+pub use results::{job_extras, state_glb, states_glb, MAX_FRAMES};
+pub use run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
 pub use spec::{parse_spec, FlowSpec, InitialSpec, JobSpec, MeshSpec, OutputSpec, ProblemSpec, SpecError};

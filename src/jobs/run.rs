@@ -105,3 +105,16 @@ fn run_dim<const D: usize>(
         }
     }
 }
+
+/// Per-vertex output fields of a state of `job`: the discrete curvature and the
+/// normal velocity of the next step (see [`Flow::vertex_fields`]).
+pub fn vertex_fields(job: &PreparedJob, state: &Checkpoint) -> Result<(Vec<f64>, Vec<f64>), FlowError> {
+    fn in_dim<const D: usize>(job: &PreparedJob, state: &Checkpoint) -> Result<(Vec<f64>, Vec<f64>), FlowError> {
+        Flow::resume(job.problem.as_dyn::<D>(), state, job.settings.clone())?.vertex_fields()
+    }
+    match state.mesh.dimension {
+        2 => in_dim::<2>(job, state),
+        3 => in_dim::<3>(job, state),
+        d => Err(FlowError::Checkpoint(format!("dimension {d}"))),
+    }
+}

@@ -2,9 +2,12 @@
 //! and a fixed pool of worker threads. Routes so far: `POST /v1/jobs` (JSON),
 //! `GET /v1/jobs`, `GET|DELETE /v1/jobs/{id}`, `POST /v1/jobs/{id}/cancel`,
 //! `GET /v1/jobs/{id}/events` (SSE), `GET /v1/jobs/{id}/energy` (JSON or `?format=csv`),
-//! `GET /v1/jobs/{id}/results/shape.json`, `GET /healthz`.
+//! `GET /v1/jobs/{id}/results` (manifest), `.../results/{shape.json, shape.glb,
+//! evolution.glb}`, `GET /v1/jobs/{id}/checkpoints` and `.../checkpoints/{n}.glb`,
+//! `GET /healthz`.
 
 mod error;
+mod results;
 pub mod store;
 pub mod worker;
 
@@ -54,7 +57,12 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("GET", "/v1/jobs/{id}/events"),
     ("GET", "/v1/jobs/{id}/energy"),
     ("GET", "/v1/jobs/{id}/energy.svg"),
+    ("GET", "/v1/jobs/{id}/results"),
     ("GET", "/v1/jobs/{id}/results/shape.json"),
+    ("GET", "/v1/jobs/{id}/results/shape.glb"),
+    ("GET", "/v1/jobs/{id}/results/evolution.glb"),
+    ("GET", "/v1/jobs/{id}/checkpoints"),
+    ("GET", "/v1/jobs/{id}/checkpoints/{n}.glb"),
 ];
 
 /// The HTTP application.
@@ -67,7 +75,12 @@ pub fn router(state: AppState) -> Router {
         .route("/v1/jobs/{id}/events", get(events))
         .route("/v1/jobs/{id}/energy", get(energy))
         .route("/v1/jobs/{id}/energy.svg", get(energy_plot))
+        .route("/v1/jobs/{id}/results", get(results::manifest))
         .route("/v1/jobs/{id}/results/shape.json", get(shape))
+        .route("/v1/jobs/{id}/results/shape.glb", get(results::shape_glb))
+        .route("/v1/jobs/{id}/results/evolution.glb", get(results::evolution_glb))
+        .route("/v1/jobs/{id}/checkpoints", get(results::checkpoint_list))
+        .route("/v1/jobs/{id}/checkpoints/{file}", get(results::checkpoint_glb))
         .layer(DefaultBodyLimit::disable())
         .layer(middleware::from_fn_with_state(state.clone(), authorize))
         .with_state(state)

@@ -141,6 +141,34 @@ impl Store {
         Ok(r.and_then(|r| serde_json::from_str(&r.get::<String, _>("data")).ok()))
     }
 
+    /// `(iteration, time)` of every checkpoint of a job, oldest first.
+    pub async fn checkpoint_index(&self, id: &str) -> Result<Vec<(i64, f64)>, sqlx::Error> {
+        let rows = sqlx::query("SELECT iteration, time FROM checkpoints WHERE job_id = ?1 ORDER BY iteration")
+            .bind(id)
+            .fetch_all(&self.pool)
+            .await?;
+        Ok(rows.iter().map(|r| (r.get::<i64, _>("iteration"), r.get::<f64, _>("time"))).collect())
+    }
+
+    /// The checkpoint of a job at `iteration`.
+    pub async fn checkpoint_at(&self, id: &str, iteration: i64) -> Result<Option<Checkpoint>, sqlx::Error> {
+        let r = sqlx::query("SELECT data FROM checkpoints WHERE job_id = ?1 AND iteration = ?2")
+            .bind(id)
+            .bind(iteration)
+            .fetch_optional(&self.pool)
+            .await?;
+        Ok(r.and_then(|r| serde_json::from_str(&r.get::<String, _>("data")).ok()))
+    }
+
+    /// Every checkpoint of a job, oldest first.
+    pub async fn checkpoints(&self, id: &str) -> Result<Vec<Checkpoint>, sqlx::Error> {
+        let rows = sqlx::query("SELECT data FROM checkpoints WHERE job_id = ?1 ORDER BY iteration")
+            .bind(id)
+            .fetch_all(&self.pool)
+            .await?;
+        Ok(rows.iter().filter_map(|r| serde_json::from_str(&r.get::<String, _>("data")).ok()).collect())
+    }
+
     /// Append history rows and update the job's progress in one transaction. Rows
     /// already present (after a resume) are replaced, never duplicated.
     pub async fn record(

@@ -1,0 +1,310 @@
+//! glTF 2.0 binary (.glb) results, laid out per DESIGN.md §3:
+//!
+//! - curves: one `LINE_LOOP` primitive per component (z = 0), vertices in the
+//!   component's order (counter-clockwise for outer boundaries);
+//! - surfaces: one indexed `TRIANGLES` primitive with unit vertex `NORMAL`s;
+//! - per vertex: `_CURVATURE` (the discrete κ), `_NORMAL_VELOCITY` (V of the next
+//!   step) and `COLOR_0`, the curvature through a blue–white–red map scaled by the
+//!   98th percentile of |κ|;
+//! - job metadata in the root `extras`, the frame's iteration/time/energy in the
+//!   node's `extras`;
+//! - evolution: one node per checkpoint, switched by a `STEP`-interpolated `scale`
+//!   animation (0.2 s per checkpoint, the first frame visible without animation, a
+//!   trailing hold key so that the last frame is shown).
+
+use crate::flow::MeshData;
+use crate::geometry::segment_cycles;
+use serde_json::{json, Value};
+
+/// One state to draw.
+#[derive(Debug, Clone, Copy)]
+pub struct GltfFrame<'a> {
+    pub mesh: &'a MeshData,
+    /// Per vertex of `mesh`.
+    pub curvature: &'a [f64],
+    /// Per vertex of `mesh`.
+    pub normal_velocity: &'a [f64],
+    pub iteration: usize,
+    pub time: f64,
+    pub energy: f64,
+}
+
+/// Seconds per checkpoint in evolution.glb.
+pub const FRAME_SECONDS: f32 = 0.2;
+
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+const FLOAT: u32 = 5126;
+const UNSIGNED_INT: u32 = 5125;
+
+#[derive(Default)]
+struct Builder {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+    meshes: Vec<Value>,
+    nodes: Vec<Value>,
+}
+
+impl Builder {
+    fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
+        if let Some(t) = target {
+            v["target"] = json!(t);
+        }
+        self.bin.extend_from_slice(bytes);
+        self.views.push(v);
+        self.views.len() - 1
+    }
+
+    /// A float accessor of `kind` (`SCALAR`, `VEC3`) with exact min/max.
+    fn floats(&mut self, data: &[f32], kind: &str, target: Option<u32>) -> usize {
+        let comps = if kind == "VEC3" { 3 } else { 1 };
+        let count = data.len() / comps;
+        let mut lo = vec![f32::INFINITY; comps];
+        let mut hi = vec![f32::NEG_INFINITY; comps];
+        for (i, &x) in data.iter().enumerate() {
+            lo[i % comps] = lo[i % comps].min(x);
+            hi[i % comps] = hi[i % comps].max(x);
+        }
+        let bytes: Vec<u8> = data.iter().flat_map(|x| x.to_le_bytes()).collect();
+        let view = self.view(&bytes, target);
+        let as_json = |v: &[f32]| v.iter().map(|&x| json!(x as f64)).collect::<Vec<_>>();
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": FLOAT, "count": count, "type": kind,
+            "min": as_json(&lo), "max": as_json(&hi),
+        }));
+        self.accessors.len() - 1
+    }
+
+    fn indices(&mut self, data: &[u32]) -> usize {
+        let bytes: Vec<u8> = data.iter().flat_map(|x| x.to_le_bytes()).collect();
+        let view = self.view(&bytes, Some(ELEMENT_ARRAY_BUFFER));
+        self.accessors
+            .push(json!({"bufferView": view, "componentType": UNSIGNED_INT, "count": data.len(), "type": "SCALAR"}));
+        self.accessors.len() - 1
+    }
+
+    /// Attributes of the vertices `order` of `frame`.
+    fn attributes(&mut self, frame: &GltfFrame<'_>, order: &[usize], scale: f64) -> serde_json::Map<String, Value> {
+        let m = frame.mesh;
+        let pos: Vec<f32> = order
+            .iter()
+            .flat_map(|&v| (0..3).map(move |k| m.positions[v].get(k).copied().unwrap_or(0.0) as f32))
+            .collect();
+        let kappa: Vec<f32> = order.iter().map(|&v| finite(frame.curvature[v])).collect();
+        let vel: Vec<f32> = order.iter().map(|&v| finite(frame.normal_velocity[v])).collect();
+        let color: Vec<f32> = order.iter().flat_map(|&v| colormap(frame.curvature[v] / scale)).collect();
+        let mut a = serde_json::Map::new();
+        a.insert("POSITION".into(), json!(self.floats(&pos, "VEC3", Some(ARRAY_BUFFER))));
+        a.insert("_CURVATURE".into(), json!(self.floats(&kappa, "SCALAR", Some(ARRAY_BUFFER))));
+        a.insert("_NORMAL_VELOCITY".into(), json!(self.floats(&vel, "SCALAR", Some(ARRAY_BUFFER))));
+        a.insert("COLOR_0".into(), json!(self.floats(&color, "VEC3", Some(ARRAY_BUFFER))));
+        a
+    }
+
+    /// A mesh for `frame`; returns its index.
+    fn mesh(&mut self, frame: &GltfFrame<'_>) -> usize {
+        let m = frame.mesh;
+        let scale = curvature_scale(frame.curvature);
+        let mut primitives = Vec::new();
+        if m.dimension == 2 {
+            for cycle in segment_cycles(m.positions.len(), m.elements.iter().map(|e| (e[0], e[1]))) {
+                let attributes = self.attributes(frame, &cycle, scale);
+                primitives.push(json!({"attributes": attributes, "mode": 2, "material": 0}));
+            }
+        } else {
+            let order: Vec<usize> = (0..m.positions.len()).collect();
+            let mut attributes = self.attributes(frame, &order, scale);
+            let normals = vertex_normals(m);
+            attributes.insert("NORMAL".into(), json!(self.floats(&normals, "VEC3", Some(ARRAY_BUFFER))));
+            let idx: Vec<u32> = m.elements.iter().flat_map(|t| t.iter().map(|&v| v as u32)).collect();
+            let indices = self.indices(&idx);
+            primitives.push(json!({"attributes": attributes, "indices": indices, "mode": 4, "material": 0}));
+        }
+        self.meshes.push(json!({"primitives": primitives}));
+        self.meshes.len() - 1
+    }
+
+    fn finish(mut self, extras: Value, animations: Vec<Value>) -> Vec<u8> {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        let nodes: Vec<usize> = (0..self.nodes.len()).collect();
+        let mut doc = json!({
+            "asset": {"version": "2.0", "generator": concat!("shapeflow ", env!("CARGO_PKG_VERSION"))},
+            "scene": 0,
+            "scenes": [{"nodes": nodes}],
+            "nodes": self.nodes,
+            "meshes": self.meshes,
+            "materials": [{
+                "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8},
+                "doubleSided": true,
+            }],
+            "accessors": self.accessors,
+            "bufferViews": self.views,
+            "buffers": [{"byteLength": self.bin.len()}],
+            "extras": extras,
+        });
+        if !animations.is_empty() {
+            doc["animations"] = json!(animations);
+        }
+        glb(&serde_json::to_vec(&doc).expect("JSON"), &self.bin)
+    }
+}
+
+fn finite(x: f64) -> f32 {
+    if x.is_finite() {
+        x as f32
+    } else {
+        0.0
+    }
+}
+
+/// The 98th percentile of `|κ|` (at least a tiny positive number).
+fn curvature_scale(k: &[f64]) -> f64 {
+    let mut a: Vec<f64> = k.iter().filter(|x| x.is_finite()).map(|x| x.abs()).collect();
+    if a.is_empty() {
+        return 1.0;
+    }
+    let i = ((a.len() - 1) as f64 * 0.98).round() as usize;
+    let (_, v, _) = a.select_nth_unstable_by(i, |p, q| p.total_cmp(q));
+    v.max(1e-12)
+}
+
+/// Blue (−1) – white (0) – red (+1), linear RGB in [0, 1].
+fn colormap(t: f64) -> [f32; 3] {
+    let t = if t.is_finite() { t.clamp(-1.0, 1.0) } else { 0.0 };
+    let (blue, white, red) = ([0.23, 0.30, 0.75], [0.87, 0.87, 0.87], [0.71, 0.02, 0.15]);
+    let (a, b, s) = if t < 0.0 { (white, blue, -t) } else { (white, red, t) };
+    std::array::from_fn(|k| (a[k] + (b[k] - a[k]) * s) as f32)
+}
+
+/// Unit area-weighted vertex normals of a triangle surface, as f32 (renormalized in f32).
+fn vertex_normals(m: &MeshData) -> Vec<f32> {
+    let mut n = vec![[0.0f64; 3]; m.positions.len()];
+    for t in &m.elements {
+        let p = |k: usize| &m.positions[t[k]];
+        let (u, v) = ([0, 1, 2].map(|c| p(1)[c] - p(0)[c]), [0, 1, 2].map(|c| p(2)[c] - p(0)[c]));
+        let c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+        for &i in t {
+            for k in 0..3 {
+                n[i][k] += c[k];
+            }
+        }
+    }
+    n.iter()
+        .flat_map(|v| {
+            let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            if len > 0.0 {
+                [(v[0] / len) as f32, (v[1] / len) as f32, (v[2] / len) as f32]
+            } else {
+                [0.0, 0.0, 1.0]
+            }
+        })
+        .collect()
+}
+
+/// The GLB container: header, JSON chunk (space-padded), BIN chunk (zero-padded).
+fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let pad = |n: usize| (4 - n % 4) % 4;
+    let (jl, bl) = (json.len() + pad(json.len()), bin.len() + pad(bin.len()));
+    let total = 12 + 8 + jl + if bl > 0 { 8 + bl } else { 0 };
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(jl as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(json);
+    out.extend(std::iter::repeat_n(b' ', pad(json.len())));
+    if bl > 0 {
+        out.extend_from_slice(&(bl as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(bin);
+        out.extend(std::iter::repeat_n(0u8, pad(bin.len())));
+    }
+    out
+}
+
+fn frame_extras(f: &GltfFrame<'_>) -> Value {
+    let energy = if f.energy.is_finite() { json!(f.energy) } else { Value::Null };
+    json!({"iteration": f.iteration, "time": f.time, "energy": energy})
+}
+
+/// One state as a .glb (shape.glb, checkpoints/{n}.glb).
+pub fn shape_glb(frame: &GltfFrame<'_>, extras: Value) -> Vec<u8> {
+    let mut b = Builder::default();
+    let mesh = b.mesh(frame);
+    b.nodes
+        .push(json!({"mesh": mesh, "name": format!("iteration {}", frame.iteration), "extras": frame_extras(frame)}));
+    b.finish(extras, Vec::new())
+}
+
+/// Every checkpoint as an animated .glb (evolution.glb). `frames` must not be empty.
+pub fn evolution_glb(frames: &[GltfFrame<'_>], extras: Value) -> Vec<u8> {
+    let mut b = Builder::default();
+    for (k, f) in frames.iter().enumerate() {
+        let mesh = b.mesh(f);
+        let mut node = json!({"mesh": mesh, "name": format!("iteration {}", f.iteration), "extras": frame_extras(f)});
+        if k > 0 {
+            node["scale"] = json!([0.0, 0.0, 0.0]);
+        }
+        b.nodes.push(node);
+    }
+    let n = frames.len();
+    if n < 2 {
+        return b.finish(extras, Vec::new());
+    }
+    // keys at k·Δt for k = 0..n-1, plus a trailing hold key at n·Δt
+    let times: Vec<f32> = (0..=n).map(|k| k as f32 * FRAME_SECONDS).collect();
+    let input = b.floats(&times, "SCALAR", None);
+    let mut samplers = Vec::new();
+    let mut channels = Vec::new();
+    for node in 0..n {
+        let scales: Vec<f32> = (0..=n)
+            .flat_map(|key| {
+                let on = key.min(n - 1) == node;
+                [on as u8 as f32; 3]
+            })
+            .collect();
+        let output = b.floats(&scales, "VEC3", None);
+        samplers.push(json!({"input": input, "output": output, "interpolation": "STEP"}));
+        channels.push(json!({"sampler": node, "target": {"node": node, "path": "scale"}}));
+    }
+    let animation = json!({"name": "evolution", "samplers": samplers, "channels": channels});
+    b.finish(extras, vec![animation])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{circle, icosphere};
+
+    #[test]
+    fn container_is_aligned_and_sized() {
+        let c = MeshData::from(&circle([0.0, 0.0], 1.0, 16).unwrap());
+        let k = vec![1.0; 16];
+        let g = shape_glb(
+            &GltfFrame { mesh: &c, curvature: &k, normal_velocity: &k, iteration: 3, time: 0.1, energy: 2.0 },
+            json!({}),
+        );
+        assert_eq!(&g[0..4], b"glTF");
+        assert_eq!(u32::from_le_bytes(g[8..12].try_into().unwrap()) as usize, g.len());
+        assert_eq!(g.len() % 4, 0);
+        let jl = u32::from_le_bytes(g[12..16].try_into().unwrap()) as usize;
+        let doc: Value = serde_json::from_slice(&g[20..20 + jl]).unwrap();
+        assert_eq!(doc["meshes"][0]["primitives"][0]["mode"], 2);
+        let s = MeshData::from(&icosphere([0.0; 3], 1.0, 1).unwrap());
+        let k = vec![2.0; s.positions.len()];
+        let f = GltfFrame { mesh: &s, curvature: &k, normal_velocity: &k, iteration: 0, time: 0.0, energy: 1.0 };
+        let g = evolution_glb(&[f, f, f], json!({"problem": "x"}));
+        let jl = u32::from_le_bytes(g[12..16].try_into().unwrap()) as usize;
+        let doc: Value = serde_json::from_slice(&g[20..20 + jl]).unwrap();
+        assert_eq!(doc["nodes"].as_array().unwrap().len(), 3);
+        assert_eq!(doc["animations"][0]["channels"].as_array().unwrap().len(), 3);
+    }
+}

@@ -1,0 +1,72 @@
+//! glTF results of a job from its checkpoints: each state with its per-vertex
+//! curvature and normal velocity (recomputed from the job's problem on that state).
+
+use super::build::PreparedJob;
+use super::run::vertex_fields;
+use crate::export::{evolution_glb, shape_glb, GltfFrame};
+use crate::flow::Checkpoint;
+use serde_json::{json, Value};
+
+/// Largest number of frames in evolution.glb; longer runs are subsampled evenly
+/// (first and last checkpoint always kept).
+pub const MAX_FRAMES: usize = 500;
+
+/// The job's metadata for the glTF `extras`.
+pub fn job_extras(job: &PreparedJob) -> Value {
+    let spec = serde_json::to_value(&job.spec).unwrap_or(Value::Null);
+    json!({"generator": "shapeflow", "problem": spec["problem"]["type"], "spec": spec})
+}
+
+/// Curvature and normal velocity of `state`; zeros where they cannot be computed
+/// (e.g. the last state of a failed run), so that the geometry is still shown.
+fn fields(job: &PreparedJob, state: &Checkpoint) -> (Vec<f64>, Vec<f64>) {
+    let n = state.mesh.positions.len();
+    match vertex_fields(job, state) {
+        Ok((k, v)) if k.len() == n && v.len() == n => (k, v),
+        _ => (vec![0.0; n], vec![0.0; n]),
+    }
+}
+
+/// shape.glb / checkpoints/{n}.glb of one state.
+pub fn state_glb(job: &PreparedJob, state: &Checkpoint) -> Vec<u8> {
+    let (k, v) = fields(job, state);
+    let frame = GltfFrame {
+        mesh: &state.mesh,
+        curvature: &k,
+        normal_velocity: &v,
+        iteration: state.iteration,
+        time: state.time,
+        energy: state.energy,
+    };
+    shape_glb(&frame, job_extras(job))
+}
+
+/// evolution.glb of the checkpoints (in iteration order). `None` if there are none.
+pub fn states_glb(job: &PreparedJob, states: &[Checkpoint]) -> Option<Vec<u8>> {
+    if states.is_empty() {
+        return None;
+    }
+    let picked: Vec<&Checkpoint> = if states.len() <= MAX_FRAMES {
+        states.iter().collect()
+    } else {
+        let last = states.len() - 1;
+        (0..MAX_FRAMES).map(|k| &states[k * last / (MAX_FRAMES - 1)]).collect()
+    };
+    let fields: Vec<(Vec<f64>, Vec<f64>)> = picked.iter().map(|s| fields(job, s)).collect();
+    let frames: Vec<GltfFrame<'_>> = picked
+        .iter()
+        .zip(&fields)
+        .map(|(s, (k, v))| GltfFrame {
+            mesh: &s.mesh,
+            curvature: k,
+            normal_velocity: v,
+            iteration: s.iteration,
+            time: s.time,
+            energy: s.energy,
+        })
+        .collect();
+    let mut extras = job_extras(job);
+    extras["frames"] = json!(frames.len());
+    extras["seconds_per_frame"] = json!(crate::export::FRAME_SECONDS);
+    Some(evolution_glb(&frames, extras))
+}

@@ -1,0 +1,135 @@
+//! glTF results: layout (DESIGN.md §3), per-vertex fields with known values, and the
+//! Khronos glTF-Validator (npm `gltf-validator`, installed by `npm ci`) reporting no
+//! errors and no warnings on every file we write.
+
+use serde_json::Value;
+use shapeflow::flow::Checkpoint;
+use shapeflow::jobs::{parse_spec, prepare, run_prepared, state_glb, states_glb, PreparedJob, RunEvents};
+use std::collections::HashMap;
+use std::path::Path;
+use std::process::Command;
+use std::sync::atomic::AtomicBool;
+
+#[derive(Default)]
+struct Keep(Vec<Checkpoint>);
+impl RunEvents for Keep {
+    fn checkpoint(&mut self, c: &Checkpoint) {
+        self.0.push(c.clone());
+    }
+}
+
+fn run(spec: &str, inputs: &[(&str, Vec<u8>)]) -> (PreparedJob, Vec<Checkpoint>) {
+    let files: HashMap<String, Vec<u8>> = inputs.iter().map(|(k, v)| (k.to_string(), v.clone())).collect();
+    let job = prepare(parse_spec(spec).unwrap(), &files).unwrap();
+    let mut keep = Keep::default();
+    run_prepared(&job, None, &AtomicBool::new(false), &mut keep).unwrap();
+    (job, keep.0)
+}
+
+/// The JSON chunk and the BIN chunk of a .glb.
+fn parse_glb(g: &[u8]) -> (Value, &[u8]) {
+    assert_eq!(&g[0..4], b"glTF");
+    let jl = u32::from_le_bytes(g[12..16].try_into().unwrap()) as usize;
+    let doc = serde_json::from_slice(&g[20..20 + jl]).unwrap();
+    (doc, &g[28 + jl..])
+}
+
+/// The f32 values of accessor `a`.
+fn floats(doc: &Value, bin: &[u8], a: usize) -> Vec<f32> {
+    let acc = &doc["accessors"][a];
+    let view = &doc["bufferViews"][acc["bufferView"].as_u64().unwrap() as usize];
+    let off = view["byteOffset"].as_u64().unwrap() as usize;
+    let len = view["byteLength"].as_u64().unwrap() as usize;
+    bin[off..off + len].chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect()
+}
+
+/// Run the Khronos validator over `files`; panics with its report unless every file
+/// has no errors and no warnings.
+fn validate(files: &[&Path]) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    assert!(
+        root.join("node_modules/gltf-validator").exists(),
+        "the glTF validator is missing: run `npm ci` in {} first",
+        root.display()
+    );
+    let out = Command::new("node").arg(root.join("scripts/validate_gltf.mjs")).args(files).output().expect("node");
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "validator: {report} {}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(report.lines().count(), files.len(), "{report}");
+    assert!(report.lines().all(|l| l.contains("\"numErrors\":0,\"numWarnings\":0")), "{report}");
+}
+
+#[test]
+fn curves_surfaces_and_segmentations_validate_with_the_right_fields() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    let mut write = |name: &str, bytes: &[u8]| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, bytes).unwrap();
+        files.push(p);
+    };
+
+    // two circles merging (several LINE_LOOP components in the early frames)
+    let spec = std::fs::read_to_string("examples/merge_circles.json").unwrap();
+    let (job, cps) = run(&spec, &[]);
+    let evo = states_glb(&job, &cps).unwrap();
+    let (doc, _) = parse_glb(&evo);
+    assert_eq!(doc["nodes"].as_array().unwrap().len(), cps.len());
+    assert_eq!(doc["meshes"][0]["primitives"].as_array().unwrap().len(), 2, "two components at the start");
+    assert_eq!(doc["meshes"].as_array().unwrap().last().unwrap()["primitives"].as_array().unwrap().len(), 1);
+    let anim = &doc["animations"][0];
+    assert_eq!(anim["samplers"][0]["interpolation"], "STEP");
+    assert_eq!(anim["channels"].as_array().unwrap().len(), cps.len());
+    assert_eq!(doc["extras"]["problem"], "curvature_flow");
+    write("merge_evolution.glb", &evo);
+    write("merge_shape.glb", &state_glb(&job, cps.last().unwrap()));
+
+    // a circle of radius 0.5 under curve-shortening: κ = 2, V = −κ = −2
+    let (job, cps) = run(
+        r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 0.5, "resolution": 64}, "flow": {"max_iterations": 1}}"#,
+        &[],
+    );
+    let glb = state_glb(&job, &cps[0]);
+    let (doc, bin) = parse_glb(&glb);
+    let prim = &doc["meshes"][0]["primitives"][0];
+    assert_eq!(prim["mode"], 2);
+    let k = floats(&doc, bin, prim["attributes"]["_CURVATURE"].as_u64().unwrap() as usize);
+    let v = floats(&doc, bin, prim["attributes"]["_NORMAL_VELOCITY"].as_u64().unwrap() as usize);
+    assert_eq!(k.len(), 64);
+    assert!(k.iter().all(|x| (x - 2.0).abs() < 1e-2), "{k:?}");
+    assert!(v.iter().all(|x| (x + 2.0).abs() < 2e-2), "{v:?}");
+    write("circle.glb", &glb);
+
+    // a sphere of radius 1 under mean curvature flow: κ = 2 (sum of principal curvatures)
+    let (job, cps) = run(
+        r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "sphere", "radius": 1.0, "resolution": 3}, "flow": {"max_iterations": 2}, "output": {"checkpoint_every": 1}}"#,
+        &[],
+    );
+    let glb = state_glb(&job, &cps[0]);
+    let (doc, bin) = parse_glb(&glb);
+    let prim = &doc["meshes"][0]["primitives"][0];
+    assert_eq!(prim["mode"], 4);
+    assert!(prim["attributes"]["NORMAL"].is_number() && prim["indices"].is_number());
+    let k = floats(&doc, bin, prim["attributes"]["_CURVATURE"].as_u64().unwrap() as usize);
+    // (the pointwise discrete curvature of an icosphere varies with the valence)
+    let mean = k.iter().sum::<f32>() / k.len() as f32;
+    assert!((mean - 2.0).abs() < 0.05 && k.iter().all(|x| (x - 2.0).abs() < 0.35), "mean {mean}");
+    write("sphere.glb", &glb);
+    write("sphere_evolution.glb", &states_glb(&job, &cps).unwrap());
+
+    // segmentation in 2D and 3D
+    let (job, cps) = run(
+        &std::fs::read_to_string("examples/segment_four.json").unwrap(),
+        &[("image", std::fs::read("examples/data/four.png").unwrap())],
+    );
+    write("four_evolution.glb", &states_glb(&job, &cps).unwrap());
+    let (job, cps) = run(
+        &std::fs::read_to_string("examples/segment_balls.json").unwrap(),
+        &[("volume", std::fs::read("examples/data/balls.nrrd").unwrap())],
+    );
+    write("balls.glb", &state_glb(&job, cps.last().unwrap()));
+    write("balls_evolution.glb", &states_glb(&job, &cps).unwrap());
+
+    let paths: Vec<&Path> = files.iter().map(|p| p.as_path()).collect();
+    validate(&paths);
+}
