@@ -77,6 +77,45 @@ fn http(
     (status, head.to_string(), body)
 }
 
+/// A multipart/form-data body of `(name, filename, bytes)` parts; returns the
+/// content type (with its boundary) and the body.
+fn multipart(parts: &[(&str, Option<&str>, &[u8])]) -> (String, Vec<u8>) {
+    let boundary = "shapeflow-test-boundary-7d1f";
+    let mut body = Vec::new();
+    for (name, file, data) in parts {
+        body.extend(format!("--{boundary}\r\n").bytes());
+        match file {
+            Some(f) => body.extend(
+                format!("Content-Disposition: form-data; name=\"{name}\"; filename=\"{f}\"\r\nContent-Type: application/octet-stream\r\n\r\n").bytes(),
+            ),
+            None => body.extend(format!("Content-Disposition: form-data; name=\"{name}\"\r\n\r\n").bytes()),
+        }
+        body.extend_from_slice(data);
+        body.extend(b"\r\n");
+    }
+    body.extend(format!("--{boundary}--\r\n").bytes());
+    (format!("multipart/form-data; boundary={boundary}"), body)
+}
+
+/// POST a binary body; returns status, head and body text.
+fn post_bytes(addr: SocketAddr, path: &str, ctype: &str, body: &[u8]) -> (u16, String, String) {
+    let mut s = TcpStream::connect(addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
+    let head = format!(
+        "POST {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nContent-Type: {ctype}\r\nContent-Length: {}\r\n\r\n",
+        body.len()
+    );
+    s.write_all(head.as_bytes()).unwrap();
+    // the server may answer (413) before reading everything: ignore write errors
+    let _ = s.write_all(body);
+    let mut out = Vec::new();
+    let _ = s.read_to_end(&mut out);
+    let text = String::from_utf8_lossy(&out).to_string();
+    let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
+    let status = head.split_whitespace().nth(1).and_then(|s| s.parse().ok()).unwrap_or(0);
+    (status, head.to_string(), body.to_string())
+}
+
 /// GET `path` as bytes (for binary results; the server sends Content-Length).
 fn download(addr: SocketAddr, path: &str) -> (u16, String, Vec<u8>) {
     let mut s = TcpStream::connect(addr).unwrap();
@@ -488,5 +527,83 @@ fn events_stream_every_iteration_then_the_status_and_resume_after_last_event_id(
         .map(|e| e.1.as_ref().unwrap().parse().unwrap())
         .collect();
     assert_eq!(again, (51..=100).collect::<Vec<_>>());
+    srv.stop();
+}
+
+/// Multipart submission of an image job: the segmentation runs in the service and
+/// mask.png, overlay.png and the glTF results download; bad uploads are 4xx
+/// problem+json naming the field and the input, and the server keeps serving.
+#[test]
+fn multipart_segmentation_and_bad_uploads() {
+    let dir = tempfile::tempdir().unwrap();
+    let srv = Server::start(&dir.path().join("jobs.db"), 1);
+    let png = std::fs::read("examples/data/star.png").unwrap();
+    let spec = br#"{"problem": {"type": "segmentation", "image": "input:image"}, "flow": {"max_iterations": 300}}"#;
+    let (ctype, body) = multipart(&[("spec", None, spec), ("image", Some("star.png"), &png)]);
+    let (s, head, text) = post_bytes(srv.addr, "/v1/jobs", &ctype, &body);
+    assert_eq!(s, 201, "{text}");
+    assert!(head.to_ascii_lowercase().contains("location: /v1/jobs/"));
+    let id = serde_json::from_str::<Value>(&text).unwrap()["id"].as_str().unwrap().to_string();
+    let done = srv.wait_for(&id, |j| j["status"] != "accepted" && j["status"] != "running");
+    assert_eq!(done["status"], "successful", "{done}");
+    assert_eq!(done["stop_reason"], "converged");
+    let (_, manifest) = srv.json("GET", &format!("/v1/jobs/{id}/results"), None);
+    let mut glbs = Vec::new();
+    for f in manifest["files"].as_array().unwrap() {
+        let (s, _, bytes) = download(srv.addr, f["href"].as_str().unwrap());
+        assert_eq!(s, 200, "{f}");
+        let name = f["name"].as_str().unwrap();
+        if name == "mask.png" {
+            let mask = image::load_from_memory(&bytes).unwrap().to_luma8();
+            assert_eq!(mask.dimensions(), (128, 128));
+            let area = mask.pixels().filter(|p| p.0[0] == 255).count() as f64;
+            let exact = std::f64::consts::PI * 34.0 * 34.0 * 1.045;
+            assert!((area / exact - 1.0).abs() < 0.03, "{area}");
+        }
+        if name.ends_with(".glb") {
+            let p = dir.path().join(name);
+            std::fs::write(&p, &bytes).unwrap();
+            glbs.push(p);
+        }
+    }
+    assert!(manifest["files"].as_array().unwrap().iter().any(|f| f["name"] == "overlay.png"), "{manifest}");
+    validate_gltf(&glbs);
+
+    // bad uploads
+    let mut zero = png.clone();
+    zero[16..24].copy_from_slice(&[0; 8]);
+    let cases: Vec<(Vec<u8>, u16, &str)> = vec![
+        (png[..png.len() / 2].to_vec(), 422, "input `image`"),
+        (zero, 422, "input `image`"),
+        (b"GIF89a not really".to_vec(), 422, "input `image`"),
+    ];
+    for (bytes, want, needle) in cases {
+        let (ctype, body) = multipart(&[("spec", None, spec), ("image", Some("x.png"), &bytes)]);
+        let (s, head, text) = post_bytes(srv.addr, "/v1/jobs", &ctype, &body);
+        assert_eq!(s, want, "{text}");
+        assert!(head.to_ascii_lowercase().contains("application/problem+json"), "{head}");
+        let j: Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(j["errors"][0]["field"], "problem.image", "{text}");
+        assert!(j["detail"].as_str().unwrap().contains(needle), "{text}");
+    }
+    // no spec part; an input the spec does not get
+    let (ctype, body) = multipart(&[("image", Some("star.png"), &png)]);
+    let (s, _, text) = post_bytes(srv.addr, "/v1/jobs", &ctype, &body);
+    assert_eq!(s, 422, "{text}");
+    assert!(text.contains("\"spec\""), "{text}");
+    let (ctype, body) = multipart(&[("spec", None, spec), ("picture", Some("star.png"), &png)]);
+    let (s, _, text) = post_bytes(srv.addr, "/v1/jobs", &ctype, &body);
+    assert_eq!(s, 422);
+    assert!(text.contains("no input named"), "{text}");
+    // oversized upload: 413 with the limit
+    let big = vec![0u8; shapeflow::service::MAX_UPLOAD_BYTES + 1024];
+    let (ctype, body) = multipart(&[("spec", None, spec), ("image", Some("big.png"), &big)]);
+    let (s, _, text) = post_bytes(srv.addr, "/v1/jobs", &ctype, &body);
+    assert_eq!(s, 413, "{text}");
+    assert!(text.contains(&shapeflow::service::MAX_UPLOAD_BYTES.to_string()), "{text}");
+    // still serving, and nothing bad was stored
+    let (s, list) = srv.json("GET", "/v1/jobs", None);
+    assert_eq!(s, 200);
+    assert_eq!(list["jobs"].as_array().unwrap().len(), 1);
     srv.stop();
 }

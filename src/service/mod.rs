@@ -9,11 +9,10 @@
 mod error;
 mod results;
 pub mod store;
+mod submit;
 pub mod worker;
 
 use crate::export::{energy_csv, energy_svg, shape_json};
-use crate::jobs::{parse_spec, prepare};
-use axum::body::Body;
 use axum::extract::{DefaultBodyLimit, Path, Query, Request, State};
 use axum::http::{header, HeaderMap, StatusCode};
 use axum::middleware::{self, Next};
@@ -30,8 +29,11 @@ use store::{JobRow, Store};
 use tokio::sync::Notify;
 use worker::{Registry, Worker};
 
-/// Largest accepted request body (a JSON job spec).
+/// Largest accepted JSON request body (a job spec).
 pub const MAX_BODY_BYTES: usize = 2 * 1024 * 1024;
+
+/// Largest accepted multipart request body (a spec plus input files).
+pub const MAX_UPLOAD_BYTES: usize = 64 * 1024 * 1024;
 
 /// Shared state of the handlers.
 #[derive(Clone)]
@@ -61,6 +63,9 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("GET", "/v1/jobs/{id}/results/shape.json"),
     ("GET", "/v1/jobs/{id}/results/shape.glb"),
     ("GET", "/v1/jobs/{id}/results/evolution.glb"),
+    ("GET", "/v1/jobs/{id}/results/mask.png"),
+    ("GET", "/v1/jobs/{id}/results/overlay.png"),
+    ("GET", "/v1/jobs/{id}/results/mask.nrrd"),
     ("GET", "/v1/jobs/{id}/checkpoints"),
     ("GET", "/v1/jobs/{id}/checkpoints/{n}.glb"),
 ];
@@ -69,7 +74,7 @@ pub const ROUTES: &[(&str, &str)] = &[
 pub fn router(state: AppState) -> Router {
     Router::new()
         .route("/healthz", get(|| async { "ok" }))
-        .route("/v1/jobs", post(create_job).get(list_jobs))
+        .route("/v1/jobs", post(submit::create_job).get(list_jobs))
         .route("/v1/jobs/{id}", get(get_job).delete(delete_job))
         .route("/v1/jobs/{id}/cancel", post(cancel_job))
         .route("/v1/jobs/{id}/events", get(events))
@@ -79,6 +84,7 @@ pub fn router(state: AppState) -> Router {
         .route("/v1/jobs/{id}/results/shape.json", get(shape))
         .route("/v1/jobs/{id}/results/shape.glb", get(results::shape_glb))
         .route("/v1/jobs/{id}/results/evolution.glb", get(results::evolution_glb))
+        .route("/v1/jobs/{id}/results/{image}", get(results::image_result))
         .route("/v1/jobs/{id}/checkpoints", get(results::checkpoint_list))
         .route("/v1/jobs/{id}/checkpoints/{file}", get(results::checkpoint_glb))
         .layer(DefaultBodyLimit::disable())
@@ -113,23 +119,6 @@ fn job_json(j: &JobRow) -> Value {
 
 async fn find(state: &AppState, id: &str) -> Result<JobRow, ApiError> {
     state.store.job(id).await?.ok_or_else(|| ApiError::NotFound(format!("no job {id}")))
-}
-
-async fn create_job(State(state): State<AppState>, headers: HeaderMap, body: Body) -> Result<Response, ApiError> {
-    let ctype = headers.get(header::CONTENT_TYPE).and_then(|v| v.to_str().ok()).unwrap_or("");
-    if !ctype.starts_with("application/json") {
-        return Err(ApiError::UnsupportedMedia(format!("expected Content-Type application/json, got {ctype:?}")));
-    }
-    let body = axum::body::to_bytes(body, MAX_BODY_BYTES).await.map_err(|_| ApiError::TooLarge(MAX_BODY_BYTES))?;
-    let text = std::str::from_utf8(&body).map_err(|_| ApiError::BadRequest("body is not UTF-8".into()))?;
-    let spec = parse_spec(text).map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
-    let normalized = serde_json::to_string(&spec).expect("spec serializes");
-    prepare(spec, &HashMap::new()).map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
-    let id = uuid::Uuid::new_v4().to_string();
-    let job = state.store.insert_job(&id, &normalized).await?;
-    state.wake.notify_one();
-    let location = format!("/v1/jobs/{id}");
-    Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(job_json(&job))).into_response())
 }
 
 #[derive(Deserialize)]

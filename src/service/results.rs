@@ -3,6 +3,7 @@
 //! checkpoints (on the blocking pool: it recomputes curvature and normal velocity).
 
 use super::{find, ApiError, AppState};
+use crate::export::{mask_nrrd, mask_png, overlay_png};
 use crate::flow::Checkpoint;
 use crate::jobs::{parse_spec, prepare, state_glb, states_glb, PreparedJob};
 use axum::extract::{Path, State};
@@ -10,7 +11,6 @@ use axum::http::header;
 use axum::response::{IntoResponse, Response};
 use axum::Json;
 use serde_json::{json, Value};
-use std::collections::HashMap;
 
 const GLB: &str = "model/gltf-binary";
 
@@ -18,7 +18,10 @@ const GLB: &str = "model/gltf-binary";
 async fn rebuild(state: &AppState, id: &str) -> Result<PreparedJob, ApiError> {
     let row = find(state, id).await?;
     let spec = parse_spec(&row.spec).map_err(|e| ApiError::Internal(format!("stored spec of {id}: {e}")))?;
-    prepare(spec, &HashMap::new()).map_err(|e| ApiError::Internal(format!("stored spec of {id}: {e}")))
+    let inputs = state.store.inputs(id).await?;
+    blocking(move || prepare(spec, &inputs))
+        .await?
+        .map_err(|e| ApiError::Internal(format!("stored spec of {}: {e}", row.id)))
 }
 
 fn glb_response(bytes: Vec<u8>, name: &str) -> Response {
@@ -52,6 +55,17 @@ pub(super) async fn manifest(State(state): State<AppState>, Path(id): Path<Strin
         );
         files.push(json!({"name": "shape.glb", "href": format!("{base}/results/shape.glb"), "type": GLB}));
         files.push(json!({"name": "evolution.glb", "href": format!("{base}/results/evolution.glb"), "type": GLB}));
+        let spec: Value = serde_json::from_str(&job.spec).unwrap_or(Value::Null);
+        if spec["problem"]["type"] == "segmentation" {
+            let names: &[(&str, &str)] = if spec["problem"]["image"].is_array() || is_volume(&state, &id).await? {
+                &[("mask.nrrd", "application/octet-stream")]
+            } else {
+                &[("mask.png", "image/png"), ("overlay.png", "image/png")]
+            };
+            for (name, media) in names {
+                files.push(json!({"name": name, "href": format!("{base}/results/{name}"), "type": media}));
+            }
+        }
     }
     Ok(Json(json!({
         "id": id,
@@ -60,6 +74,46 @@ pub(super) async fn manifest(State(state): State<AppState>, Path(id): Path<Strin
         "files": files,
         "checkpoints": format!("{base}/checkpoints"),
     })))
+}
+
+/// Whether the (single) input image of a segmentation job is an NRRD volume.
+async fn is_volume(state: &AppState, id: &str) -> Result<bool, ApiError> {
+    Ok(state.store.inputs(id).await?.values().any(|b| b.starts_with(b"NRRD")))
+}
+
+/// The job, its image and its latest state, for image results.
+async fn image_job(state: &AppState, id: &str) -> Result<(PreparedJob, Checkpoint), ApiError> {
+    let job = rebuild(state, id).await?;
+    if job.image.is_none() {
+        return Err(ApiError::NotFound(format!("job {id} is not an image job: it has no mask")));
+    }
+    let cp = state
+        .store
+        .last_checkpoint(id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("job {id} has no result yet")))?;
+    Ok((job, cp))
+}
+
+/// `GET /v1/jobs/{id}/results/mask.png` (2D), `.../mask.nrrd` (3D),
+/// `.../overlay.png` (2D): the segmentation of the latest state.
+pub(super) async fn image_result(
+    State(state): State<AppState>,
+    Path((id, file)): Path<(String, String)>,
+) -> Result<Response, ApiError> {
+    let (job, cp) = image_job(&state, &id).await?;
+    let dimension = job.image.as_ref().map_or(0, |g| g.dimension);
+    let (media, bytes) = match (file.as_str(), dimension) {
+        ("mask.png", 2) => ("image/png", blocking(move || mask_png(job.image.as_deref().unwrap(), &cp.mesh)).await?),
+        ("overlay.png", 2) => {
+            ("image/png", blocking(move || overlay_png(job.image.as_deref().unwrap(), &cp.mesh)).await?)
+        }
+        ("mask.nrrd", 3) => {
+            ("application/octet-stream", blocking(move || mask_nrrd(job.image.as_deref().unwrap(), &cp.mesh)).await?)
+        }
+        _ => return Err(ApiError::NotFound(format!("job {id} has no result {file} ({dimension}D image)"))),
+    };
+    Ok(([(header::CONTENT_TYPE, media)], bytes).into_response())
 }
 
 /// `GET /v1/jobs/{id}/results/shape.glb`: the final (or latest) state.

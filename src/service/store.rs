@@ -4,6 +4,7 @@
 use crate::flow::{Checkpoint, Progress};
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous};
 use sqlx::Row;
+use std::collections::HashMap;
 use std::path::Path;
 use std::time::Duration;
 
@@ -83,8 +84,14 @@ impl Store {
         Ok(Store { pool })
     }
 
-    /// Store a new accepted job.
-    pub async fn insert_job(&self, id: &str, spec: &str) -> Result<JobRow, sqlx::Error> {
+    /// Store a new accepted job and its uploaded inputs, in one transaction.
+    pub async fn insert_job(
+        &self,
+        id: &str,
+        spec: &str,
+        inputs: &HashMap<String, Vec<u8>>,
+    ) -> Result<JobRow, sqlx::Error> {
+        let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
         sqlx::query(
             "INSERT INTO jobs (id, seq, status, spec, created_at) \
              VALUES (?1, (SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs), 'accepted', ?2, ?3)",
@@ -92,9 +99,25 @@ impl Store {
         .bind(id)
         .bind(spec)
         .bind(now())
-        .execute(&self.pool)
+        .execute(&mut *tx)
         .await?;
+        for (name, data) in inputs {
+            sqlx::query("INSERT INTO inputs (job_id, name, data) VALUES (?1, ?2, ?3)")
+                .bind(id)
+                .bind(name)
+                .bind(data.as_slice())
+                .execute(&mut *tx)
+                .await?;
+        }
+        tx.commit().await?;
         Ok(self.job(id).await?.expect("just inserted"))
+    }
+
+    /// The uploaded inputs of a job, by name.
+    pub async fn inputs(&self, id: &str) -> Result<HashMap<String, Vec<u8>>, sqlx::Error> {
+        let rows =
+            sqlx::query("SELECT name, data FROM inputs WHERE job_id = ?1").bind(id).fetch_all(&self.pool).await?;
+        Ok(rows.iter().map(|r| (r.get::<String, _>("name"), r.get::<Vec<u8>, _>("data"))).collect())
     }
 
     pub async fn job(&self, id: &str) -> Result<Option<JobRow>, sqlx::Error> {

@@ -100,7 +100,8 @@ impl Worker {
             self.rt.block_on(self.store.finish(&job.id, status, stop, msg))?;
             Ok(status.to_string())
         };
-        let prepared = match parse_spec(&job.spec).and_then(|s| prepare(s, &HashMap::new())) {
+        let inputs = self.rt.block_on(self.store.inputs(&job.id))?;
+        let prepared = match parse_spec(&job.spec).and_then(|s| prepare(s, &inputs)) {
             Ok(p) => p,
             Err(e) => return finish("failed", None, Some(&e.to_string())),
         };

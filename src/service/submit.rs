@@ -1,0 +1,87 @@
+//! `POST /v1/jobs`: a JSON spec (inline geometry), or `multipart/form-data` with a
+//! part named `spec` (the JSON spec) and one part per input file, named as in the
+//! spec's `"input:NAME"`. The spec is validated with its inputs (images decoded,
+//! meshes read) before anything is stored; job and inputs are stored in one
+//! transaction before 201 is answered.
+
+use super::{job_json, ApiError, AppState, MAX_BODY_BYTES, MAX_UPLOAD_BYTES};
+use crate::jobs::{parse_spec, prepare};
+use axum::extract::{FromRequest, Multipart, Request, State};
+use axum::http::{header, StatusCode};
+use axum::response::{IntoResponse, Response};
+use axum::Json;
+use std::collections::HashMap;
+
+/// The spec text and the input files of a multipart body.
+async fn read_multipart(req: Request, state: &AppState) -> Result<(String, HashMap<String, Vec<u8>>), ApiError> {
+    let mut mp = Multipart::from_request(req, state)
+        .await
+        .map_err(|e| ApiError::BadRequest(format!("malformed multipart body: {}", e.body_text())))?;
+    let mut spec = None;
+    let mut inputs = HashMap::new();
+    let mut total = 0usize;
+    loop {
+        let field = match mp.next_field().await {
+            Ok(Some(f)) => f,
+            Ok(None) => break,
+            Err(e) => return Err(ApiError::BadRequest(format!("malformed multipart body: {}", e.body_text()))),
+        };
+        let name = field
+            .name()
+            .map(str::to_string)
+            .filter(|n| !n.is_empty())
+            .ok_or_else(|| ApiError::BadRequest("a multipart part has no name".into()))?;
+        let mut data = Vec::new();
+        let mut field = field;
+        while let Some(chunk) =
+            field.chunk().await.map_err(|e| ApiError::BadRequest(format!("part `{name}`: {}", e.body_text())))?
+        {
+            total += chunk.len();
+            if total > MAX_UPLOAD_BYTES {
+                return Err(ApiError::TooLarge(MAX_UPLOAD_BYTES));
+            }
+            data.extend_from_slice(&chunk);
+        }
+        if name == "spec" {
+            let text = String::from_utf8(data)
+                .map_err(|_| ApiError::Invalid { field: "spec".into(), detail: "the spec part is not UTF-8".into() })?;
+            spec = Some(text);
+        } else if inputs.insert(name.clone(), data).is_some() {
+            return Err(ApiError::BadRequest(format!("input part `{name}` is given twice")));
+        }
+    }
+    let spec = spec.ok_or_else(|| ApiError::Invalid {
+        field: "spec".into(),
+        detail: "the multipart body has no part named `spec` (the JSON job spec)".into(),
+    })?;
+    Ok((spec, inputs))
+}
+
+pub(super) async fn create_job(State(state): State<AppState>, req: Request) -> Result<Response, ApiError> {
+    let ctype = req.headers().get(header::CONTENT_TYPE).and_then(|v| v.to_str().ok()).unwrap_or("").to_string();
+    let (text, inputs) = if ctype.starts_with("application/json") {
+        let body = axum::body::to_bytes(req.into_body(), MAX_BODY_BYTES)
+            .await
+            .map_err(|_| ApiError::TooLarge(MAX_BODY_BYTES))?;
+        let text = String::from_utf8(body.to_vec()).map_err(|_| ApiError::BadRequest("body is not UTF-8".into()))?;
+        (text, HashMap::new())
+    } else if ctype.starts_with("multipart/form-data") {
+        read_multipart(req, &state).await?
+    } else {
+        return Err(ApiError::UnsupportedMedia(format!(
+            "expected Content-Type application/json or multipart/form-data, got {ctype:?}"
+        )));
+    };
+    let spec = parse_spec(&text).map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
+    let normalized = serde_json::to_string(&spec).expect("spec serializes");
+    // validation decodes images and reads meshes: keep it off the async threads
+    let inputs = tokio::task::spawn_blocking(move || prepare(spec, &inputs).map(|_| inputs))
+        .await
+        .map_err(|e| ApiError::Internal(e.to_string()))?
+        .map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
+    let id = uuid::Uuid::new_v4().to_string();
+    let job = state.store.insert_job(&id, &normalized, &inputs).await?;
+    state.wake.notify_one();
+    let location = format!("/v1/jobs/{id}");
+    Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(job_json(&job))).into_response())
+}
