@@ -426,6 +426,20 @@ fn router_and_openapi_document_list_the_same_routes() {
             assert!(head.to_ascii_lowercase().contains("application/problem+json"), "{m} {p} is not routed");
         }
     }
+    // the served document is api/openapi.yaml, as JSON, with the same routes
+    let (s, doc) = srv.json("GET", "/v1/openapi.json", None);
+    assert_eq!(s, 200);
+    assert_eq!(doc["openapi"], "3.1.0");
+    let mut served: Vec<(String, String)> = doc["paths"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .flat_map(|(p, item)| {
+            item.as_object().unwrap().keys().filter(|k| *k != "parameters").map(move |m| (m.to_uppercase(), p.clone()))
+        })
+        .collect();
+    served.sort();
+    assert_eq!(served, listed, "/v1/openapi.json vs service::ROUTES");
     srv.stop();
 }
 

@@ -51,6 +51,7 @@ pub struct AppState {
 /// `api/openapi.yaml` and against the router itself.
 pub const ROUTES: &[(&str, &str)] = &[
     ("GET", "/healthz"),
+    ("GET", "/v1/openapi.json"),
     ("POST", "/v1/jobs"),
     ("GET", "/v1/jobs"),
     ("GET", "/v1/jobs/{id}"),
@@ -74,6 +75,7 @@ pub const ROUTES: &[(&str, &str)] = &[
 pub fn router(state: AppState) -> Router {
     Router::new()
         .route("/healthz", get(|| async { "ok" }))
+        .route("/v1/openapi.json", get(openapi))
         .route("/v1/jobs", post(submit::create_job).get(list_jobs))
         .route("/v1/jobs/{id}", get(get_job).delete(delete_job))
         .route("/v1/jobs/{id}/cancel", post(cancel_job))
@@ -115,6 +117,19 @@ fn job_json(j: &JobRow) -> Value {
         "started": j.started_at,
         "finished": j.finished_at,
     })
+}
+
+/// The contract `api/openapi.yaml`, embedded at build time.
+pub const OPENAPI_YAML: &str = include_str!("../../api/openapi.yaml");
+
+/// `api/openapi.yaml` as JSON (converted once).
+pub fn openapi_json() -> &'static Value {
+    static DOC: std::sync::OnceLock<Value> = std::sync::OnceLock::new();
+    DOC.get_or_init(|| serde_norway::from_str(OPENAPI_YAML).expect("api/openapi.yaml is valid YAML"))
+}
+
+async fn openapi() -> Json<Value> {
+    Json(openapi_json().clone())
 }
 
 async fn find(state: &AppState, id: &str) -> Result<JobRow, ApiError> {
