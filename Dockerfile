@@ -16,4 +16,4 @@ USER shapeflow
 VOLUME /data
 EXPOSE 8080
 ENTRYPOINT ["shapeflow"]
-CMD ["serve", "--bind", "0.0.0.0:8080", "--database", "/data/shapeflow.db"]
+CMD ["serve", "--bind", "0.0.0.0:8080", "--data-dir", "/data"]

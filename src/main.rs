@@ -39,9 +39,14 @@ enum Command {
         /// Address to listen on.
         #[arg(long, default_value = "127.0.0.1:8080")]
         bind: String,
-        /// SQLite database file (created if missing).
+        /// SQLite database file (created if missing); a relative path is taken
+        /// inside --data-dir.
         #[arg(long, default_value = "shapeflow.db")]
         database: PathBuf,
+        /// Directory for the service's data (the database, with its WAL files);
+        /// created if missing.
+        #[arg(long, default_value = ".")]
+        data_dir: PathBuf,
         /// Worker threads running jobs (default: number of cores).
         #[arg(long)]
         workers: Option<usize>,
@@ -65,7 +70,12 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
-        Command::Serve { bind, database, workers, token } => {
+        Command::Serve { bind, database, data_dir, workers, token } => {
+            if let Err(e) = std::fs::create_dir_all(&data_dir) {
+                eprintln!("error: cannot create data directory {}: {e}", data_dir.display());
+                return ExitCode::from(1);
+            }
+            let database = data_dir.join(database);
             let workers = workers.unwrap_or_else(|| std::thread::available_parallelism().map_or(2, |n| n.get()));
             let result = tokio::runtime::Builder::new_multi_thread()
                 .enable_all()

@@ -348,7 +348,8 @@ fn a_stopped_server_resumes_its_running_job_on_restart_without_losing_history() 
 fn kill_9_mid_job_then_restart_resumes_and_finishes() {
     use std::process::{Child, Command, Stdio};
     let dir = tempfile::tempdir().unwrap();
-    let db = dir.path().join("jobs.db");
+    // the database goes into --data-dir (created by the server)
+    let data = dir.path().join("data");
     let port = {
         let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
         l.local_addr().unwrap().port()
@@ -356,8 +357,8 @@ fn kill_9_mid_job_then_restart_resumes_and_finishes() {
     let addr: SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
     let spawn = || -> Child {
         let child = Command::new(env!("CARGO_BIN_EXE_shapeflow"))
-            .args(["serve", "--bind", &addr.to_string(), "--workers", "1", "--database"])
-            .arg(&db)
+            .args(["serve", "--bind", &addr.to_string(), "--workers", "1", "--database", "jobs.db", "--data-dir"])
+            .arg(&data)
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
@@ -372,6 +373,7 @@ fn kill_9_mid_job_then_restart_resumes_and_finishes() {
     let call = |method: &str, path: &str, body: Option<&str>| http_json(addr, method, path, body);
     let wait = |id: &str, pred: &dyn Fn(&Value) -> bool| wait_for(addr, id, pred);
     let mut first = spawn();
+    assert!(data.join("jobs.db").exists(), "the database is in --data-dir");
     let (s, job) = call("POST", "/v1/jobs", Some(LONG));
     assert_eq!(s, 201);
     let id = job["id"].as_str().unwrap().to_string();
@@ -466,6 +468,30 @@ fn twenty_jobs_on_two_workers_all_finish_with_complete_histories() {
             hist["history"].as_array().unwrap().iter().map(|r| r["iteration"].as_u64().unwrap()).collect();
         assert_eq!(its, (0..=50).collect::<Vec<_>>(), "job {id}");
     }
+    // paging: 7 per page, newest first, every job exactly once
+    let mut seen = Vec::new();
+    let mut token: Option<String> = None;
+    let mut pages = 0;
+    loop {
+        let path = match &token {
+            Some(t) => format!("/v1/jobs?limit=7&page_token={t}"),
+            None => "/v1/jobs?limit=7".to_string(),
+        };
+        let (s, page) = srv.json("GET", &path, None);
+        assert_eq!(s, 200);
+        pages += 1;
+        seen.extend(page["jobs"].as_array().unwrap().iter().map(|j| j["id"].as_str().unwrap().to_string()));
+        match page["next_page_token"].as_str() {
+            Some(t) => token = Some(t.to_string()),
+            None => break,
+        }
+    }
+    assert_eq!(pages, 3);
+    let newest_first: Vec<String> = ids.iter().rev().cloned().collect();
+    assert_eq!(seen, newest_first);
+    assert_eq!(srv.request("GET", "/v1/jobs?page_token=zzz", None).0, 422);
+    assert_eq!(srv.request("GET", "/v1/jobs?status=done", None).0, 422);
+    assert_eq!(srv.request("GET", "/v1/jobs?limit=0", None).0, 422);
     srv.stop();
 }
 

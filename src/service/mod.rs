@@ -140,12 +140,44 @@ async fn find(state: &AppState, id: &str) -> Result<JobRow, ApiError> {
 struct ListQuery {
     status: Option<String>,
     limit: Option<i64>,
+    page_token: Option<String>,
 }
 
+/// Statuses a job can have (OGC API – Processes).
+const STATUSES: [&str; 5] = ["accepted", "running", "successful", "failed", "dismissed"];
+
+/// `GET /v1/jobs?status=&limit=&page_token=`: newest first, `limit` (1–1000, default
+/// 100) per page; `next_page_token` is present when more jobs follow.
 async fn list_jobs(State(state): State<AppState>, Query(q): Query<ListQuery>) -> Result<Json<Value>, ApiError> {
-    let limit = q.limit.unwrap_or(100).clamp(1, 1000);
-    let jobs = state.store.list(q.status.as_deref(), limit).await?;
-    Ok(Json(json!({ "jobs": jobs.iter().map(job_json).collect::<Vec<_>>() })))
+    if let Some(s) = q.status.as_deref() {
+        if !STATUSES.contains(&s) {
+            let detail = format!("unknown status {s:?}; one of {}", STATUSES.join(", "));
+            return Err(ApiError::Invalid { field: "status".into(), detail });
+        }
+    }
+    let limit = match q.limit {
+        None => 100,
+        Some(l @ 1..=1000) => l,
+        Some(l) => {
+            return Err(ApiError::Invalid { field: "limit".into(), detail: format!("must be 1 to 1000, got {l}") })
+        }
+    };
+    let before = match q.page_token.as_deref() {
+        None | Some("") => None,
+        Some(t) => Some(t.strip_prefix("p").and_then(|h| i64::from_str_radix(h, 16).ok()).ok_or_else(|| {
+            ApiError::Invalid { field: "page_token".into(), detail: format!("not a page token: {t:?}") }
+        })?),
+    };
+    let mut jobs = state.store.list(q.status.as_deref(), before, limit + 1).await?;
+    let more = jobs.len() as i64 > limit;
+    jobs.truncate(limit as usize);
+    let mut body = json!({ "jobs": jobs.iter().map(job_json).collect::<Vec<_>>() });
+    if more {
+        if let Some(last) = jobs.last() {
+            body["next_page_token"] = json!(format!("p{:x}", last.seq));
+        }
+    }
+    Ok(Json(body))
 }
 
 async fn get_job(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Value>, ApiError> {

@@ -12,6 +12,8 @@ use std::time::Duration;
 #[derive(Debug, Clone, PartialEq)]
 pub struct JobRow {
     pub id: String,
+    /// Submission order (1, 2, ...).
+    pub seq: i64,
     pub status: String,
     pub spec: String,
     pub created_at: String,
@@ -51,6 +53,7 @@ fn job_from_row(r: &sqlx::sqlite::SqliteRow) -> JobRow {
     let iteration: Option<i64> = r.get("iteration");
     JobRow {
         id: r.get("id"),
+        seq: r.get("seq"),
         status: r.get("status"),
         spec: r.get("spec"),
         created_at: r.get("created_at"),
@@ -125,12 +128,23 @@ impl Store {
         Ok(r.as_ref().map(job_from_row))
     }
 
-    pub async fn list(&self, status: Option<&str>, limit: i64) -> Result<Vec<JobRow>, sqlx::Error> {
-        let rows = sqlx::query("SELECT * FROM jobs WHERE (?1 IS NULL OR status = ?1) ORDER BY seq DESC LIMIT ?2")
-            .bind(status)
-            .bind(limit)
-            .fetch_all(&self.pool)
-            .await?;
+    /// Jobs newest first, optionally of one status and submitted before `before`
+    /// (a `seq`), at most `limit`.
+    pub async fn list(
+        &self,
+        status: Option<&str>,
+        before: Option<i64>,
+        limit: i64,
+    ) -> Result<Vec<JobRow>, sqlx::Error> {
+        let rows = sqlx::query(
+            "SELECT * FROM jobs WHERE (?1 IS NULL OR status = ?1) AND (?2 IS NULL OR seq < ?2) \
+             ORDER BY seq DESC LIMIT ?3",
+        )
+        .bind(status)
+        .bind(before)
+        .bind(limit)
+        .fetch_all(&self.pool)
+        .await?;
         Ok(rows.iter().map(job_from_row).collect())
     }
 
