@@ -4,6 +4,7 @@ WORKDIR /src
 COPY Cargo.toml Cargo.lock build.rs rustfmt.toml ./
 COPY src src
 COPY migrations migrations
+COPY api api
 COPY benches benches
 COPY examples examples
 RUN cargo build --release --bin shapeflow
