@@ -288,6 +288,12 @@ fn bad_inputs_are_problem_json_naming_the_field_and_the_server_keeps_serving() {
             "initial",
         ),
         (r#"{"problem": {"type": "nonsense"}, "initial": {"shape": "circle", "radius": 1}}"#, "problem.type"),
+        // NaN is not JSON: the document is malformed
+        (r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": NaN}}"#, "(document)"),
+        (
+            r#"{"problem": {"type": "curvature_flow", "lambda": -1e999}, "initial": {"shape": "circle", "radius": 1}}"#,
+            "(document)",
+        ),
     ];
     for (body, field) in cases {
         let (status, head, b) = srv.request("POST", "/v1/jobs", Some(("application/json", body)));
