@@ -74,9 +74,6 @@ fn png_rgb8(p: &Picture) -> Vec<u8> {
 struct History(Vec<f64>);
 impl RunEvents for History {
     fn progress(&mut self, p: &Progress) {
-        if std::env::var("TRACE").is_ok() {
-            eprintln!("  {} tau {:.3e} J {:.6} n {}", p.iteration, p.tau, p.energy, p.vertices);
-        }
         self.0.push(p.energy);
     }
 }

@@ -27,7 +27,8 @@
 //! ```
 //!
 //! Finally `V⃗_i = N⃗_i V_i / m_i`. `S` is symmetric positive definite when `g` is a
-//! nonnegative constant in the L2/H1 case (Cholesky); otherwise LU is used.
+//! nonnegative constant in the L2/H1 case (Cholesky); for positive varying `g`,
+//! GMRES preconditioned by the Cholesky factor of the symmetric part; otherwise LU.
 //!
 //! The `H^{-1}` complement has a two-ring stencil and is not symmetric; see
 //! [`super::h_minus_1`] for its preconditioned iterative solve (sparse LU of the
@@ -35,9 +36,10 @@
 
 use super::cholesky::SparseCholesky;
 use super::cyclic::{cyclic_solve, cyclic_solve_checked, CyclicComponent};
+use super::gmres::gmres;
 use super::system::{LinearSystem, ProductWeights};
 use super::FlowError;
-use crate::fem::Pattern;
+use crate::fem::{csc_mul, Pattern};
 use crate::geometry::segment_cycles;
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
@@ -131,10 +133,65 @@ impl LumpedSolver {
                 return Ok(v);
             }
             // not positive definite: fall back to LU
+        } else if sys.g.iter().all(|&g| g > 0.0) {
+            if let Some(v) = self.solve_by_symmetric_part(sys, &s) {
+                return Ok(v);
+            }
         }
         let (v, lu) = lu_solve(&mut self.lu, sys.pattern.symbolic(), s)?;
         self.last = Last::Lu(Box::new(lu));
         Ok(v)
+    }
+
+    /// `S` not symmetric only through `τ g_i Q_ij` with `g > 0` varying (e.g. `g = H`
+    /// in segmentation): GMRES preconditioned by a Cholesky factorization of the
+    /// symmetric part `(S + Sᵀ)/2` (one-ring pattern, symbolic factorization kept),
+    /// which is close to `S` when `g` varies slowly between neighbours. `None` if the
+    /// symmetric part is not positive definite or GMRES does not converge (then LU).
+    fn solve_by_symmetric_part<const D: usize>(
+        &mut self,
+        sys: &LinearSystem<'_, D>,
+        s: &SchurMatrix,
+    ) -> Option<Vec<f64>> {
+        let p = sys.pattern;
+        let (col_ptr, row_idx) = (p.col_ptr(), p.row_idx());
+        let mut sym = s.values.clone();
+        for j in 0..p.size() {
+            for k in col_ptr[j]..col_ptr[j + 1] {
+                let i = row_idx[k];
+                if i <= j {
+                    continue;
+                }
+                // the transposed entry (j, i) in column i
+                let col = &row_idx[col_ptr[i]..col_ptr[i + 1]];
+                let t = col_ptr[i] + col.binary_search(&j).ok()?;
+                let mean = 0.5 * (s.values[k] + s.values[t]);
+                sym[k] = mean;
+                sym[t] = mean;
+            }
+        }
+        let symbolic = p.symbolic().as_ref();
+        if self.chol.is_none() {
+            self.chol = Some(SparseCholesky::new(symbolic).ok()?);
+        }
+        let chol = self.chol.as_mut().unwrap();
+        chol.factorize(symbolic, &sym).ok()?;
+        let chol = self.chol.as_ref().unwrap();
+        let mut v = vec![0.0; p.size()];
+        let out = gmres(
+            |x, y| csc_mul(col_ptr, row_idx, &s.values, x, y),
+            |x| chol.solve_in_place(x),
+            &s.rhs,
+            &mut v,
+            1e-10,
+            40,
+            200,
+        );
+        if !out.converged {
+            return None;
+        }
+        self.last = Last::OneRingCholesky;
+        Some(v)
     }
 
     /// Apply the inverse of the last factorized matrix (the Schur complement, or its
