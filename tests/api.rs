@@ -1,5 +1,8 @@
 //! The HTTP service over real HTTP on 127.0.0.1 against a temporary SQLite file.
 
+mod common;
+
+use common::validate_gltf;
 use serde_json::Value;
 use shapeflow::service::Service;
 use std::io::{Read, Write};
@@ -128,20 +131,6 @@ fn download(addr: SocketAddr, path: &str) -> (u16, String, Vec<u8>) {
     let head = String::from_utf8_lossy(&out[..split]).to_string();
     let status = head.split_whitespace().nth(1).unwrap().parse().unwrap();
     (status, head, out[split + 4..].to_vec())
-}
-
-/// The Khronos glTF-Validator (installed by `npm ci`) on `files`: no errors, no warnings.
-fn validate_gltf(files: &[std::path::PathBuf]) {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    assert!(root.join("node_modules/gltf-validator").exists(), "the glTF validator is missing: run `npm ci` first");
-    let out = std::process::Command::new("node")
-        .arg(root.join("scripts/validate_gltf.mjs"))
-        .args(files)
-        .output()
-        .expect("node");
-    let report = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "validator: {report} {}", String::from_utf8_lossy(&out.stderr));
-    assert_eq!(report.lines().count(), files.len(), "{report}");
 }
 
 fn http_json(addr: SocketAddr, method: &str, path: &str, body: Option<&str>) -> (u16, Value) {

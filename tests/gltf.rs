@@ -2,12 +2,13 @@
 //! Khronos glTF-Validator (npm `gltf-validator`, installed by `npm ci`) reporting no
 //! errors and no warnings on every file we write.
 
+mod common;
+
+use common::validate_gltf;
 use serde_json::Value;
 use shapeflow::flow::Checkpoint;
 use shapeflow::jobs::{parse_spec, prepare, run_prepared, state_glb, states_glb, PreparedJob, RunEvents};
 use std::collections::HashMap;
-use std::path::Path;
-use std::process::Command;
 use std::sync::atomic::AtomicBool;
 
 #[derive(Default)]
@@ -41,22 +42,6 @@ fn floats(doc: &Value, bin: &[u8], a: usize) -> Vec<f32> {
     let off = view["byteOffset"].as_u64().unwrap() as usize;
     let len = view["byteLength"].as_u64().unwrap() as usize;
     bin[off..off + len].chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect()
-}
-
-/// Run the Khronos validator over `files`; panics with its report unless every file
-/// has no errors and no warnings.
-fn validate(files: &[&Path]) {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    assert!(
-        root.join("node_modules/gltf-validator").exists(),
-        "the glTF validator is missing: run `npm ci` in {} first",
-        root.display()
-    );
-    let out = Command::new("node").arg(root.join("scripts/validate_gltf.mjs")).args(files).output().expect("node");
-    let report = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "validator: {report} {}", String::from_utf8_lossy(&out.stderr));
-    assert_eq!(report.lines().count(), files.len(), "{report}");
-    assert!(report.lines().all(|l| l.contains("\"numErrors\":0,\"numWarnings\":0")), "{report}");
 }
 
 #[test]
@@ -130,6 +115,5 @@ fn curves_surfaces_and_segmentations_validate_with_the_right_fields() {
     write("balls.glb", &state_glb(&job, cps.last().unwrap()));
     write("balls_evolution.glb", &states_glb(&job, &cps).unwrap());
 
-    let paths: Vec<&Path> = files.iter().map(|p| p.as_path()).collect();
-    validate(&paths);
+    validate_gltf(&files);
 }

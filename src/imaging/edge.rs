@@ -121,9 +121,8 @@ impl EdgeField {
         let n = self.dims[a] as isize;
         let index = std::array::from_fn(|q| (ax.i0 - 1 + q as isize).clamp(0, n - 1) as usize);
         let clamped = ax.excess != 0.0;
-        let w = if !derivatives {
-            [bspline::w(ax.t), [0.0; 4], [0.0; 4]]
-        } else if clamped {
+        // outside the grid the field is constant along this axis
+        let w = if !derivatives || clamped {
             [bspline::w(ax.t), [0.0; 4], [0.0; 4]]
         } else {
             [bspline::w(ax.t), bspline::dw(ax.t), bspline::ddw(ax.t)]

@@ -409,12 +409,7 @@ fn build_initial(field: &str, s: &InitialSpec, inputs: &HashMap<String, Vec<u8>>
             surface(field, geometry::torus(*center, big, small, n, n_minor))
         }
         InitialSpec::Mesh { file } => {
-            let name = file.strip_prefix("input:").ok_or_else(|| {
-                SpecError::new(at("file"), format!("must name an uploaded input as \"input:NAME\", got {file:?}"))
-            })?;
-            let bytes = inputs
-                .get(name)
-                .ok_or_else(|| SpecError::new(at("file"), format!("no input named {name:?} was supplied")))?;
+            let (name, bytes) = input(&at("file"), file, inputs)?;
             read_mesh_file(name, bytes).map_err(|e| SpecError::new(at("file"), e.to_string()))
         }
     }

@@ -78,7 +78,7 @@ pub(super) async fn manifest(State(state): State<AppState>, Path(id): Path<Strin
 
 /// Whether the (single) input image of a segmentation job is an NRRD volume.
 async fn is_volume(state: &AppState, id: &str) -> Result<bool, ApiError> {
-    Ok(state.store.inputs(id).await?.values().any(|b| b.starts_with(b"NRRD")))
+    Ok(state.store.input_magics(id).await?.iter().any(|b| b.starts_with(b"NRRD")))
 }
 
 /// The job, its image and its latest state, for image results.

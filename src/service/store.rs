@@ -116,6 +116,16 @@ impl Store {
         Ok(self.job(id).await?.expect("just inserted"))
     }
 
+    /// The first bytes (at most 8) of each uploaded input of a job: enough to tell
+    /// the file type without loading the files.
+    pub async fn input_magics(&self, id: &str) -> Result<Vec<Vec<u8>>, sqlx::Error> {
+        let rows = sqlx::query("SELECT substr(data, 1, 8) AS head FROM inputs WHERE job_id = ?1")
+            .bind(id)
+            .fetch_all(&self.pool)
+            .await?;
+        Ok(rows.iter().map(|r| r.get::<Vec<u8>, _>("head")).collect())
+    }
+
     /// The uploaded inputs of a job, by name.
     pub async fn inputs(&self, id: &str) -> Result<HashMap<String, Vec<u8>>, sqlx::Error> {
         let rows =
