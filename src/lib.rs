@@ -19,6 +19,7 @@
 //! cases an element has `D` vertices, which lets the assembly and the flow be written
 //! once for both dimensions.
 
+pub mod bulk;
 pub mod export;
 pub mod fem;
 pub mod flow;

@@ -11,10 +11,10 @@
 //!
 //! where `N_c` is the `c`-th component of `N⃗_ij = ∫ φ_i φ_j ν` (symmetric).
 
-use super::cholesky::SparseCholesky;
 use super::gmres::{gmres, GmresOutcome};
 use super::system::{LinearSystem, ProductWeights};
 use super::{FlowError, LumpedSolver};
+use crate::fem::SparseCholesky;
 use crate::fem::Weight;
 use crate::geometry::Point;
 

@@ -34,11 +34,11 @@
 //! [`super::h_minus_1`] for its preconditioned iterative solve (sparse LU of the
 //! assembled `S` is the fallback).
 
-use super::cholesky::SparseCholesky;
 use super::cyclic::{cyclic_solve, cyclic_solve_checked, CyclicComponent};
 use super::gmres::gmres;
 use super::system::{LinearSystem, ProductWeights};
 use super::FlowError;
+use crate::fem::SparseCholesky;
 use crate::fem::{csc_mul, Pattern};
 use crate::geometry::segment_cycles;
 use faer::linalg::solvers::Solve;

@@ -3,7 +3,6 @@
 //! geometric time-step control, backtracking and the driver loop.
 
 mod checkpoint;
-mod cholesky;
 mod consistent;
 mod cyclic;
 mod driver;
@@ -16,7 +15,7 @@ mod problem;
 mod step;
 mod system;
 
-pub use cholesky::SparseCholesky;
+pub use crate::fem::SparseCholesky;
 pub use consistent::ConsistentSolver;
 pub use cyclic::solve_cyclic_tridiagonal;
 pub use driver::{Checkpoint, Flow, FlowSettings, MeshData, Progress, StepReport, StopReason};

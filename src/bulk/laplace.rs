@@ -1,0 +1,132 @@
+//! P1 finite elements for the state and adjoint equations of shape design
+//! (paper eqs. 7 and 42) on a [`BulkMesh`]:
+//!
+//! ```text
+//! state:   −Δy = 0 in Ω,   y = 0 on Σ,   ∂_ν y = 1 on Γ
+//! adjoint: −Δp = χ_D (y − z_g) in Ω,   p = 0 on Σ,   ∂_ν p = 0 on Γ
+//! ```
+//!
+//! Both share the stiffness matrix `K_ij = ∫_Ω ∇φ_i·∇φ_j` with the Dirichlet rows
+//! and columns of `Σ` replaced by the identity: one sparse Cholesky factorization
+//! (faer), two solves. The data misfit `½∫_D (y − z_g)²` and the adjoint load
+//! `∫_D (y − z_g) φ_i` use the degree-5 seven-point rule on every triangle of `D`
+//! (the mesh conforms to `∂D`, so only the geometry of `∂D` is approximated).
+
+use super::mesh::{triangle_area, BulkMesh};
+use super::BulkError;
+use crate::fem::{Pattern, SparseCholesky};
+use crate::geometry::Point;
+
+/// Barycentric coordinates and weights (summing to 1) of the seven-point rule.
+const RULE7: [([f64; 3], f64); 7] = {
+    const A1: f64 = 0.059_715_871_789_770;
+    const B1: f64 = 0.470_142_064_105_115;
+    const A2: f64 = 0.797_426_985_353_087;
+    const B2: f64 = 0.101_286_507_323_456;
+    const W1: f64 = 0.132_394_152_788_506;
+    const W2: f64 = 0.125_939_180_544_827;
+    [
+        ([1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0], 0.225),
+        ([A1, B1, B1], W1),
+        ([B1, A1, B1], W1),
+        ([B1, B1, A1], W1),
+        ([A2, B2, B2], W2),
+        ([B2, A2, B2], W2),
+        ([B2, B2, A2], W2),
+    ]
+};
+
+/// The fields of one shape-design evaluation, at the vertices of the bulk mesh.
+#[derive(Debug, Clone)]
+pub struct DesignFields {
+    pub y: Vec<f64>,
+    pub p: Vec<f64>,
+    /// `½ ∫_D (y − z_g)²`.
+    pub misfit: f64,
+}
+
+/// `∇λ_a` of the barycentric coordinates of a triangle with area `area`.
+fn gradients(p: [Point<2>; 3], area: f64) -> [Point<2>; 3] {
+    std::array::from_fn(|a| {
+        let (b, c) = (p[(a + 1) % 3], p[(a + 2) % 3]);
+        Point::<2>::new(b.y - c.y, c.x - b.x) / (2.0 * area)
+    })
+}
+
+/// Solves the state and adjoint problems for the target `z_g`.
+pub fn solve_design_fields(mesh: &BulkMesh, target: &dyn Fn(Point<2>) -> f64) -> Result<DesignFields, BulkError> {
+    let n = mesh.points.len();
+    let pattern = Pattern::<3>::new(n, &mesh.triangles);
+    let mut k = vec![0.0; pattern.nnz()];
+    for (e, t) in mesh.triangles.iter().enumerate() {
+        let p = t.map(|i| mesh.points[i]);
+        let area = triangle_area(&mesh.points, t);
+        if !(area > 0.0) {
+            return Err(BulkError::Meshing(format!("bulk triangle {e} is degenerate (area {area:e})")));
+        }
+        let g = gradients(p, area);
+        let slots = &pattern.slots()[e];
+        for a in 0..3 {
+            for b in 0..3 {
+                k[slots[a][b]] += area * g[a].dot(&g[b]);
+            }
+        }
+    }
+    // Dirichlet rows and columns → identity
+    let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+    for j in 0..n {
+        for s in cp[j]..cp[j + 1] {
+            let i = ri[s];
+            if mesh.on_outer[i] || mesh.on_outer[j] {
+                k[s] = if i == j { 1.0 } else { 0.0 };
+            }
+        }
+    }
+    let sym = pattern.symbolic().as_ref();
+    let mut chol = SparseCholesky::<f64>::new(sym).map_err(BulkError::Solver)?;
+    chol.factorize(sym, &k).map_err(BulkError::Solver)?;
+
+    // state: Neumann load ∫_Γ φ_i
+    let mut y = vec![0.0; n];
+    for &[a, b] in &mesh.curve_edges {
+        let len = (mesh.points[b] - mesh.points[a]).norm();
+        y[a] += 0.5 * len;
+        y[b] += 0.5 * len;
+    }
+    chol.solve_in_place(&mut y);
+    check_finite("state", &y)?;
+
+    // misfit and adjoint load on D
+    let mut p = vec![0.0; n];
+    let mut misfit = 0.0;
+    for (t, _) in mesh.triangles.iter().zip(&mesh.in_control).filter(|(_, &c)| c) {
+        let area = triangle_area(&mesh.points, t);
+        let x = t.map(|i| mesh.points[i]);
+        for (l, w) in RULE7 {
+            let point = x[0] * l[0] + x[1] * l[1] + x[2] * l[2];
+            let r = l[0] * y[t[0]] + l[1] * y[t[1]] + l[2] * y[t[2]] - target(point);
+            misfit += 0.5 * w * area * r * r;
+            for a in 0..3 {
+                p[t[a]] += w * area * r * l[a];
+            }
+        }
+    }
+    for (pi, &d) in p.iter_mut().zip(&mesh.on_outer) {
+        if d {
+            *pi = 0.0;
+        }
+    }
+    chol.solve_in_place(&mut p);
+    check_finite("adjoint", &p)?;
+    if !misfit.is_finite() {
+        return Err(BulkError::Solver("the misfit ½∫_D (y − z_g)² is not finite (check the target)".into()));
+    }
+    Ok(DesignFields { y, p, misfit })
+}
+
+fn check_finite(what: &str, v: &[f64]) -> Result<(), BulkError> {
+    match v.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(BulkError::Solver(format!("the {what} solution is not finite at bulk vertex {i}"))),
+        None => Ok(()),
+    }
+}

@@ -1,0 +1,255 @@
+//! Triangulation of the bulk domain `Ω` between the moving curve `Γ` and the fixed
+//! outer boundary `Σ`, conforming to the boundary of the control region `D`: a
+//! constrained Delaunay triangulation (spade) of all boundary polygons, refined to a
+//! minimum angle, with the element size graded from the boundary spacing.
+//!
+//! Which triangles belong to `Ω` (and to `D`) is decided by a flood fill over the
+//! triangles from the convex hull inwards: crossing a constraint edge of `Γ` or `Σ`
+//! flips "in `Ω`", crossing one of `∂D` flips "in `D`". Refinement splits constraint
+//! edges; the pieces inherit the boundary they lie on by walking the constraint chains
+//! from the input vertices.
+
+use super::domain::{loop_segments, DesignDomain};
+use super::BulkError;
+use crate::geometry::Point;
+use spade::handles::FixedVertexHandle;
+use spade::{AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation};
+use std::collections::VecDeque;
+
+/// Meshing parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeshingOptions {
+    /// Minimum angle the refinement aims for, in degrees (at most 33).
+    pub min_angle_deg: f64,
+    /// Largest allowed triangle area (caps the grading away from the boundaries).
+    pub max_area: f64,
+    /// Triangles below this area are not refined further (protects against narrow gaps).
+    pub min_area: f64,
+}
+
+impl MeshingOptions {
+    /// Defaults for a domain: 28°, triangle areas at most `h_Σ²` (`h_Σ` the spacing of
+    /// `Σ`; this keeps the P1 error `O(h²)` in the far field, measured on the annulus),
+    /// no refinement below 1/400 of the smallest boundary spacing squared.
+    pub fn for_domain(domain: &DesignDomain, curve_spacing: f64) -> Self {
+        let h_sigma = domain.outer().spacing();
+        let h_min = curve_spacing.min(domain.control()[0].spacing()).min(h_sigma);
+        MeshingOptions { min_angle_deg: 28.0, max_area: h_sigma * h_sigma, min_area: 0.0025 * h_min * h_min }
+    }
+}
+
+/// Which boundary a vertex or constraint edge lies on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Boundary {
+    Curve,
+    Outer,
+    Control,
+}
+
+/// A P1 triangulation of `Ω`.
+///
+/// The first `curve_vertices` vertices are the vertices of `Γ`, in the order of the
+/// curve mesh; every vertex belongs to at least one triangle.
+#[derive(Debug, Clone)]
+pub struct BulkMesh {
+    pub points: Vec<Point<2>>,
+    /// Counter-clockwise triangles of `Ω`.
+    pub triangles: Vec<[usize; 3]>,
+    /// Per triangle: does it lie in `D`?
+    pub in_control: Vec<bool>,
+    /// Per vertex: on `Σ` (Dirichlet)?
+    pub on_outer: Vec<bool>,
+    /// Edges of the triangulation on `Γ` (refinement may split curve segments).
+    pub curve_edges: Vec<[usize; 2]>,
+    pub curve_vertices: usize,
+}
+
+impl BulkMesh {
+    /// Triangulates `Ω` for the curve given by `points` and `segments` (closed,
+    /// admissible: see [`DesignDomain::check_curve`]).
+    pub fn build(
+        domain: &DesignDomain,
+        points: &[Point<2>],
+        segments: &[[usize; 2]],
+        opts: &MeshingOptions,
+    ) -> Result<BulkMesh, BulkError> {
+        let n_curve = points.len();
+        let outer = domain.outer();
+        let [ci, co] = domain.control();
+        let (fixed_pts, fixed_segs) = loop_segments(&[outer, ci, co]);
+        let n_outer = outer.points().len();
+        let mut vertices: Vec<Point2<f64>> = points.iter().map(|p| Point2::new(p.x, p.y)).collect();
+        vertices.extend(fixed_pts.iter().map(|p| Point2::new(p.x, p.y)));
+        let mut class: Vec<Option<Boundary>> = vec![Some(Boundary::Curve); n_curve];
+        class.extend((0..fixed_pts.len()).map(|i| Some(if i < n_outer { Boundary::Outer } else { Boundary::Control })));
+        let mut edges: Vec<[usize; 2]> = segments.to_vec();
+        edges.extend(fixed_segs.iter().map(|s| [s[0] + n_curve, s[1] + n_curve]));
+        let n_input = vertices.len();
+        let mut conflicts = 0usize;
+        let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
+            ConstrainedDelaunayTriangulation::try_bulk_load_cdt(vertices, edges, |_| conflicts += 1)
+                .map_err(|e| BulkError::Meshing(format!("triangulation: {e:?}")))?;
+        if conflicts > 0 || cdt.num_vertices() != n_input {
+            return Err(BulkError::Inadmissible("the curve touches itself or a fixed boundary".into()));
+        }
+        let budget = 20 * n_input + 200_000;
+        let result = cdt.refine(
+            RefinementParameters::new()
+                .with_angle_limit(AngleLimit::from_deg(opts.min_angle_deg))
+                .with_max_allowed_area(opts.max_area)
+                .with_min_required_area(opts.min_area)
+                .with_max_additional_vertices(budget)
+                .exclude_outer_faces(false),
+        );
+        if !result.refinement_complete {
+            tracing::debug!("bulk refinement stopped at its vertex budget ({budget})");
+        }
+
+        // boundaries of the Steiner vertices on split constraint edges: walk the chains
+        let nv = cdt.num_vertices();
+        class.resize(nv, None);
+        let mut queue: VecDeque<usize> = (0..n_input).collect();
+        while let Some(v) = queue.pop_front() {
+            for e in cdt.vertex(FixedVertexHandle::from_index(v)).out_edges() {
+                if e.is_constraint_edge() {
+                    let w = e.to().fix().index();
+                    if class[w].is_none() {
+                        class[w] = class[v];
+                        queue.push_back(w);
+                    }
+                }
+            }
+        }
+
+        // flood fill over the inner faces: (in Ω, in D) parities
+        let nf = cdt.num_all_faces();
+        let mut state: Vec<Option<(bool, bool)>> = vec![None; nf];
+        let mut queue: VecDeque<usize> = VecDeque::new();
+        // crossing a constraint edge between vertices a and b
+        let flip = |constraint: bool, a: usize, b: usize, s: (bool, bool)| -> (bool, bool) {
+            if !constraint {
+                return s;
+            }
+            match class[a].or(class[b]) {
+                Some(Boundary::Control) => (s.0, !s.1),
+                _ => (!s.0, s.1),
+            }
+        };
+        let ends = |e: &spade::handles::DirectedEdgeHandle<'_, Point2<f64>, (), spade::CdtEdge<()>, ()>| {
+            let [a, b] = e.vertices().map(|v| v.fix().index());
+            (e.is_constraint_edge(), a, b)
+        };
+        for e in cdt.convex_hull() {
+            for side in [e, e.rev()] {
+                if let Some(inner) = side.face().as_inner() {
+                    let idx = inner.fix().index();
+                    if state[idx].is_none() {
+                        let (c, a, b) = ends(&side);
+                        state[idx] = Some(flip(c, a, b, (false, false)));
+                        queue.push_back(idx);
+                    }
+                }
+            }
+        }
+        // per inner face: its three neighbours across (constraint?, a, b)
+        let mut adjacency: Vec<[(Option<usize>, bool, usize, usize); 3]> = vec![[(None, false, 0, 0); 3]; nf];
+        for face in cdt.inner_faces() {
+            adjacency[face.fix().index()] = face.adjacent_edges().map(|e| {
+                let (c, a, b) = ends(&e);
+                (e.rev().face().as_inner().map(|f| f.fix().index()), c, a, b)
+            });
+        }
+        while let Some(f) = queue.pop_front() {
+            let s = state[f].expect("visited");
+            for (next, c, a, b) in adjacency[f] {
+                if let Some(idx) = next {
+                    if state[idx].is_none() {
+                        state[idx] = Some(flip(c, a, b, s));
+                        queue.push_back(idx);
+                    }
+                }
+            }
+        }
+
+        // keep the triangles of Ω, renumber their vertices (curve vertices first)
+        let mut index = vec![usize::MAX; nv];
+        for (i, slot) in index.iter_mut().enumerate().take(n_curve) {
+            *slot = i;
+        }
+        let mut positions: Vec<Point<2>> = points.to_vec();
+        let mut triangles = Vec::new();
+        let mut in_control = Vec::new();
+        for face in cdt.inner_faces() {
+            let Some((inside, control)) = state[face.fix().index()] else { continue };
+            if !inside {
+                continue;
+            }
+            let tri = face.vertices().map(|v| {
+                let i = v.fix().index();
+                if index[i] == usize::MAX {
+                    index[i] = positions.len();
+                    let p = v.position();
+                    positions.push(Point::<2>::new(p.x, p.y));
+                }
+                index[i]
+            });
+            triangles.push(tri);
+            in_control.push(control);
+        }
+        if triangles.is_empty() {
+            return Err(BulkError::Meshing("the bulk domain has no triangles".into()));
+        }
+        let mut on_outer = vec![false; positions.len()];
+        let mut curve_edges = Vec::new();
+        for (i, c) in class.iter().enumerate() {
+            if index[i] != usize::MAX && *c == Some(Boundary::Outer) {
+                on_outer[index[i]] = true;
+            }
+        }
+        for e in cdt.undirected_edges() {
+            if !e.is_constraint_edge() {
+                continue;
+            }
+            let [a, b] = e.vertices().map(|v| v.fix().index());
+            if class[a] == Some(Boundary::Curve) && class[b] == Some(Boundary::Curve) {
+                if index[a] == usize::MAX || index[b] == usize::MAX {
+                    return Err(BulkError::Meshing("a curve edge has no triangle of Ω".into()));
+                }
+                curve_edges.push([index[a], index[b]]);
+            }
+        }
+        Ok(BulkMesh { points: positions, triangles, in_control, on_outer, curve_edges, curve_vertices: n_curve })
+    }
+
+    /// Area of `Ω` and of `Ω ∩ D`.
+    pub fn areas(&self) -> (f64, f64) {
+        let (mut total, mut control) = (0.0, 0.0);
+        for (t, &c) in self.triangles.iter().zip(&self.in_control) {
+            let a = triangle_area(&self.points, t);
+            total += a;
+            if c {
+                control += a;
+            }
+        }
+        (total, control)
+    }
+
+    /// Smallest interior angle, in degrees.
+    pub fn min_angle_deg(&self) -> f64 {
+        let mut worst = 180.0f64;
+        for t in &self.triangles {
+            for k in 0..3 {
+                let (a, b, c) = (self.points[t[k]], self.points[t[(k + 1) % 3]], self.points[t[(k + 2) % 3]]);
+                let (u, v) = (b - a, c - a);
+                worst = worst.min(u.angle(&v).to_degrees());
+            }
+        }
+        worst
+    }
+}
+
+/// Signed area of triangle `t`.
+pub fn triangle_area(points: &[Point<2>], t: &[usize; 3]) -> f64 {
+    let (a, b, c) = (points[t[0]], points[t[1]], points[t[2]]);
+    0.5 * ((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x))
+}
