@@ -349,6 +349,12 @@ impl<'p, const D: usize> Flow<'p, D> {
                 continue;
             }
             let energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
+            if energy == f64::INFINITY {
+                // an inadmissible candidate (shape design: Γ met D or Σ): shorten the step
+                tau *= 0.5;
+                report.backtracks += 1;
+                continue;
+            }
             if !energy.is_finite() {
                 return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration + 1 });
             }
@@ -381,19 +387,25 @@ impl<const D: usize> Flow<'_, D> {
     /// Returns `true` on pinch-off.
     fn manage_mesh(&mut self) -> Result<bool, FlowError> {
         let Some(manager) = self.manager.as_mut() else { return Ok(false) };
-        match manager.manage(&self.mesh)? {
+        let (mesh, remeshed) = match manager.manage(&self.mesh)? {
             Managed::Unchanged => return Ok(false),
             Managed::PinchOff => return Ok(true),
-            Managed::Moved(m) => self.mesh = m,
-            Managed::Remeshed(m) => {
-                self.mesh = m;
-                self.pattern = Pattern::new(self.mesh.num_vertices(), self.mesh.elements());
-                self.solver.reset();
-            }
+            Managed::Moved(m) => (m, false),
+            Managed::Remeshed(m) => (m, true),
+        };
+        let energy = self.problem.energy(&mesh).map_err(|e| FlowError::Problem(e.0))?;
+        if energy == f64::INFINITY {
+            // management made the shape inadmissible (shape design: a regularized
+            // spike crossed a fixed boundary): keep the accepted mesh this time
+            return Ok(false);
         }
-        let energy = self.problem.energy(&self.mesh).map_err(|e| FlowError::Problem(e.0))?;
         if !energy.is_finite() {
             return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration });
+        }
+        self.mesh = mesh;
+        if remeshed {
+            self.pattern = Pattern::new(self.mesh.num_vertices(), self.mesh.elements());
+            self.solver.reset();
         }
         self.energy = energy;
         Ok(false)

@@ -1,6 +1,6 @@
 //! The interface between the flow and an application (implemented in `problems`).
 
-use crate::fem::{Matrices, Weight};
+use crate::fem::{Matrices, Pattern, Weight};
 use crate::geometry::{Mesh, Point};
 
 use super::ScalarProduct;
@@ -37,7 +37,7 @@ pub struct ProblemError(pub String);
 pub trait Problem<const D: usize>: Send {
     /// Name as in the job spec (`problem.type`).
     fn name(&self) -> &'static str;
-    /// `J(Γ)`.
+    /// `J(Γ)`; `+∞` marks an inadmissible shape (the flow then shortens the step).
     fn energy(&self, mesh: &Mesh<D>) -> Result<f64, ProblemError>;
     /// `g` and `f` at the vertices of `Γ_n`.
     fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError>;
@@ -53,4 +53,26 @@ pub trait Problem<const D: usize>: Send {
     fn is_physical(&self) -> bool {
         false
     }
+}
+
+/// The discrete shape derivative of `problem` at `mesh` along the vertex field `V⃗`:
+/// `dJ(Γ; V⃗) = ∫_Γ G V⃗·ν ≈ Σ_i (g_i κ_i + f_i) N⃗_i·V⃗_i`, with `N⃗_i = ∫_Γ φ_i ν` and the
+/// discrete curvature of the flow. Used to check shape gradients against finite
+/// differences of `J`.
+pub fn shape_derivative<const D: usize>(
+    problem: &dyn Problem<D>,
+    mesh: &Mesh<D>,
+    field: &[Point<D>],
+) -> Result<f64, ProblemError> {
+    let pattern = Pattern::new(mesh.num_vertices(), mesh.elements());
+    let matrices = Matrices::assemble(mesh, &pattern);
+    let ax = matrices.stiffness_times_positions(mesh, &pattern);
+    let normals: Vec<Point<D>> = matrices.lumped_normal.iter().map(|n| n.normalize()).collect();
+    let curvature: Vec<f64> =
+        matrices.lumped_normal.iter().zip(&ax).map(|(n, a)| n.dot(a) / n.norm_squared()).collect();
+    let state = SurfaceState { mesh, matrices: &matrices, curvature: &curvature, normals: &normals };
+    let grad = problem.shape_gradient(&state)?;
+    Ok((0..mesh.num_vertices())
+        .map(|i| (grad.g[i] * curvature[i] + grad.f[i]) * matrices.lumped_normal[i].dot(&field[i]))
+        .sum())
 }

@@ -6,7 +6,7 @@ use super::spec::{ImageSource, InitialSpec, JobSpec, ProblemSpec, SpecError};
 use crate::flow::{CurveManager, FlowSettings, Problem, ScalarProduct, SurfaceManager};
 use crate::geometry::{self, CurveMesh, Mesh, MeshError, Point, SurfaceMesh};
 use crate::imaging::{decode_image, decode_slices, decode_volume, EdgeField, Grid, ImageLimits};
-use crate::problems::{CurvatureFlow, Segmentation, SurfaceDiffusion};
+use crate::problems::{CurvatureFlow, Segmentation, ShapeDesign, SurfaceDiffusion};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -35,6 +35,7 @@ pub enum ProblemKind {
     CurvatureFlow(CurvatureFlow),
     SurfaceDiffusion(SurfaceDiffusion),
     Segmentation(Segmentation),
+    ShapeDesign(ShapeDesign),
 }
 
 impl ProblemKind {
@@ -43,6 +44,7 @@ impl ProblemKind {
             ProblemKind::CurvatureFlow(p) => p,
             ProblemKind::SurfaceDiffusion(p) => p,
             ProblemKind::Segmentation(p) => p,
+            ProblemKind::ShapeDesign(p) => p,
         }
     }
     fn physical(&self) -> bool {
@@ -98,7 +100,7 @@ fn mesh_err(field: &str, e: MeshError) -> SpecError {
 /// file's bytes.
 pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<PreparedJob, SpecError> {
     let mut image = None;
-    let problem = match &spec.problem {
+    let early = match &spec.problem {
         ProblemSpec::CurvatureFlow { gamma, lambda } => {
             positive("problem.gamma", *gamma)?;
             finite("problem.lambda", &[*lambda])
@@ -126,6 +128,8 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             image = Some(Arc::new(grid));
             ProblemKind::Segmentation(Segmentation { field: Arc::new(field), lambda: *lambda, epsilon: *epsilon })
         }
+        // needs the initial curve: built below
+        ProblemSpec::ShapeDesign(_) => ProblemKind::CurvatureFlow(CurvatureFlow { gamma: 1.0, lambda: 0.0 }),
     };
     let mesh = match (&spec.initial, &image) {
         (Some(initial), _) => build_initial("initial", initial, inputs)?,
@@ -144,11 +148,29 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             ));
         }
     }
+    let (curve_manager, surface_manager) = match &mesh {
+        AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
+        AnyMesh::Surface(m) => {
+            let pinch_off = spec.mesh.pinch_off.unwrap_or(!matches!(early, ProblemKind::Segmentation(_)));
+            (None, surface_manager(&spec.mesh, m, pinch_off)?)
+        }
+    };
+    let problem = match (&spec.problem, &mesh) {
+        (ProblemSpec::ShapeDesign(sd), AnyMesh::Curve(c)) => {
+            let min_area = curve_manager.map_or(CurveManager::defaults_for(c).min_area, |m| m.params.min_area);
+            ProblemKind::ShapeDesign(super::design::shape_design(sd, c, spec.mesh.topology_changes, min_area)?)
+        }
+        (ProblemSpec::ShapeDesign(_), AnyMesh::Surface(_)) => {
+            return Err(SpecError::new("initial", "shape design is two-dimensional: it needs a curve"));
+        }
+        _ => early,
+    };
     let f = &spec.flow;
     let default_product = match &problem {
         ProblemKind::CurvatureFlow(p) => Problem::<2>::default_scalar_product(p),
         ProblemKind::SurfaceDiffusion(p) => Problem::<2>::default_scalar_product(p),
         ProblemKind::Segmentation(p) => Problem::<2>::default_scalar_product(p),
+        ProblemKind::ShapeDesign(p) => Problem::<2>::default_scalar_product(p),
     };
     let scalar_product = f.scalar_product.unwrap_or(default_product);
     let d = FlowSettings::default();
@@ -157,6 +179,8 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         // β is clipped at ε and V = -G/ε, so a larger cap lets the step control decide
         (ProblemKind::Segmentation(_), ScalarProduct::H1Newton) => SEGMENTATION_NEWTON_TAU,
         (ProblemKind::Segmentation(_), _) => SEGMENTATION_L2_TAU,
+        // the step control and backtracking pick the step; τ only caps it
+        (ProblemKind::ShapeDesign(_), _) => SHAPE_DESIGN_TAU,
         _ => d.tau,
     };
     let tau = positive("flow.tau", f.tau.unwrap_or(default_tau))?;
@@ -194,18 +218,14 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         beta,
     };
     let checkpoint_every = in_range("output.checkpoint_every", spec.output.checkpoint_every, 1, usize::MAX)?;
-    let (curve_manager, surface_manager) = match &mesh {
-        AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
-        AnyMesh::Surface(m) => {
-            let pinch_off = spec.mesh.pinch_off.unwrap_or(!matches!(problem, ProblemKind::Segmentation(_)));
-            (None, surface_manager(&spec.mesh, m, pinch_off)?)
-        }
-    };
     Ok(PreparedJob { spec, mesh, problem, settings, checkpoint_every, curve_manager, surface_manager, image })
 }
 
 /// Default `flow.tau` of segmentation with the Newton-type H1 product.
 pub const SEGMENTATION_NEWTON_TAU: f64 = 10.0;
+
+/// Default `flow.tau` (the cap of the adaptive step) of shape design.
+pub const SHAPE_DESIGN_TAU: f64 = 10.0;
 
 /// Default `flow.tau` of segmentation with the L2 (and plain H1) product.
 pub const SEGMENTATION_L2_TAU: f64 = 1e-3;

@@ -4,6 +4,7 @@
 //! as bytes.
 
 mod build;
+mod design;
 mod mesh_io;
 mod results;
 mod run;
@@ -13,4 +14,7 @@ pub use build::{prepare, AnyMesh, PreparedJob, ProblemKind};
 pub use mesh_io::{read_mesh_file, MeshFileError};
 pub use results::{job_extras, state_glb, states_glb, MAX_FRAMES};
 pub use run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
-pub use spec::{parse_spec, FlowSpec, InitialSpec, JobSpec, MeshSpec, OutputSpec, ProblemSpec, SpecError};
+pub use spec::{
+    parse_spec, BoundarySpec, ControlSpec, FlowSpec, InitialSpec, JobSpec, MeshSpec, OutputSpec, ProblemSpec,
+    ShapeDesignSpec, SpecError, TargetSpec,
+};

@@ -2,8 +2,10 @@
 
 mod curvature_flow;
 mod segmentation;
+mod shape_design;
 mod surface_diffusion;
 
 pub use curvature_flow::CurvatureFlow;
 pub use segmentation::Segmentation;
+pub use shape_design::{alpha_84, DesignSolution, ShapeDesign, Target};
 pub use surface_diffusion::SurfaceDiffusion;

@@ -1,0 +1,184 @@
+//! Building a shape-design problem from its spec: the boundary polygons of `Σ` and
+//! `∂D` at the requested spacing, the target, the bulk meshing options, and the
+//! admissibility of the initial curve.
+
+use super::spec::{BoundarySpec, ShapeDesignSpec, SpecError, TargetSpec};
+use crate::bulk::{BulkError, DesignDomain, MeshingOptions, Polygon};
+use crate::geometry::{CurveMesh, Point};
+use crate::problems::{ShapeDesign, Target};
+use std::sync::Arc;
+
+/// Most vertices a fixed boundary may have.
+const MAX_BOUNDARY_VERTICES: usize = 100_000;
+
+fn finite(field: &str, v: &[f64]) -> Result<(), SpecError> {
+    match v.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(SpecError::new(format!("{field}[{i}]"), "must be a finite number")),
+        None => Ok(()),
+    }
+}
+
+fn positive(field: &str, v: f64) -> Result<f64, SpecError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(SpecError::new(field, format!("must be a positive number, got {v}")))
+    }
+}
+
+fn count(field: &str, length: f64, h: f64) -> Result<usize, SpecError> {
+    let n = (length / h).ceil();
+    if n > MAX_BOUNDARY_VERTICES as f64 {
+        return Err(SpecError::new(
+            field,
+            format!("needs {n:.0} vertices at this spacing, more than {MAX_BOUNDARY_VERTICES}"),
+        ));
+    }
+    Ok(n as usize)
+}
+
+/// The perimeter of a boundary spec (for the default spacing).
+fn perimeter(b: &BoundarySpec) -> f64 {
+    match b {
+        BoundarySpec::Circle { radius, .. } => std::f64::consts::TAU * radius,
+        BoundarySpec::Square { size, .. } => 4.0 * size,
+        BoundarySpec::Polygon { points } => {
+            let n = points.len();
+            (0..n).map(|i| (Point::<2>::from(points[(i + 1) % n]) - Point::<2>::from(points[i])).norm()).sum()
+        }
+    }
+}
+
+/// The polygon of a boundary spec with vertices about `h` apart.
+fn polygon(field: &str, b: &BoundarySpec, h: f64) -> Result<Polygon, SpecError> {
+    let points: Vec<Point<2>> = match b {
+        BoundarySpec::Circle { center, radius } => {
+            finite(&format!("{field}.center"), center)?;
+            let r = positive(&format!("{field}.radius"), *radius)?;
+            let n = count(field, std::f64::consts::TAU * r, h)?.max(16);
+            (0..n)
+                .map(|k| {
+                    let t = std::f64::consts::TAU * k as f64 / n as f64;
+                    Point::<2>::new(center[0] + r * t.cos(), center[1] + r * t.sin())
+                })
+                .collect()
+        }
+        BoundarySpec::Square { center, size } => {
+            finite(&format!("{field}.center"), center)?;
+            let s = 0.5 * positive(&format!("{field}.size"), *size)?;
+            let c = Point::<2>::from(*center);
+            let corners = [(-s, -s), (s, -s), (s, s), (-s, s)].map(|(x, y)| c + Point::<2>::new(x, y));
+            subdivide(field, &corners, h)?
+        }
+        BoundarySpec::Polygon { points } => {
+            if points.len() < 3 {
+                return Err(SpecError::new(
+                    format!("{field}.points"),
+                    format!("needs at least 3 points, got {}", points.len()),
+                ));
+            }
+            for (i, p) in points.iter().enumerate() {
+                finite(&format!("{field}.points[{i}]"), p)?;
+            }
+            let pts: Vec<Point<2>> = points.iter().map(|p| Point::<2>::from(*p)).collect();
+            subdivide(field, &pts, h)?
+        }
+    };
+    Polygon::new(field, points).map_err(|e| match e {
+        BulkError::Domain { message, .. } => SpecError::new(field, message),
+        other => SpecError::new(field, other.to_string()),
+    })
+}
+
+/// Corners joined by straight edges split into pieces of length at most `h`.
+fn subdivide(field: &str, corners: &[Point<2>], h: f64) -> Result<Vec<Point<2>>, SpecError> {
+    let n = corners.len();
+    let mut out = Vec::new();
+    for i in 0..n {
+        let (a, b) = (corners[i], corners[(i + 1) % n]);
+        let m = count(field, (b - a).norm(), h)?.max(1);
+        out.extend((0..m).map(|k| a + (b - a) * (k as f64 / m as f64)));
+        if out.len() > MAX_BOUNDARY_VERTICES {
+            return Err(SpecError::new(field, format!("more than {MAX_BOUNDARY_VERTICES} vertices at this spacing")));
+        }
+    }
+    Ok(out)
+}
+
+fn bulk_error(e: BulkError) -> SpecError {
+    match e {
+        BulkError::Domain { what, message } => SpecError::new(format!("problem.{what}"), message),
+        other => SpecError::new("problem", other.to_string()),
+    }
+}
+
+fn target(spec: &TargetSpec, domain: &DesignDomain) -> Result<Target, SpecError> {
+    let centre_outside_d = |c: &[f64; 2]| -> Result<Point<2>, SpecError> {
+        finite("problem.target.center", c)?;
+        let p = Point::<2>::from(*c);
+        if domain.in_control(p) {
+            return Err(SpecError::new(
+                "problem.target.center",
+                "must not lie in the control region (z_g is singular there)",
+            ));
+        }
+        Ok(p)
+    };
+    Ok(match spec {
+        TargetSpec::Constant { value } => {
+            finite("problem.target.value", &[*value])
+                .map_err(|_| SpecError::new("problem.target.value", "must be a finite number"))?;
+            Target::Constant(*value)
+        }
+        TargetSpec::LogRadial { center, radius } => {
+            let center = centre_outside_d(center)?;
+            Target::LogRadial { center, radius: positive("problem.target.radius", *radius)? }
+        }
+        TargetSpec::Polar { center, a, b, k } => {
+            let center = centre_outside_d(center)?;
+            for (name, v) in [("a", a), ("b", b), ("k", k)] {
+                if !v.is_finite() {
+                    return Err(SpecError::new(format!("problem.target.{name}"), "must be a finite number"));
+                }
+            }
+            Target::Polar { center, a: *a, b: *b, k: *k }
+        }
+    })
+}
+
+/// The shape-design problem of a spec, for the initial curve `initial`, with merging
+/// of crossing curves when `merge` (topology changes on) and loops below `min_area`
+/// dropped. The initial curve must be admissible.
+pub fn shape_design(
+    spec: &ShapeDesignSpec,
+    initial: &CurveMesh,
+    merge: bool,
+    min_area: f64,
+) -> Result<ShapeDesign, SpecError> {
+    let gamma = spec.gamma;
+    if !(gamma.is_finite() && gamma >= 0.0) {
+        return Err(SpecError::new("problem.gamma", format!("must be a nonnegative number, got {gamma}")));
+    }
+    let h = match spec.spacing {
+        Some(h) => positive("problem.spacing", h)?,
+        None => perimeter(&spec.outer) / 200.0,
+    };
+    if !(h.is_finite() && h > 0.0) {
+        return Err(SpecError::new("problem.outer", "has no length"));
+    }
+    let outer = polygon("problem.outer", &spec.outer, h)?;
+    let inner_d = polygon("problem.control.inner", &spec.control.inner, h)?;
+    let outer_d = polygon("problem.control.outer", &spec.control.outer, h)?;
+    let domain = DesignDomain::new(outer, inner_d, outer_d).map_err(bulk_error)?;
+    let target = target(&spec.target, &domain)?;
+    let mean_edge = initial.boundary_measure() / initial.num_elements() as f64;
+    let meshing = MeshingOptions::for_domain(&domain, mean_edge);
+    let problem = ShapeDesign::new(Arc::new(domain), target, gamma, merge, min_area, meshing);
+    match problem.solve(initial) {
+        Ok(_) => Ok(problem),
+        Err(BulkError::Inadmissible(m)) => {
+            Err(SpecError::new("initial", format!("not admissible for shape design: {m}")))
+        }
+        Err(e) => Err(SpecError::new("problem", e.to_string())),
+    }
+}

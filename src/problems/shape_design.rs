@@ -1,0 +1,334 @@
+//! Optimal shape design for an elliptic PDE (paper §1.2, §2.2.2, §4.3):
+//!
+//! ```text
+//! J(Ω) = ½ ∫_D (y − z_g)² + γ|Γ|,    −Δy = 0 in Ω, y = 0 on Σ, ∂_ν y = 1 on Γ,
+//! ```
+//!
+//! with the adjoint `−Δp = χ_D (y − z_g)`, `p = 0` on `Σ`, `∂_ν p = 0` on `Γ`.
+//!
+//! Signs: the paper writes `G = −∇_Γ y·∇_Γ p + κ(p + γ)` for velocities along the
+//! outward normal `ν` of `Ω`, which on `Γ` points into the hole. Our curves carry their
+//! own outward normal `n = −ν` (away from the hole) and their curvature `κ_Γ = −κ`,
+//! and the velocity is `V_Γ = −V`; hence along `n`
+//!
+//! ```text
+//! G_Γ = (p + γ) κ_Γ + ∇_Γ y·∇_Γ p      (g = p + γ, f = ∇_Γ y·∇_Γ p).
+//! ```
+//!
+//! The tangential derivatives are the lumped L2 projections of the elementwise
+//! difference quotients of the P1 traces onto P1 (length-weighted averages at the
+//! vertices). The weighted H1 product of the paper (eq. 84) has `β = 1` and `α`
+//! per edge from `g` at its ends (`p` in the paper, where `γ = 0`): 1 where `g` takes
+//! negative values (there the L2 flow is backward parabolic), `h_e²` where `g` is
+//! well above its oscillation, and a linear blend in between.
+
+use crate::bulk::{solve_design_fields, BulkError, BulkMesh, DesignDomain, MeshingOptions};
+use crate::fem::Weight;
+use crate::flow::{H1Weights, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
+use crate::geometry::{find_segment_intersections, resolve_intersections, CurveMesh, Mesh, Point};
+use std::sync::{Arc, Mutex};
+
+/// The target `z_g` on `D`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Target {
+    Constant(f64),
+    /// `log(R / |x − c|)`: the state of the annulus with `Γ` the unit circle around `c`
+    /// and `Σ` the circle of radius `R` (paper §4.3.2).
+    LogRadial {
+        center: Point<2>,
+        radius: f64,
+    },
+    /// `a + b cos(kθ)` in polar coordinates around `c` (paper §4.3.3, Figure 7).
+    Polar {
+        center: Point<2>,
+        a: f64,
+        b: f64,
+        k: f64,
+    },
+}
+
+impl Target {
+    pub fn value(&self, x: Point<2>) -> f64 {
+        match *self {
+            Target::Constant(c) => c,
+            Target::LogRadial { center, radius } => (radius / (x - center).norm()).ln(),
+            Target::Polar { center, a, b, k } => {
+                let d = x - center;
+                a + b * (k * d.y.atan2(d.x)).cos()
+            }
+        }
+    }
+}
+
+/// State, adjoint and energy of one curve.
+#[derive(Debug, Clone)]
+pub struct DesignSolution {
+    /// `y` and `p` at the curve's vertices.
+    pub y: Vec<f64>,
+    pub p: Vec<f64>,
+    /// `½ ∫_D (y − z_g)²`.
+    pub misfit: f64,
+    /// `J = misfit + γ|Γ|`.
+    pub energy: f64,
+    /// Triangles of the bulk mesh.
+    pub bulk_triangles: usize,
+}
+
+struct Cached {
+    positions: Vec<Point<2>>,
+    elements: Vec<[usize; 2]>,
+    solution: Arc<DesignSolution>,
+}
+
+/// The shape-design functional on a fixed domain.
+pub struct ShapeDesign {
+    pub domain: Arc<DesignDomain>,
+    pub target: Target,
+    /// Weight `γ ≥ 0` of the length of `Γ`.
+    pub gamma: f64,
+    /// Topology changes on: a candidate whose curves cross is evaluated as the union
+    /// it becomes (the mesh manager merges it after the step). Off: crossing is
+    /// inadmissible.
+    pub merge: bool,
+    /// Loops below this area are dropped when crossing curves are merged.
+    pub min_area: f64,
+    pub meshing: MeshingOptions,
+    cache: Mutex<Option<Cached>>,
+}
+
+impl std::fmt::Debug for ShapeDesign {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ShapeDesign").field("target", &self.target).field("gamma", &self.gamma).finish_non_exhaustive()
+    }
+}
+
+impl Clone for ShapeDesign {
+    /// A copy with an empty solution cache.
+    fn clone(&self) -> Self {
+        ShapeDesign::new(self.domain.clone(), self.target, self.gamma, self.merge, self.min_area, self.meshing)
+    }
+}
+
+impl PartialEq for ShapeDesign {
+    fn eq(&self, o: &Self) -> bool {
+        self.domain == o.domain
+            && self.target == o.target
+            && self.gamma == o.gamma
+            && self.merge == o.merge
+            && self.min_area == o.min_area
+            && self.meshing == o.meshing
+    }
+}
+
+impl ShapeDesign {
+    pub fn new(
+        domain: Arc<DesignDomain>,
+        target: Target,
+        gamma: f64,
+        merge: bool,
+        min_area: f64,
+        meshing: MeshingOptions,
+    ) -> Self {
+        ShapeDesign { domain, target, gamma, merge, min_area, meshing, cache: Mutex::new(None) }
+    }
+
+    /// Solves state and adjoint for a curve without crossings. `Err(Inadmissible)` if
+    /// it leaves `Σ`, meets `D` or touches itself.
+    pub fn solve(&self, mesh: &CurveMesh) -> Result<Arc<DesignSolution>, BulkError> {
+        if let Some(c) = self.cache.lock().expect("cache").as_ref() {
+            if c.positions == mesh.positions() && c.elements == mesh.elements() {
+                return Ok(c.solution.clone());
+            }
+        }
+        let (points, segments) = (mesh.positions(), mesh.elements());
+        if let Some(h) = find_segment_intersections(points, segments).first() {
+            return Err(BulkError::Inadmissible(format!(
+                "the curve crosses itself near ({:.4}, {:.4})",
+                h.point.x, h.point.y
+            )));
+        }
+        self.domain.check_curve(points, segments)?;
+        let bulk = BulkMesh::build(&self.domain, points, segments, &self.meshing)?;
+        let target = |x: Point<2>| self.target.value(x);
+        let fields = solve_design_fields(&bulk, &target)?;
+        let n = points.len();
+        let energy = fields.misfit + self.gamma * mesh.boundary_measure();
+        let solution = Arc::new(DesignSolution {
+            y: fields.y[..n].to_vec(),
+            p: fields.p[..n].to_vec(),
+            misfit: fields.misfit,
+            energy,
+            bulk_triangles: bulk.triangles.len(),
+        });
+        *self.cache.lock().expect("cache") =
+            Some(Cached { positions: points.to_vec(), elements: segments.to_vec(), solution: solution.clone() });
+        Ok(solution)
+    }
+
+    /// Tangential derivatives `∂_s u` at the vertices by patch recovery: the slope at
+    /// `s = 0` of the least-squares quadratic in arclength through the values at the
+    /// vertex and its two neighbours on either side (exact for quadratics, so `O(h²)`
+    /// for smooth `u`, and it averages out the mesh-level noise of the bulk traces).
+    /// Loops of fewer than five vertices use the length-weighted mean of the
+    /// difference quotients of the adjacent edges.
+    fn tangential_derivative(mesh: &CurveMesh, u: &[f64]) -> Vec<f64> {
+        let x = mesh.positions();
+        let mut out = vec![0.0; mesh.num_vertices()];
+        for cyc in mesh.cycles() {
+            let n = cyc.len();
+            let len: Vec<f64> = (0..n).map(|k| (x[cyc[(k + 1) % n]] - x[cyc[k]]).norm()).collect();
+            for k in 0..n {
+                let (lp, ln) = (len[(k + n - 1) % n], len[k]);
+                if n < 5 {
+                    let (up, ui, un) = (u[cyc[(k + n - 1) % n]], u[cyc[k]], u[cyc[(k + 1) % n]]);
+                    out[cyc[k]] = ((ui - up) + (un - ui)) / (lp + ln);
+                    continue;
+                }
+                // arclength offsets of k−2..k+2
+                let s = [-(len[(k + n - 2) % n] + lp), -lp, 0.0, ln, ln + len[(k + 1) % n]];
+                let v: [f64; 5] = std::array::from_fn(|j| u[cyc[(k + n + j - 2) % n]]);
+                out[cyc[k]] = quadratic_slope(&s, &v);
+            }
+        }
+        out
+    }
+
+    fn to_problem_error(e: BulkError) -> ProblemError {
+        ProblemError(e.to_string())
+    }
+}
+
+/// The curve behind a mesh of dimension `D` (shape design is two-dimensional; the
+/// job builder only pairs it with curves).
+fn curve<const D: usize>(mesh: &Mesh<D>) -> Result<&CurveMesh, ProblemError> {
+    (mesh as &dyn std::any::Any)
+        .downcast_ref::<CurveMesh>()
+        .ok_or_else(|| ProblemError("shape design needs a curve (2D)".into()))
+}
+
+impl<const D: usize> Problem<D> for ShapeDesign {
+    fn name(&self) -> &'static str {
+        "shape_design"
+    }
+
+    /// `+∞` for inadmissible curves (the step is then shortened).
+    fn energy(&self, mesh: &Mesh<D>) -> Result<f64, ProblemError> {
+        let mesh = curve(mesh)?;
+        let merged;
+        let mut c = mesh;
+        if self.merge {
+            if let Some(m) = resolve_intersections(mesh, self.min_area).map_err(|e| ProblemError(e.to_string()))? {
+                merged = m;
+                c = &merged;
+            }
+        }
+        match self.solve(c) {
+            Ok(s) => Ok(s.energy),
+            Err(BulkError::Inadmissible(_)) => Ok(f64::INFINITY),
+            Err(e) => Err(Self::to_problem_error(e)),
+        }
+    }
+
+    fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
+        let mesh = curve(state.mesh)?;
+        let s = self.solve(mesh).map_err(Self::to_problem_error)?;
+        let dy = Self::tangential_derivative(mesh, &s.y);
+        let dp = Self::tangential_derivative(mesh, &s.p);
+        Ok(ShapeGradient {
+            g: s.p.iter().map(|p| p + self.gamma).collect(),
+            f: dy.iter().zip(&dp).map(|(a, b)| a * b).collect(),
+        })
+    }
+
+    /// Paper eq. (84) with `g = p + γ`, `β = 1`.
+    fn h1_weights(&self, state: &SurfaceState<'_, D>, grad: &ShapeGradient) -> Option<H1Weights> {
+        let mesh = curve(state.mesh).ok()?;
+        let alpha = mesh
+            .elements()
+            .iter()
+            .map(|&[a, b]| {
+                let h2 = (mesh.positions()[b] - mesh.positions()[a]).norm_squared();
+                alpha_84(grad.g[a], grad.g[b], h2)
+            })
+            .collect();
+        Some(H1Weights { alpha: Weight::Element(alpha), beta: Weight::Constant(1.0) })
+    }
+
+    fn default_scalar_product(&self) -> ScalarProduct {
+        ScalarProduct::H1Newton
+    }
+}
+
+/// Slope at 0 of the least-squares quadratic through `(s_j, v_j)`.
+fn quadratic_slope(s: &[f64; 5], v: &[f64; 5]) -> f64 {
+    // normal equations of a + b s + c s², solved by Cramer's rule (3×3, well scaled
+    // after dividing s by its spread)
+    let scale = (s[4] - s[0]).abs().max(f64::MIN_POSITIVE);
+    let mut m = [[0.0; 3]; 3];
+    let mut r = [0.0; 3];
+    for (&sj, &vj) in s.iter().zip(v) {
+        let t = sj / scale;
+        let phi = [1.0, t, t * t];
+        for a in 0..3 {
+            r[a] += phi[a] * vj;
+            for b in 0..3 {
+                m[a][b] += phi[a] * phi[b];
+            }
+        }
+    }
+    let det3 = |m: &[[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det3(&m);
+    let mut mb = m;
+    for a in 0..3 {
+        mb[a][1] = r[a];
+    }
+    det3(&mb) / d / scale
+}
+
+/// `α_e` of paper eq. (84) from the values of `g` at the ends of edge `e` and `h_e²`.
+pub fn alpha_84(g0: f64, g1: f64, h2: f64) -> f64 {
+    let (lo, hi) = (g0.min(g1), g0.max(g1));
+    if lo < 0.0 {
+        return 1.0;
+    }
+    let (mean, osc) = (0.5 * (hi + lo), hi - lo);
+    if mean <= osc {
+        // osc > 0 here (mean ≥ lo ≥ 0 and mean ≤ osc, with mean = osc = 0 only if g ≡ 0)
+        if osc > 0.0 {
+            1.0 - mean * (1.0 - h2) / osc
+        } else {
+            1.0
+        }
+    } else {
+        h2
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn alpha_of_eq_84() {
+        assert_eq!(alpha_84(-0.1, 0.3, 0.01), 1.0);
+        assert_eq!(alpha_84(0.5, 0.6, 0.01), 0.01);
+        // transition: p_m = 0 gives the midpoint (1 + h²)/2
+        assert!((alpha_84(0.0, 0.2, 0.01) - 0.505).abs() < 1e-12);
+        // p̄ = osc gives h²
+        assert!((alpha_84(0.1, 0.3, 0.04) - 0.04).abs() < 1e-12);
+        assert_eq!(alpha_84(0.0, 0.0, 0.01), 1.0);
+    }
+
+    #[test]
+    fn targets() {
+        let c = Point::<2>::zeros();
+        let t = Target::LogRadial { center: c, radius: 3.0 };
+        assert!((t.value(Point::<2>::new(0.0, 3.0))).abs() < 1e-15);
+        let t = Target::Polar { center: c, a: 0.45, b: 0.4, k: 6.0 };
+        assert!((t.value(Point::<2>::new(2.0, 0.0)) - 0.85).abs() < 1e-15);
+        assert!((t.value(Point::<2>::new(0.0, 2.0)) - 0.05).abs() < 1e-12);
+    }
+}
