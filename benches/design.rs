@@ -1,0 +1,80 @@
+//! Shape design (paper §4.3.2, Test 1 domain): time per iteration and its parts —
+//! bulk meshing (spade CDT + refinement), the state and adjoint solves (assembly,
+//! one sparse Cholesky, two solves) and the whole flow step (which re-meshes and
+//! re-solves for every trial step of the backtracking) — for curves of 100, 400
+//! and 1,600 vertices, with the outer boundaries at their default spacing.
+//! Memory: peak resident set size after each size. `cargo bench --bench design`.
+
+use shapeflow::bulk::{solve_design_fields, BulkMesh};
+use shapeflow::flow::{Flow, Problem};
+use shapeflow::geometry::{ellipse, Point};
+use shapeflow::jobs::{parse_spec, prepare, ProblemKind};
+use std::collections::HashMap;
+use std::time::Instant;
+
+fn time_it(mut f: impl FnMut()) -> f64 {
+    f();
+    let start = Instant::now();
+    let mut n = 0;
+    while n < 3 || start.elapsed().as_secs_f64() < 0.5 {
+        f();
+        n += 1;
+    }
+    start.elapsed().as_secs_f64() / n as f64
+}
+
+fn peak_rss_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).map(|l| l[6..].trim().trim_end_matches("kB").trim().to_string()))
+        .and_then(|v| v.parse::<f64>().ok())
+        .map_or(f64::NAN, |kb| kb / 1024.0)
+}
+
+fn main() {
+    println!("| curve vertices | bulk triangles | meshing | state + adjoint | flow step | step / (mesh + solve) | peak RSS |");
+    println!("|---|---|---|---|---|---|---|");
+    for n in [100usize, 400, 1600] {
+        // Σ and ∂D at the default spacing (1/200 of the perimeter of Σ); the bulk
+        // mesh grades from the curve's spacing to it
+        let spec = format!(
+            r#"{{"problem": {{"type": "shape_design",
+                "outer": {{"shape": "circle", "radius": 3.0}},
+                "control": {{"inner": {{"shape": "circle", "radius": 2.0}}, "outer": {{"shape": "circle", "radius": 2.5}}}},
+                "target": {{"type": "log_radial", "radius": 3.0}}}},
+              "initial": {{"shape": "ellipse", "center": [0.5, 0.7], "semi_axes": [0.8, 0.6], "resolution": {n}}},
+              "mesh": {{"adapt": false}}}}"#
+        );
+        let job = prepare(parse_spec(&spec).unwrap(), &HashMap::new()).unwrap();
+        let ProblemKind::ShapeDesign(problem) = &job.problem else { unreachable!() };
+        let curve = ellipse([0.5, 0.7], [0.8, 0.6], 0.0, n).unwrap();
+        let (pts, segs) = (curve.positions(), curve.elements());
+        let mut bulk = None;
+        let t_mesh = time_it(|| bulk = Some(BulkMesh::build(&problem.domain, pts, segs, &problem.meshing).unwrap()));
+        let bulk = bulk.unwrap();
+        let target = |x: Point<2>| problem.target.value(x);
+        let t_solve = time_it(|| {
+            std::hint::black_box(solve_design_fields(&bulk, &target).unwrap());
+        });
+        // flow steps (fresh problem copies so that no cached solution is reused)
+        let mut steps = 0usize;
+        let start = Instant::now();
+        while steps < 5 || start.elapsed().as_secs_f64() < 1.0 {
+            let p = problem.clone();
+            let mut flow = Flow::new(&p as &dyn Problem<2>, curve.clone(), job.settings.clone()).unwrap();
+            flow.step().unwrap();
+            steps += 1;
+        }
+        // each iteration above also paid one initial energy evaluation
+        let t_step = start.elapsed().as_secs_f64() / steps as f64 - (t_mesh + t_solve);
+        println!(
+            "| {n} | {} | {:.1} ms | {:.1} ms | {:.1} ms | {:.2} | {:.0} MB |",
+            bulk.triangles.len(),
+            t_mesh * 1e3,
+            t_solve * 1e3,
+            t_step * 1e3,
+            t_step / (t_mesh + t_solve),
+            peak_rss_mb()
+        );
+    }
+}
