@@ -69,7 +69,7 @@ pub struct PreparedJob {
     pub image: Option<Arc<Grid>>,
 }
 
-fn positive(field: &str, v: f64) -> Result<f64, SpecError> {
+pub(super) fn positive(field: &str, v: f64) -> Result<f64, SpecError> {
     if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
@@ -77,7 +77,7 @@ fn positive(field: &str, v: f64) -> Result<f64, SpecError> {
     }
 }
 
-fn finite(field: &str, v: &[f64]) -> Result<(), SpecError> {
+pub(super) fn finite(field: &str, v: &[f64]) -> Result<(), SpecError> {
     match v.iter().position(|x| !x.is_finite()) {
         Some(i) => Err(SpecError::new(format!("{field}[{i}]"), "must be a finite number")),
         None => Ok(()),

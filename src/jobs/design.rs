@@ -2,6 +2,7 @@
 //! `∂D` at the requested spacing, the target, the bulk meshing options, and the
 //! admissibility of the initial curve.
 
+use super::build::{finite, positive};
 use super::spec::{BoundarySpec, ShapeDesignSpec, SpecError, TargetSpec};
 use crate::bulk::{BulkError, DesignDomain, MeshingOptions, Polygon};
 use crate::geometry::{CurveMesh, Point};
@@ -10,21 +11,6 @@ use std::sync::Arc;
 
 /// Most vertices a fixed boundary may have.
 const MAX_BOUNDARY_VERTICES: usize = 100_000;
-
-fn finite(field: &str, v: &[f64]) -> Result<(), SpecError> {
-    match v.iter().position(|x| !x.is_finite()) {
-        Some(i) => Err(SpecError::new(format!("{field}[{i}]"), "must be a finite number")),
-        None => Ok(()),
-    }
-}
-
-fn positive(field: &str, v: f64) -> Result<f64, SpecError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(SpecError::new(field, format!("must be a positive number, got {v}")))
-    }
-}
 
 fn count(field: &str, length: f64, h: f64) -> Result<usize, SpecError> {
     let n = (length / h).ceil();
