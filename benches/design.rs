@@ -12,26 +12,9 @@ use shapeflow::jobs::{parse_spec, prepare, ProblemKind};
 use std::collections::HashMap;
 use std::time::Instant;
 
-fn time_it(mut f: impl FnMut()) -> f64 {
-    f();
-    let start = Instant::now();
-    let mut n = 0;
-    while n < 3 || start.elapsed().as_secs_f64() < 0.5 {
-        f();
-        n += 1;
-    }
-    start.elapsed().as_secs_f64() / n as f64
-}
-
-fn peak_rss_mb() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines().find(|l| l.starts_with("VmHWM:")).map(|l| l[6..].trim().trim_end_matches("kB").trim().to_string())
-        })
-        .and_then(|v| v.parse::<f64>().ok())
-        .map_or(f64::NAN, |kb| kb / 1024.0)
-}
+#[path = "common/mod.rs"]
+mod common;
+use common::{peak_rss_mib, time_it};
 
 fn main() {
     println!("| curve vertices | bulk triangles | meshing | state + adjoint | flow step | step / (mesh + solve) | peak RSS |");
@@ -50,12 +33,11 @@ fn main() {
         let job = prepare(parse_spec(&spec).unwrap(), &HashMap::new()).unwrap();
         let ProblemKind::ShapeDesign(problem) = &job.problem else { unreachable!() };
         let curve = ellipse([0.5, 0.7], [0.8, 0.6], 0.0, n).unwrap();
-        let (pts, segs) = (curve.positions(), curve.elements());
         let mut bulk = None;
-        let t_mesh = time_it(|| bulk = Some(BulkMesh::build(&problem.domain, pts, segs, &problem.meshing).unwrap()));
+        let t_mesh = time_it(0.5, || bulk = Some(BulkMesh::build(&problem.domain, &curve, &problem.meshing).unwrap()));
         let bulk = bulk.unwrap();
         let target = |x: Point<2>| problem.target.value(x);
-        let t_solve = time_it(|| {
+        let t_solve = time_it(0.5, || {
             std::hint::black_box(solve_design_fields(&bulk, &target).unwrap());
         });
         // flow steps (fresh problem copies so that no cached solution is reused)
@@ -76,7 +58,7 @@ fn main() {
             t_solve * 1e3,
             t_step * 1e3,
             t_step / (t_mesh + t_solve),
-            peak_rss_mb()
+            peak_rss_mib()
         );
     }
 }

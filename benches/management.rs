@@ -10,18 +10,10 @@ use shapeflow::flow::{
 };
 use shapeflow::geometry::{icosphere, polygon, Point};
 use std::hint::black_box;
-use std::time::Instant;
 
-fn time_it(mut f: impl FnMut()) -> f64 {
-    f();
-    let start = Instant::now();
-    let mut n = 0;
-    while n < 5 || start.elapsed().as_secs_f64() < 0.5 {
-        f();
-        n += 1;
-    }
-    start.elapsed().as_secs_f64() / n as f64
-}
+#[path = "common/mod.rs"]
+mod common;
+use common::time_it;
 
 /// Mean time of one L2 step (assembly + Schur solve) on `mesh`.
 fn l2_step_time<const D: usize>(mesh: &shapeflow::geometry::Mesh<D>) -> f64 {
@@ -30,7 +22,7 @@ fn l2_step_time<const D: usize>(mesh: &shapeflow::geometry::Mesh<D>) -> f64 {
     let mut m = Matrices::assemble(mesh, &pattern);
     let (g, f) = (vec![1.0; n], vec![0.0; n]);
     let mut step = SemiImplicitStep::new(SolverKind::Lumped);
-    time_it(|| {
+    time_it(0.5, || {
         m.assemble_into(mesh, &pattern, false);
         let ax = m.stiffness_times_positions(mesh, &pattern);
         let sys = LinearSystem {
@@ -68,17 +60,17 @@ fn main() {
             topology_changes: true,
             params: CurveManager::defaults_for(&mesh),
         };
-        let t_manage = time_it(|| {
+        let t_manage = time_it(0.5, || {
             black_box(manager.manage(&mesh).unwrap());
         });
-        let t_int = time_it(|| {
+        let t_int = time_it(0.5, || {
             black_box(shapeflow::geometry::find_segment_intersections(mesh.positions(), mesh.elements()));
         });
         let params = manager.params;
-        let t_adapt = time_it(|| {
+        let t_adapt = time_it(0.5, || {
             black_box(shapeflow::geometry::adapt_curve(&mesh, &params).unwrap());
         });
-        let t_reg = time_it(|| {
+        let t_reg = time_it(0.5, || {
             black_box(shapeflow::geometry::regularize_curve(&mesh, 1, Some(&params)));
         });
         eprintln!(
@@ -97,7 +89,7 @@ fn main() {
     let t_step = l2_step_time(&mesh);
     let (params, pinch) = SurfaceManager::defaults_for(&mesh);
     let mut manager = SurfaceManager { regularize: true, sweeps: 3, adapt: true, params, pinch_curvature: Some(pinch) };
-    let t_manage = time_it(|| {
+    let t_manage = time_it(0.5, || {
         black_box(manager.manage(&mesh).unwrap());
     });
     println!("| {n} | {:.3} | {:.3} | {:.2} |", t_step * 1e3, t_manage * 1e3, t_manage / t_step);

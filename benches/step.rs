@@ -11,28 +11,10 @@ use shapeflow::fem::{Matrices, Pattern, Weight};
 use shapeflow::flow::{LinearSystem, ProductWeights, SemiImplicitStep, SolverKind, SparseCholesky};
 use shapeflow::geometry::{circle, icosphere, Mesh};
 use std::hint::black_box;
-use std::time::Instant;
 
-fn peak_rss_mib() -> f64 {
-    let s = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
-    s.lines()
-        .find(|l| l.starts_with("VmHWM:"))
-        .and_then(|l| l.split_whitespace().nth(1))
-        .and_then(|k| k.parse::<f64>().ok())
-        .map_or(f64::NAN, |kb| kb / 1024.0)
-}
-
-/// Repeat `f` until at least `budget` seconds and 3 runs; mean seconds per run.
-fn time_it(budget: f64, mut f: impl FnMut()) -> f64 {
-    f(); // warm-up: symbolic factorizations, allocations
-    let start = Instant::now();
-    let mut n = 0;
-    while n < 3 || start.elapsed().as_secs_f64() < budget {
-        f();
-        n += 1;
-    }
-    start.elapsed().as_secs_f64() / n as f64
-}
+#[path = "common/mod.rs"]
+mod common;
+use common::{peak_rss_mib, time_it};
 
 fn case<const D: usize>(mesh: &Mesh<D>, product: &str) -> f64 {
     let pattern = Pattern::new(mesh.num_vertices(), mesh.elements());

@@ -12,16 +12,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 fn circle_polygon(what: &str, r: f64, n: usize) -> Polygon {
-    Polygon::new(
-        what,
-        (0..n)
-            .map(|k| {
-                let t = 2.0 * PI * k as f64 / n as f64;
-                Point::<2>::new(r * t.cos(), r * t.sin())
-            })
-            .collect(),
-    )
-    .unwrap()
+    Polygon::from_curve(what, circle([0.0, 0.0], r, n)).unwrap()
 }
 
 /// Paper §4.3.2: Σ the circle of radius 3, D = {2 ≤ |x| ≤ 2.5}, z_g = log(3/|x|).

@@ -3,97 +3,54 @@
 //! curve `Γ` lives inside `Σ` and must not meet `D`.
 
 use super::BulkError;
-use crate::geometry::{find_segment_intersections, Point};
+use crate::geometry::{find_segment_intersections, polygon, winding_number, CurveMesh, MeshError, Point};
 
-/// A closed simple polygon, stored counter-clockwise (first point not repeated).
+/// A closed simple polygon, stored counter-clockwise: a validated one-component
+/// curve mesh (the geometry's constructors check finiteness, repeated points and
+/// self-intersections).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Polygon {
-    points: Vec<Point<2>>,
+    curve: CurveMesh,
 }
 
 impl Polygon {
-    /// Validates a closed polygon (at least 3 distinct points, finite, simple, nonzero
-    /// area) and orients it counter-clockwise. `what` names it in errors.
+    /// The polygon through `points` (either orientation). `what` names it in errors.
     pub fn new(what: &str, points: Vec<Point<2>>) -> Result<Self, BulkError> {
-        let bad = |m: String| BulkError::Domain { what: what.to_string(), message: m };
-        if points.len() < 3 {
-            return Err(bad(format!("needs at least 3 points, got {}", points.len())));
-        }
-        if let Some(i) = points.iter().position(|p| !p.x.is_finite() || !p.y.is_finite()) {
-            return Err(bad(format!("point {i} is not finite")));
-        }
-        let n = points.len();
-        if let Some(i) = (0..n).find(|&i| points[i] == points[(i + 1) % n]) {
-            return Err(bad(format!("points {i} and {} coincide", (i + 1) % n)));
-        }
-        let segments: Vec<[usize; 2]> = (0..n).map(|i| [i, (i + 1) % n]).collect();
-        if let Some(h) = find_segment_intersections(&points, &segments).first() {
-            return Err(bad(format!("intersects itself near ({:.4}, {:.4})", h.point.x, h.point.y)));
-        }
-        let mut poly = Polygon { points };
-        let area = poly.signed_area();
-        if area.abs() <= 1e-14 * poly.diameter().powi(2) {
-            return Err(bad("encloses no area".into()));
-        }
-        if area < 0.0 {
-            poly.points.reverse();
-        }
-        Ok(poly)
+        Self::from_curve(what, polygon(&points, None))
     }
 
+    /// A polygon from a curve built by the geometry's shapes (`circle`, `rectangle`,
+    /// `polygon`); it must have a single component.
+    pub fn from_curve(what: &str, curve: Result<CurveMesh, MeshError>) -> Result<Self, BulkError> {
+        let bad = |message: String| BulkError::Domain { what: what.to_string(), message };
+        let curve = curve.map_err(|e| match e {
+            MeshError::SelfIntersection { a, b } => bad(format!("intersects itself (segments {a} and {b})")),
+            e => bad(e.to_string()),
+        })?;
+        if curve.num_components() != 1 {
+            return Err(bad(format!("must be one closed curve, got {}", curve.num_components())));
+        }
+        Ok(Polygon { curve })
+    }
+
+    /// The vertices, counter-clockwise.
     pub fn points(&self) -> &[Point<2>] {
-        &self.points
+        self.curve.positions()
     }
 
-    /// `½ Σ x_i × x_{i+1}` (positive for counter-clockwise polygons).
+    /// Enclosed area (positive: counter-clockwise).
     pub fn signed_area(&self) -> f64 {
-        let n = self.points.len();
-        (0..n)
-            .map(|i| {
-                let (a, b) = (self.points[i], self.points[(i + 1) % n]);
-                a.x * b.y - a.y * b.x
-            })
-            .sum::<f64>()
-            * 0.5
-    }
-
-    /// Largest distance between two of its points' bounding box corners.
-    pub fn diameter(&self) -> f64 {
-        let (lo, hi) = self.bounds();
-        (hi - lo).norm()
-    }
-
-    /// Axis-aligned bounding box `(min, max)`.
-    pub fn bounds(&self) -> (Point<2>, Point<2>) {
-        let mut lo = Point::<2>::repeat(f64::INFINITY);
-        let mut hi = Point::<2>::repeat(f64::NEG_INFINITY);
-        for p in &self.points {
-            lo = lo.inf(p);
-            hi = hi.sup(p);
-        }
-        (lo, hi)
+        self.curve.enclosed_measure()
     }
 
     /// Mean edge length.
     pub fn spacing(&self) -> f64 {
-        let n = self.points.len();
-        (0..n).map(|i| (self.points[(i + 1) % n] - self.points[i]).norm()).sum::<f64>() / n as f64
+        self.curve.boundary_measure() / self.curve.num_elements() as f64
     }
 
-    /// Whether `p` lies inside (crossing-number rule; points on the boundary may go either way).
+    /// Whether `p` lies inside (points on the boundary may go either way).
     pub fn contains(&self, p: Point<2>) -> bool {
-        let n = self.points.len();
-        let mut inside = false;
-        for i in 0..n {
-            let (a, b) = (self.points[i], self.points[(i + 1) % n]);
-            if (a.y > p.y) != (b.y > p.y) {
-                let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
-                if p.x < x {
-                    inside = !inside;
-                }
-            }
-        }
-        inside
+        winding_number(&[self.points()], p) != 0
     }
 }
 
@@ -121,10 +78,10 @@ impl DesignDomain {
                 ),
             });
         }
-        if !d.control_outer.contains(d.control_inner.points[0]) {
+        if !d.control_outer.contains(d.control_inner.points()[0]) {
             return Err(bad("control.inner", "must lie inside control.outer"));
         }
-        if !d.outer.contains(d.control_outer.points[0]) {
+        if !d.outer.contains(d.control_outer.points()[0]) {
             return Err(bad("control.outer", "must lie inside the outer boundary"));
         }
         Ok(d)
@@ -150,29 +107,29 @@ impl DesignDomain {
         self.control_outer.signed_area() - self.control_inner.signed_area()
     }
 
-    /// Checks that the curve (points and segments) is admissible: it lies inside `Σ`,
-    /// does not meet `D` and its segments do not cross those of `Σ` or `∂D`.
-    /// Crossings of the curve with itself are left to the caller.
-    pub fn check_curve(&self, points: &[Point<2>], segments: &[[usize; 2]]) -> Result<(), BulkError> {
+    /// Checks that the curve is admissible: it lies inside `Σ`, does not meet `D`, and
+    /// its segments cross neither each other nor those of `Σ` and `∂D` (one pass of
+    /// the spatial hashing over all of them).
+    pub fn check_curve(&self, curve: &CurveMesh) -> Result<(), BulkError> {
         let loops = [&self.outer, &self.control_inner, &self.control_outer];
         let (mut all, mut segs) = loop_segments(&loops);
         let fixed = segs.len();
         let offset = all.len();
-        all.extend_from_slice(points);
-        segs.extend(segments.iter().map(|s| [s[0] + offset, s[1] + offset]));
-        for h in find_segment_intersections(&all, &segs) {
-            if h.a < fixed && h.b >= fixed {
-                return Err(BulkError::Inadmissible(format!(
-                    "the curve meets the {} near ({:.4}, {:.4})",
-                    if h.a < self.outer.points.len() { "outer boundary" } else { "control region" },
-                    h.point.x,
-                    h.point.y
-                )));
-            }
+        all.extend_from_slice(curve.positions());
+        segs.extend(curve.elements().iter().map(|s| [s[0] + offset, s[1] + offset]));
+        if let Some(h) = find_segment_intersections(&all, &segs).into_iter().find(|h| h.b >= fixed) {
+            let what = if h.a >= fixed {
+                "crosses itself"
+            } else if h.a < self.outer.points().len() {
+                "meets the outer boundary"
+            } else {
+                "meets the control region"
+            };
+            return Err(BulkError::Inadmissible(format!("the curve {what} near ({:.4}, {:.4})", h.point.x, h.point.y)));
         }
-        // no crossings: each connected piece of the curve is entirely on one side
-        for s in segments {
-            let p = points[s[0]];
+        // no crossings: each component lies entirely on one side of every boundary
+        for cycle in curve.cycles() {
+            let p = curve.positions()[cycle[0]];
             if !self.outer.contains(p) {
                 return Err(BulkError::Inadmissible(format!(
                     "the curve leaves the outer boundary at ({:.4}, {:.4})",
@@ -196,8 +153,8 @@ pub(super) fn loop_segments(loops: &[&Polygon]) -> (Vec<Point<2>>, Vec<[usize; 2
     let mut segments = Vec::new();
     for l in loops {
         let o = points.len();
-        let n = l.points.len();
-        points.extend_from_slice(&l.points);
+        let n = l.points().len();
+        points.extend_from_slice(l.points());
         segments.extend((0..n).map(|i| [o + i, o + (i + 1) % n]));
     }
     (points, segments)
@@ -250,9 +207,9 @@ mod tests {
         let b = Polygon::new("control.outer", square(0.0, 2.5)).unwrap();
         let d = DesignDomain::new(outer, a, b).unwrap();
         assert!((d.control_area() - 9.0).abs() < 1e-12);
-        let segs = [[0, 1], [1, 2], [2, 3], [3, 0]];
-        assert!(d.check_curve(&square(0.0, 1.0), &segs).is_ok());
-        assert!(matches!(d.check_curve(&square(0.0, 2.2), &segs), Err(BulkError::Inadmissible(_))));
-        assert!(matches!(d.check_curve(&square(1.0, 1.5), &segs), Err(BulkError::Inadmissible(_))));
+        let curve = |c: f64, h: f64| polygon(&square(c, h), None).unwrap();
+        assert!(d.check_curve(&curve(0.0, 1.0)).is_ok());
+        assert!(matches!(d.check_curve(&curve(0.0, 2.2)), Err(BulkError::Inadmissible(_))));
+        assert!(matches!(d.check_curve(&curve(1.0, 1.5)), Err(BulkError::Inadmissible(_))));
     }
 }

@@ -14,6 +14,7 @@
 
 use super::mesh::{triangle_area, BulkMesh};
 use super::BulkError;
+use crate::fem::element::cotangent_stiffness;
 use crate::fem::{Pattern, SparseCholesky};
 use crate::geometry::Point;
 
@@ -45,14 +46,6 @@ pub struct DesignFields {
     pub misfit: f64,
 }
 
-/// `∇λ_a` of the barycentric coordinates of a triangle with area `area`.
-fn gradients(p: [Point<2>; 3], area: f64) -> [Point<2>; 3] {
-    std::array::from_fn(|a| {
-        let (b, c) = (p[(a + 1) % 3], p[(a + 2) % 3]);
-        Point::<2>::new(b.y - c.y, c.x - b.x) / (2.0 * area)
-    })
-}
-
 /// Solves the state and adjoint problems for the target `z_g`.
 pub fn solve_design_fields(mesh: &BulkMesh, target: &dyn Fn(Point<2>) -> f64) -> Result<DesignFields, BulkError> {
     let n = mesh.points.len();
@@ -64,11 +57,11 @@ pub fn solve_design_fields(mesh: &BulkMesh, target: &dyn Fn(Point<2>) -> f64) ->
         if !(area > 0.0) {
             return Err(BulkError::Meshing(format!("bulk triangle {e} is degenerate (area {area:e})")));
         }
-        let g = gradients(p, area);
+        let local = cotangent_stiffness(&p, area);
         let slots = &pattern.slots()[e];
         for a in 0..3 {
             for b in 0..3 {
-                k[slots[a][b]] += area * g[a].dot(&g[b]);
+                k[slots[a][b]] += local[(a, b)];
             }
         }
     }

@@ -11,7 +11,7 @@
 
 use super::domain::{loop_segments, DesignDomain};
 use super::BulkError;
-use crate::geometry::Point;
+use crate::geometry::{CurveMesh, Point};
 use spade::handles::FixedVertexHandle;
 use spade::{AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation};
 use std::collections::VecDeque;
@@ -65,14 +65,9 @@ pub struct BulkMesh {
 }
 
 impl BulkMesh {
-    /// Triangulates `Ω` for the curve given by `points` and `segments` (closed,
-    /// admissible: see [`DesignDomain::check_curve`]).
-    pub fn build(
-        domain: &DesignDomain,
-        points: &[Point<2>],
-        segments: &[[usize; 2]],
-        opts: &MeshingOptions,
-    ) -> Result<BulkMesh, BulkError> {
+    /// Triangulates `Ω` for the curve `Γ` (admissible: see [`DesignDomain::check_curve`]).
+    pub fn build(domain: &DesignDomain, curve: &CurveMesh, opts: &MeshingOptions) -> Result<BulkMesh, BulkError> {
+        let (points, segments) = (curve.positions(), curve.elements());
         let n_curve = points.len();
         let outer = domain.outer();
         let [ci, co] = domain.control();
@@ -121,52 +116,41 @@ impl BulkMesh {
             }
         }
 
-        // flood fill over the inner faces: (in Ω, in D) parities
+        // flood fill from the outer face: (in Ω, in D) parities. Crossing a
+        // constraint edge of Γ or Σ flips the first, one of ∂D the second.
+        let crossing = |constraint: bool, a: usize, b: usize| -> (bool, bool) {
+            match (constraint, class[a].or(class[b])) {
+                (false, _) => (false, false),
+                (true, Some(Boundary::Control)) => (false, true),
+                (true, _) => (true, false),
+            }
+        };
         let nf = cdt.num_all_faces();
-        let mut state: Vec<Option<(bool, bool)>> = vec![None; nf];
-        let mut queue: VecDeque<usize> = VecDeque::new();
-        // crossing a constraint edge between vertices a and b
-        let flip = |constraint: bool, a: usize, b: usize, s: (bool, bool)| -> (bool, bool) {
-            if !constraint {
-                return s;
-            }
-            match class[a].or(class[b]) {
-                Some(Boundary::Control) => (s.0, !s.1),
-                _ => (!s.0, s.1),
-            }
-        };
-        let ends = |e: &spade::handles::DirectedEdgeHandle<'_, Point2<f64>, (), spade::CdtEdge<()>, ()>| {
-            let [a, b] = e.vertices().map(|v| v.fix().index());
-            (e.is_constraint_edge(), a, b)
-        };
-        for e in cdt.convex_hull() {
-            for side in [e, e.rev()] {
-                if let Some(inner) = side.face().as_inner() {
-                    let idx = inner.fix().index();
-                    if state[idx].is_none() {
-                        let (c, a, b) = ends(&side);
-                        state[idx] = Some(flip(c, a, b, (false, false)));
-                        queue.push_back(idx);
-                    }
-                }
-            }
-        }
-        // per inner face: its three neighbours across (constraint?, a, b)
-        let mut adjacency: Vec<[(Option<usize>, bool, usize, usize); 3]> = vec![[(None, false, 0, 0); 3]; nf];
+        let outer_face = spade::handles::OUTER_FACE.index();
+        // per inner face: the face across each edge (possibly the outer one) and the flips
+        let mut neighbours: Vec<[(usize, (bool, bool)); 3]> = vec![[(outer_face, (false, false)); 3]; nf];
         for face in cdt.inner_faces() {
-            adjacency[face.fix().index()] = face.adjacent_edges().map(|e| {
-                let (c, a, b) = ends(&e);
-                (e.rev().face().as_inner().map(|f| f.fix().index()), c, a, b)
+            neighbours[face.fix().index()] = face.adjacent_edges().map(|e| {
+                let [a, b] = e.vertices().map(|v| v.fix().index());
+                (e.rev().face().fix().index(), crossing(e.is_constraint_edge(), a, b))
             });
+        }
+        let mut state: Vec<Option<(bool, bool)>> = vec![None; nf];
+        state[outer_face] = Some((false, false));
+        // the outer face's neighbours are the inner faces that name it
+        let mut queue: VecDeque<usize> = VecDeque::new();
+        for f in (0..nf).filter(|&f| f != outer_face) {
+            if let Some(&(_, c)) = neighbours[f].iter().find(|(g, _)| *g == outer_face) {
+                state[f] = Some(c);
+                queue.push_back(f);
+            }
         }
         while let Some(f) = queue.pop_front() {
             let s = state[f].expect("visited");
-            for (next, c, a, b) in adjacency[f] {
-                if let Some(idx) = next {
-                    if state[idx].is_none() {
-                        state[idx] = Some(flip(c, a, b, s));
-                        queue.push_back(idx);
-                    }
+            for (g, c) in neighbours[f] {
+                if state[g].is_none() {
+                    state[g] = Some((s.0 ^ c.0, s.1 ^ c.1));
+                    queue.push_back(g);
                 }
             }
         }

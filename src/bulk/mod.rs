@@ -29,36 +29,26 @@ pub enum BulkError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Point;
+    use crate::geometry::{circle, Point};
 
-    fn circle_points(r: f64, n: usize) -> Vec<Point<2>> {
-        (0..n)
-            .map(|k| {
-                let t = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
-                Point::<2>::new(r * t.cos(), r * t.sin())
-            })
-            .collect()
+    fn circle_polygon(what: &str, r: f64, n: usize) -> Polygon {
+        Polygon::from_curve(what, circle([0.0, 0.0], r, n)).unwrap()
     }
 
     fn ring_domain(n: usize) -> DesignDomain {
         DesignDomain::new(
-            Polygon::new("outer", circle_points(3.0, 3 * n)).unwrap(),
-            Polygon::new("control.inner", circle_points(2.0, 2 * n)).unwrap(),
-            Polygon::new("control.outer", circle_points(2.5, 5 * n / 2)).unwrap(),
+            circle_polygon("outer", 3.0, 3 * n),
+            circle_polygon("control.inner", 2.0, 2 * n),
+            circle_polygon("control.outer", 2.5, 5 * n / 2),
         )
         .unwrap()
-    }
-
-    fn unit_circle(n: usize) -> (Vec<Point<2>>, Vec<[usize; 2]>) {
-        (circle_points(1.0, n), (0..n).map(|i| [i, (i + 1) % n]).collect())
     }
 
     /// Max nodal error of `y` against `log(3/|x|)` on the annulus 1 < |x| < 3.
     fn annulus_error(n: usize) -> (f64, BulkMesh, DesignFields) {
         let d = ring_domain(n);
-        let (pts, segs) = unit_circle(n);
         let opts = MeshingOptions::for_domain(&d, 2.0 * std::f64::consts::PI / n as f64);
-        let mesh = BulkMesh::build(&d, &pts, &segs, &opts).unwrap();
+        let mesh = BulkMesh::build(&d, &circle([0.0, 0.0], 1.0, n).unwrap(), &opts).unwrap();
         let f = solve_design_fields(&mesh, &|x: Point<2>| (3.0 / x.norm()).ln()).unwrap();
         let err = mesh.points.iter().zip(&f.y).map(|(x, y)| (y - (3.0 / x.norm()).ln()).abs()).fold(0.0, f64::max);
         (err, mesh, f)
@@ -94,9 +84,8 @@ mod tests {
     fn adjoint_of_a_constant_misfit_matches_the_radial_solution() {
         // z_g = y − 1 on D: −Δp = χ_D, p = 0 on |x| = 3, ∂_ν p = 0 on |x| = 1
         let d = ring_domain(96);
-        let (pts, segs) = unit_circle(96);
         let opts = MeshingOptions::for_domain(&d, 2.0 * std::f64::consts::PI / 96.0);
-        let mesh = BulkMesh::build(&d, &pts, &segs, &opts).unwrap();
+        let mesh = BulkMesh::build(&d, &circle([0.0, 0.0], 1.0, 96).unwrap(), &opts).unwrap();
         let f = solve_design_fields(&mesh, &|x: Point<2>| (3.0 / x.norm()).ln() - 1.0).unwrap();
         // radial solution: p(r) = c for r ≤ 2; −(r p')'/r = 1 on (2, 2.5); p(3) = 0
         // flux: r p'(r) = −(r² − 4)/2 on [2, 2.5], = −9/8 beyond

@@ -37,17 +37,26 @@ pub fn element_data<const D: usize>(p: &[SVector<f64, D>; D]) -> ElementData<D> 
             stiffness[(1, 0)] = -inv;
         }
         3 => {
-            let e: [SVector<f64, D>; D] = std::array::from_fn(|a| p[(a + 2) % 3] - p[(a + 1) % 3]);
-            let inv = 1.0 / (4.0 * measure);
+            let k = cotangent_stiffness(&[p[0], p[1], p[2]], measure);
             for a in 0..3 {
                 for b in 0..3 {
-                    stiffness[(a, b)] = e[a].dot(&e[b]) * inv;
+                    stiffness[(a, b)] = k[(a, b)];
                 }
             }
         }
         _ => unreachable!(),
     }
     ElementData { measure, normal, stiffness }
+}
+
+/// P1 stiffness `K_ab = (e_a · e_b) / (4|T|)` of a triangle with vertices `p` (in the
+/// plane or in space) and area `|T| = area`, `e_a = p_{a+2} − p_{a+1}` the edge
+/// opposite vertex `a` (the cotangent formula).
+#[inline]
+pub fn cotangent_stiffness<const N: usize>(p: &[SVector<f64, N>; 3], area: f64) -> SMatrix<f64, 3, 3> {
+    let e: [SVector<f64, N>; 3] = std::array::from_fn(|a| p[(a + 2) % 3] - p[(a + 1) % 3]);
+    let inv = 1.0 / (4.0 * area);
+    SMatrix::<f64, 3, 3>::from_fn(|a, b| e[a].dot(&e[b]) * inv)
 }
 
 /// Entry `M_ab` of the consistent element mass matrix.

@@ -11,7 +11,7 @@
 //! Below `τ_min` the run stops with [`StopReason::TauMin`] on the last good state.
 
 use super::mesh_management::{Managed, MeshManager};
-use super::problem::{Problem, SurfaceState};
+use super::problem::{curvature_and_normals, Problem, SurfaceState};
 use super::step::{SemiImplicitStep, SolverKind};
 use super::system::{LinearSystem, ProductWeights, ScalarProduct};
 use super::FlowError;
@@ -243,13 +243,7 @@ impl<'p, const D: usize> Flow<'p, D> {
         self.matrices.assemble_into(&self.mesh, &self.pattern, s.solver == SolverKind::Consistent);
         let matrices = &self.matrices;
         let ax = matrices.stiffness_times_positions(&self.mesh, &self.pattern);
-        let curvature: Vec<f64> = (0..self.mesh.num_vertices())
-            .map(|i| {
-                let n = &matrices.lumped_normal[i];
-                n.dot(&ax[i]) / n.norm_squared()
-            })
-            .collect();
-        let normals: Vec<Point<D>> = matrices.lumped_normal.iter().map(|n| n.normalize()).collect();
+        let (curvature, normals) = curvature_and_normals(matrices, &ax);
         let state = SurfaceState { mesh: &self.mesh, matrices, curvature: &curvature, normals: &normals };
         let grad = self.problem.shape_gradient(&state).map_err(|e| FlowError::Problem(e.0))?;
         check_values("g", &grad.g, self.mesh.num_vertices())?;
@@ -349,16 +343,12 @@ impl<'p, const D: usize> Flow<'p, D> {
                 continue;
             }
             let energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
-            if energy == f64::INFINITY {
-                // an inadmissible candidate (shape design: Γ met D or Σ): shorten the step
-                tau *= 0.5;
-                report.backtracks += 1;
-                continue;
-            }
-            if !energy.is_finite() {
+            if energy.is_nan() || energy == f64::NEG_INFINITY {
                 return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration + 1 });
             }
-            if s.backtracking && energy > self.energy {
+            // +∞ marks an inadmissible candidate (shape design: Γ met D or Σ), which
+            // is shortened even where backtracking is off
+            if energy > self.energy && (s.backtracking || energy == f64::INFINITY) {
                 tau *= 0.5;
                 report.backtracks += 1;
                 continue;

@@ -55,6 +55,16 @@ pub trait Problem<const D: usize>: Send {
     }
 }
 
+/// The discrete curvature `κ_i = N⃗_i·(A X)_i / |N⃗_i|²` and the unit vertex normals
+/// `N⃗_i/|N⃗_i|` of [`SurfaceState`], from the matrices and `A X`.
+pub(crate) fn curvature_and_normals<const D: usize>(
+    matrices: &Matrices<D>,
+    ax: &[Point<D>],
+) -> (Vec<f64>, Vec<Point<D>>) {
+    let n = &matrices.lumped_normal;
+    (n.iter().zip(ax).map(|(n, a)| n.dot(a) / n.norm_squared()).collect(), n.iter().map(|n| n.normalize()).collect())
+}
+
 /// The discrete shape derivative of `problem` at `mesh` along the vertex field `V⃗`:
 /// `dJ(Γ; V⃗) = ∫_Γ G V⃗·ν ≈ Σ_i (g_i κ_i + f_i) N⃗_i·V⃗_i`, with `N⃗_i = ∫_Γ φ_i ν` and the
 /// discrete curvature of the flow. Used to check shape gradients against finite
@@ -67,9 +77,7 @@ pub fn shape_derivative<const D: usize>(
     let pattern = Pattern::new(mesh.num_vertices(), mesh.elements());
     let matrices = Matrices::assemble(mesh, &pattern);
     let ax = matrices.stiffness_times_positions(mesh, &pattern);
-    let normals: Vec<Point<D>> = matrices.lumped_normal.iter().map(|n| n.normalize()).collect();
-    let curvature: Vec<f64> =
-        matrices.lumped_normal.iter().zip(&ax).map(|(n, a)| n.dot(a) / n.norm_squared()).collect();
+    let (curvature, normals) = curvature_and_normals(&matrices, &ax);
     let state = SurfaceState { mesh, matrices: &matrices, curvature: &curvature, normals: &normals };
     let grad = problem.shape_gradient(&state)?;
     Ok((0..mesh.num_vertices())

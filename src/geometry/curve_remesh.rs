@@ -153,10 +153,12 @@ pub fn adapt_curve(mesh: &CurveMesh, s: &CurveRemeshSettings) -> Result<Option<C
     from_polylines_trusted(out).map(Some)
 }
 
-/// Winding number of the point `p` with respect to closed loops.
-fn winding(loops: &[Loop], p: Point<2>) -> i32 {
+/// Winding number of the point `p` with respect to closed loops (each a list of
+/// vertices, the closing segment implied).
+pub fn winding_number<L: AsRef<[Point<2>]>>(loops: &[L], p: Point<2>) -> i32 {
     let mut w = 0;
     for l in loops {
+        let l = l.as_ref();
         let n = l.len();
         for k in 0..n {
             let (a, b) = (l[k], l[(k + 1) % n]);
@@ -254,8 +256,8 @@ pub fn resolve_intersections(mesh: &CurveMesh, min_area: f64) -> Result<Option<C
         let normal_left = Point::<2>::new(-d.y, d.x).normalize();
         let mid = (a + b) * 0.5;
         let eps = 1e-6 * d.norm().max(1e-12);
-        let left = winding(&original, mid + normal_left * eps) > 0;
-        let right = winding(&original, mid - normal_left * eps) > 0;
+        let left = winding_number(&original, mid + normal_left * eps) > 0;
+        let right = winding_number(&original, mid - normal_left * eps) > 0;
         if left != right {
             let l: Loop = l.into_iter().zip(is_crossing).filter(|(_, c)| !c).map(|(p, _)| p).collect();
             if l.len() >= 3 {

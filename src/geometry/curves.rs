@@ -38,9 +38,16 @@ fn polyline_parts(parts: Vec<Vec<Point<2>>>) -> (Vec<Point<2>>, Vec<[usize; 2]>)
     (positions, elements)
 }
 
-/// Circle of the given centre and radius with `n` equally spaced vertices.
+/// Circle of the given centre and radius with `n` equally spaced vertices (at the
+/// angles `2πk/n`, exactly on the circle).
 pub fn circle(center: [f64; 2], radius: f64, n: usize) -> Result<CurveMesh, MeshError> {
-    ellipse(center, [radius, radius], 0.0, n)
+    let pts = (0..n)
+        .map(|k| {
+            let t = 2.0 * PI * k as f64 / n as f64;
+            Point::<2>::new(center[0] + radius * t.cos(), center[1] + radius * t.sin())
+        })
+        .collect();
+    from_polylines(vec![pts])
 }
 
 /// Ellipse with semi-axes `(a, b)`, rotated by `rotation` radians, with `n` vertices

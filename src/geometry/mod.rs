@@ -12,7 +12,7 @@ mod surface_remesh;
 mod surfaces;
 mod validate;
 
-pub use curve_remesh::{adapt_curve, regularize_curve, resolve_intersections, CurveRemeshSettings};
+pub use curve_remesh::{adapt_curve, regularize_curve, resolve_intersections, winding_number, CurveRemeshSettings};
 pub use curves::{circle, ellipse, polygon, rectangle, union};
 pub use intersect::{find_segment_intersections, SegmentHit};
 pub use measures::MeshQuality;

@@ -5,7 +5,7 @@
 use super::build::{finite, positive};
 use super::spec::{BoundarySpec, ShapeDesignSpec, SpecError, TargetSpec};
 use crate::bulk::{BulkError, DesignDomain, MeshingOptions, Polygon};
-use crate::geometry::{CurveMesh, Point};
+use crate::geometry::{self, CurveMesh, Point};
 use crate::problems::{ShapeDesign, Target};
 use std::sync::Arc;
 
@@ -35,26 +35,19 @@ fn perimeter(b: &BoundarySpec) -> f64 {
     }
 }
 
-/// The polygon of a boundary spec with vertices about `h` apart.
+/// The polygon of a boundary spec with vertices about `h` apart (at least 16 on a
+/// circle; squares and polygons keep their corners).
 fn polygon(field: &str, b: &BoundarySpec, h: f64) -> Result<Polygon, SpecError> {
-    let points: Vec<Point<2>> = match b {
+    let curve = match b {
         BoundarySpec::Circle { center, radius } => {
             finite(&format!("{field}.center"), center)?;
             let r = positive(&format!("{field}.radius"), *radius)?;
-            let n = count(field, std::f64::consts::TAU * r, h)?.max(16);
-            (0..n)
-                .map(|k| {
-                    let t = std::f64::consts::TAU * k as f64 / n as f64;
-                    Point::<2>::new(center[0] + r * t.cos(), center[1] + r * t.sin())
-                })
-                .collect()
+            geometry::circle(*center, r, count(field, perimeter(b), h)?.max(16))
         }
         BoundarySpec::Square { center, size } => {
             finite(&format!("{field}.center"), center)?;
-            let s = 0.5 * positive(&format!("{field}.size"), *size)?;
-            let c = Point::<2>::from(*center);
-            let corners = [(-s, -s), (s, -s), (s, s), (-s, s)].map(|(x, y)| c + Point::<2>::new(x, y));
-            subdivide(field, &corners, h)?
+            let s = positive(&format!("{field}.size"), *size)?;
+            geometry::rectangle(*center, [s, s], count(field, perimeter(b), h)?.max(4))
         }
         BoundarySpec::Polygon { points } => {
             if points.len() < 3 {
@@ -67,28 +60,13 @@ fn polygon(field: &str, b: &BoundarySpec, h: f64) -> Result<Polygon, SpecError> 
                 finite(&format!("{field}.points[{i}]"), p)?;
             }
             let pts: Vec<Point<2>> = points.iter().map(|p| Point::<2>::from(*p)).collect();
-            subdivide(field, &pts, h)?
+            geometry::polygon(&pts, Some(count(field, perimeter(b), h)?))
         }
     };
-    Polygon::new(field, points).map_err(|e| match e {
+    Polygon::from_curve(field, curve).map_err(|e| match e {
         BulkError::Domain { message, .. } => SpecError::new(field, message),
         other => SpecError::new(field, other.to_string()),
     })
-}
-
-/// Corners joined by straight edges split into pieces of length at most `h`.
-fn subdivide(field: &str, corners: &[Point<2>], h: f64) -> Result<Vec<Point<2>>, SpecError> {
-    let n = corners.len();
-    let mut out = Vec::new();
-    for i in 0..n {
-        let (a, b) = (corners[i], corners[(i + 1) % n]);
-        let m = count(field, (b - a).norm(), h)?.max(1);
-        out.extend((0..m).map(|k| a + (b - a) * (k as f64 / m as f64)));
-        if out.len() > MAX_BOUNDARY_VERTICES {
-            return Err(SpecError::new(field, format!("more than {MAX_BOUNDARY_VERTICES} vertices at this spacing")));
-        }
-    }
-    Ok(out)
 }
 
 fn bulk_error(e: BulkError) -> SpecError {

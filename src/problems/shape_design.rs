@@ -25,7 +25,8 @@
 use crate::bulk::{solve_design_fields, BulkError, BulkMesh, DesignDomain, MeshingOptions};
 use crate::fem::Weight;
 use crate::flow::{H1Weights, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
-use crate::geometry::{find_segment_intersections, resolve_intersections, CurveMesh, Mesh, Point};
+use crate::geometry::{resolve_intersections, CurveMesh, Mesh, Point};
+use nalgebra::{Matrix3, Vector3};
 use std::sync::{Arc, Mutex};
 
 /// The target `z_g` on `D`.
@@ -70,8 +71,6 @@ pub struct DesignSolution {
     pub misfit: f64,
     /// `J = misfit + γ|Γ|`.
     pub energy: f64,
-    /// Triangles of the bulk mesh.
-    pub bulk_triangles: usize,
 }
 
 struct Cached {
@@ -140,28 +139,23 @@ impl ShapeDesign {
                 return Ok(c.solution.clone());
             }
         }
-        let (points, segments) = (mesh.positions(), mesh.elements());
-        if let Some(h) = find_segment_intersections(points, segments).first() {
-            return Err(BulkError::Inadmissible(format!(
-                "the curve crosses itself near ({:.4}, {:.4})",
-                h.point.x, h.point.y
-            )));
-        }
-        self.domain.check_curve(points, segments)?;
-        let bulk = BulkMesh::build(&self.domain, points, segments, &self.meshing)?;
+        self.domain.check_curve(mesh)?;
+        let bulk = BulkMesh::build(&self.domain, mesh, &self.meshing)?;
         let target = |x: Point<2>| self.target.value(x);
         let fields = solve_design_fields(&bulk, &target)?;
-        let n = points.len();
+        let n = bulk.curve_vertices;
         let energy = fields.misfit + self.gamma * mesh.boundary_measure();
         let solution = Arc::new(DesignSolution {
             y: fields.y[..n].to_vec(),
             p: fields.p[..n].to_vec(),
             misfit: fields.misfit,
             energy,
-            bulk_triangles: bulk.triangles.len(),
         });
-        *self.cache.lock().expect("cache") =
-            Some(Cached { positions: points.to_vec(), elements: segments.to_vec(), solution: solution.clone() });
+        *self.cache.lock().expect("cache") = Some(Cached {
+            positions: mesh.positions().to_vec(),
+            elements: mesh.elements().to_vec(),
+            solution: solution.clone(),
+        });
         Ok(solution)
     }
 
@@ -180,8 +174,7 @@ impl ShapeDesign {
             for k in 0..n {
                 let (lp, ln) = (len[(k + n - 1) % n], len[k]);
                 if n < 5 {
-                    let (up, ui, un) = (u[cyc[(k + n - 1) % n]], u[cyc[k]], u[cyc[(k + 1) % n]]);
-                    out[cyc[k]] = ((ui - up) + (un - ui)) / (lp + ln);
+                    out[cyc[k]] = (u[cyc[(k + 1) % n]] - u[cyc[(k + n - 1) % n]]) / (lp + ln);
                     continue;
                 }
                 // arclength offsets of k−2..k+2
@@ -259,33 +252,18 @@ impl<const D: usize> Problem<D> for ShapeDesign {
     }
 }
 
-/// Slope at 0 of the least-squares quadratic through `(s_j, v_j)`.
+/// Slope at 0 of the least-squares quadratic through `(s_j, v_j)` (normal equations,
+/// with `s` scaled by its spread).
 fn quadratic_slope(s: &[f64; 5], v: &[f64; 5]) -> f64 {
-    // normal equations of a + b s + c s², solved by Cramer's rule (3×3, well scaled
-    // after dividing s by its spread)
     let scale = (s[4] - s[0]).abs().max(f64::MIN_POSITIVE);
-    let mut m = [[0.0; 3]; 3];
-    let mut r = [0.0; 3];
+    let (mut m, mut r) = (Matrix3::<f64>::zeros(), Vector3::<f64>::zeros());
     for (&sj, &vj) in s.iter().zip(v) {
         let t = sj / scale;
-        let phi = [1.0, t, t * t];
-        for a in 0..3 {
-            r[a] += phi[a] * vj;
-            for b in 0..3 {
-                m[a][b] += phi[a] * phi[b];
-            }
-        }
+        let phi = Vector3::new(1.0, t, t * t);
+        m += phi * phi.transpose();
+        r += phi * vj;
     }
-    let det3 = |m: &[[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det3(&m);
-    let mut mb = m;
-    for a in 0..3 {
-        mb[a][1] = r[a];
-    }
-    det3(&mb) / d / scale
+    m.lu().solve(&r).map_or(0.0, |c| c[1] / scale)
 }
 
 /// `α_e` of paper eq. (84) from the values of `g` at the ends of edge `e` and `h_e²`.
