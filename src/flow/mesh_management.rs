@@ -85,13 +85,22 @@ impl MeshManager<2> for CurveManager {
                 remeshed = Some(m);
             }
         }
-        let moved = if self.regularize {
+        let mut moved = if self.regularize {
             let cur = remeshed.as_ref().unwrap_or(mesh);
             let sizes = self.adapt.then_some(&self.params);
             Some(regularize_curve(cur, self.sweeps, sizes))
         } else {
             None
         };
+        // regularization moves vertices along chords and may fold a sharp corner
+        // over: resolve again, so that the result never crosses itself
+        if self.topology_changes {
+            if let Some(m) = moved.as_ref() {
+                if let Some(r) = resolve_intersections(m, self.params.min_area).map_err(fail)? {
+                    (remeshed, moved) = (Some(r), None);
+                }
+            }
+        }
         Ok(outcome(remeshed, moved))
     }
 }
