@@ -36,19 +36,24 @@ pub fn rasterize_curve(positions: &[Point<2>], segments: &[[usize; 2]], dims: [u
     }
     let mut mask = vec![false; dims[0] * dims[1]];
     for (j, row) in rows.iter_mut().enumerate() {
-        row.sort_by(|p, q| p.0.total_cmp(&q.0));
-        let mut winding = 0;
-        let mut next = 0;
-        for i in 0..dims[0] {
-            let x = centre(i, l);
-            while next < row.len() && row[next].0 < x {
-                winding += row[next].1;
-                next += 1;
-            }
-            mask[i + dims[0] * j] = winding != 0;
-        }
+        fill_line(row, dims[0], l, |i, inside| mask[i + dims[0] * j] = inside);
     }
     mask
+}
+
+/// Along one grid line: sort the boundary crossings `(coordinate, ±1)` and report
+/// for each of the `n` cell centres whether the winding number there is nonzero.
+fn fill_line(hits: &mut [(f64, i32)], n: usize, l: f64, mut set: impl FnMut(usize, bool)) {
+    hits.sort_by(|p, q| p.0.total_cmp(&q.0));
+    let (mut winding, mut next) = (0, 0);
+    for i in 0..n {
+        let x = centre(i, l);
+        while next < hits.len() && hits[next].0 < x {
+            winding += hits[next].1;
+            next += 1;
+        }
+        set(i, winding != 0);
+    }
 }
 
 /// The mask of the solid enclosed by a closed triangle surface, on a 3D grid of
@@ -87,17 +92,7 @@ pub fn rasterize_surface(positions: &[Point<3>], triangles: &[[usize; 3]], dims:
     }
     let mut mask = vec![false; dims[0] * dims[1] * dims[2]];
     for (col, hits) in columns.iter_mut().enumerate() {
-        hits.sort_by(|p, q| p.0.total_cmp(&q.0));
-        let mut winding = 0;
-        let mut next = 0;
-        for k in 0..dims[2] {
-            let z = centre(k, l);
-            while next < hits.len() && hits[next].0 < z {
-                winding += hits[next].1;
-                next += 1;
-            }
-            mask[col + dims[0] * dims[1] * k] = winding != 0;
-        }
+        fill_line(hits, dims[2], l, |k, inside| mask[col + dims[0] * dims[1] * k] = inside);
     }
     mask
 }
