@@ -74,14 +74,8 @@ impl MeshManager<2> for CurveManager {
     fn manage(&mut self, mesh: &CurveMesh) -> Result<Managed<2>, FlowError> {
         let fail = |e: crate::geometry::MeshError| FlowError::Problem(format!("mesh management: {e}"));
         let mut remeshed: Option<CurveMesh> = None;
-        if self.topology_changes {
-            if let Some(m) = resolve_intersections(mesh, self.params.min_area).map_err(fail)? {
-                remeshed = Some(m);
-            }
-        }
         if self.adapt {
-            let cur = remeshed.as_ref().unwrap_or(mesh);
-            if let Some(m) = adapt_curve(cur, &self.params).map_err(fail)? {
+            if let Some(m) = adapt_curve(mesh, &self.params).map_err(fail)? {
                 remeshed = Some(m);
             }
         }
@@ -92,13 +86,12 @@ impl MeshManager<2> for CurveManager {
         } else {
             None
         };
-        // regularization moves vertices along chords and may fold a sharp corner
-        // over: resolve again, so that the result never crosses itself
+        // topology last: it resolves the crossings of the step and any fold the
+        // regularization made at a sharp corner, so the result never crosses itself
         if self.topology_changes {
-            if let Some(m) = moved.as_ref() {
-                if let Some(r) = resolve_intersections(m, self.params.min_area).map_err(fail)? {
-                    (remeshed, moved) = (Some(r), None);
-                }
+            let cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
+            if let Some(m) = resolve_intersections(cur, self.params.min_area).map_err(fail)? {
+                (remeshed, moved) = (Some(m), None);
             }
         }
         Ok(outcome(remeshed, moved))
