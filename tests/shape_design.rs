@@ -221,3 +221,40 @@ fn bad_shape_design_specs_name_the_field() {
         assert_eq!(err.field, field, "{pointer}: {err}");
     }
 }
+
+/// Paper Figure 7: `z_g = 0.45 + 0.4 cos 6θ` on the ring of Test 1, from a small
+/// centred circle: J decreases and the curve takes the six-fold structure of `z_g`,
+/// reaching out (larger radius) where `z_g` is large.
+#[test]
+fn polar_target_gives_a_six_fold_shape() {
+    let spec = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/design_polar.json")).unwrap();
+    let job = prepared(&spec);
+    let mut h = History(Vec::new());
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut h).unwrap();
+    let (j0, j1) = (h.0[0], *h.0.last().unwrap());
+    assert!(j1 < 0.6 * j0, "J {j0} → {j1}");
+    let last: CurveMesh = out.last.mesh.to_mesh::<2>().unwrap();
+    assert_eq!(last.num_components(), 1);
+    // Fourier modes of r(θ) around the origin, by the midpoint rule in θ
+    let x = last.positions();
+    let mode = |k: f64| -> (f64, f64) {
+        let (mut c, mut s, mut total) = (0.0, 0.0, 0.0);
+        for &[a, b] in last.elements() {
+            let (ta, tb) = (x[a].y.atan2(x[a].x), x[b].y.atan2(x[b].x));
+            let dt = (tb - ta + 3.0 * PI).rem_euclid(2.0 * PI) - PI;
+            let (t, r) = (ta + 0.5 * dt, 0.5 * (x[a].norm() + x[b].norm()));
+            c += r * (k * t).cos() * dt;
+            s += r * (k * t).sin() * dt;
+            total += dt;
+        }
+        (c / total, s / total)
+    };
+    let (c6, s6) = mode(6.0);
+    let others = [1.0, 2.0, 3.0, 4.0, 5.0, 7.0, 8.0, 9.0, 10.0, 11.0].map(|k| {
+        let (c, s) = mode(k);
+        c.hypot(s)
+    });
+    let worst = others.iter().fold(0.0f64, |m, a| m.max(*a));
+    assert!(c6 > 0.02 && c6 > 5.0 * worst, "mode 6: cos {c6:.4} sin {s6:.4}; largest other mode {worst:.4}");
+    assert!(s6.abs() < 0.2 * c6, "mode 6 out of phase with cos 6θ: cos {c6:.4} sin {s6:.4}");
+}
