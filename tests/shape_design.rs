@@ -5,7 +5,7 @@ use shapeflow::bulk::{DesignDomain, MeshingOptions, Polygon};
 use shapeflow::flow::{shape_derivative, Flow, MeshManager, Problem};
 use shapeflow::geometry::{circle, CurveMesh, Point};
 use shapeflow::jobs::{parse_spec, prepare, run_prepared, AnyMesh, JobOutcome, PreparedJob, ProblemKind, RunEvents};
-use shapeflow::problems::{ShapeDesign, Target};
+use shapeflow::problems::{GradientKind, ShapeDesign, Target};
 use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::sync::atomic::AtomicBool;
@@ -42,7 +42,6 @@ fn moved(mesh: &CurveMesh, field: &[Point<2>], d: f64) -> CurveMesh {
 #[test]
 fn shape_derivative_matches_finite_differences() {
     let n = 256;
-    let problem = test1(0.05, 2.0 * PI * 0.8 / n as f64);
     let mesh = circle([0.3, 0.2], 0.8, n).unwrap();
     let c = Point::<2>::new(0.3, 0.2);
     let fields: [(&str, Vec<Point<2>>); 3] = [
@@ -50,13 +49,43 @@ fn shape_derivative_matches_finite_differences() {
         ("translation y", vec![Point::<2>::new(0.0, 1.0); n]),
         ("dilation", mesh.positions().iter().map(|x| x - c).collect()),
     ];
-    for (name, v) in &fields {
-        let exact = shape_derivative(&problem, &mesh, v).unwrap();
-        let d = 1e-2;
-        let fd =
-            (problem.energy(&moved(&mesh, v, d)).unwrap() - problem.energy(&moved(&mesh, v, -d)).unwrap()) / (2.0 * d);
-        let rel = (fd - exact).abs() / exact.abs();
-        assert!(rel < 1e-2, "{name}: dJ = {exact:e}, finite differences {fd:e}, relative error {rel:e}");
+    // the paper's formula: to discretization error; the discrete gradient: exact for
+    // the bulk mesh that follows the curve (errors O(d²) of the central differences)
+    for (kind, bound) in [(GradientKind::Continuous, 1e-2), (GradientKind::Discrete, 1e-4)] {
+        let mut problem = test1(0.05, 2.0 * PI * 0.8 / n as f64);
+        problem.gradient = kind;
+        for (name, v) in &fields {
+            let exact = shape_derivative(&problem, &mesh, v).unwrap();
+            let d = 1e-3;
+            let fd = (problem.energy(&moved(&mesh, v, d)).unwrap() - problem.energy(&moved(&mesh, v, -d)).unwrap())
+                / (2.0 * d);
+            let rel = (fd - exact).abs() / exact.abs();
+            assert!(rel < bound, "{kind:?} {name}: dJ = {exact:e}, finite differences {fd:e}, relative error {rel:e}");
+        }
+    }
+}
+
+/// The exact discrete gradient against central differences, vertex by vertex, on a
+/// curve whose bulk mesh follows it.
+#[test]
+fn discrete_sensitivity_is_exact() {
+    let n = 96;
+    let problem = test1(0.1, 2.0 * PI * 0.8 / n as f64);
+    let mesh = circle([0.3, 0.2], 0.8, n).unwrap();
+    let base = problem.solve(&mesh).unwrap();
+    // fix the base mesh that trial curves follow
+    shape_derivative(&problem, &mesh, &vec![Point::<2>::zeros(); n]).unwrap();
+    let scale = base.sensitivity.iter().fold(0.0f64, |m, g| m.max(g.norm()));
+    for k in [0, 17, 50] {
+        for dir in [Point::<2>::new(1.0, 0.0), Point::<2>::new(0.0, 1.0)] {
+            let mut v = vec![Point::<2>::zeros(); n];
+            v[k] = dir;
+            let h = 1e-6;
+            let fd = (problem.energy(&moved(&mesh, &v, h)).unwrap() - problem.energy(&moved(&mesh, &v, -h)).unwrap())
+                / (2.0 * h);
+            let exact = base.sensitivity[k].dot(&dir);
+            assert!((fd - exact).abs() < 1e-6 * scale, "vertex {k} {dir:?}: {fd:e} vs {exact:e} (largest {scale:e})");
+        }
     }
 }
 
@@ -227,8 +256,12 @@ fn bad_shape_design_specs_name_the_field() {
 /// reaching out (larger radius) where `z_g` is large.
 #[test]
 fn polar_target_gives_a_six_fold_shape() {
-    let spec = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/design_polar.json")).unwrap();
-    let job = prepared(&spec);
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/design_polar.json")).unwrap();
+    let mut spec: serde_json::Value = serde_json::from_str(&text).unwrap();
+    // the six-fold structure is there after 150 iterations (later, knobs at the
+    // corners pinch off: with γ = 0 the functional rewards them)
+    spec["flow"]["max_iterations"] = 150.into();
+    let job = prepared(&spec.to_string());
     let mut h = History(Vec::new());
     let out = run_prepared(&job, None, &AtomicBool::new(false), &mut h).unwrap();
     let (j0, j1) = (h.0[0], *h.0.last().unwrap());

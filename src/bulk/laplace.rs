@@ -123,3 +123,52 @@ fn check_finite(what: &str, v: &[f64]) -> Result<(), BulkError> {
         None => Ok(()),
     }
 }
+
+/// `∇φ_a` of the P1 basis functions on a counter-clockwise triangle of area `area`.
+fn basis_gradients(p: &[Point<2>; 3], area: f64) -> [Point<2>; 3] {
+    std::array::from_fn(|a| {
+        let e = p[(a + 2) % 3] - p[(a + 1) % 3]; // edge opposite a, counter-clockwise
+        Point::<2>::new(-e.y, e.x) / (2.0 * area)
+    })
+}
+
+/// The exact gradient of the discrete functional `J_h = ½∫_D (y_h − z_g)² + γ|Γ_h|`
+/// with respect to the positions of the curve's vertices (the first
+/// `mesh.curve_vertices` bulk vertices), all other bulk vertices fixed, as in
+/// [`BulkMesh::with_curve_positions`]; `y_h` and the adjoint `p_h` are those of
+/// `fields`.
+///
+/// With the Lagrangian `L = J_h + ℓ(p) − a(y, p)`, `a(y, p) = ∫_Ω ∇y·∇p`,
+/// `ℓ(p) = ∫_Γ p`, and the state and adjoint equations satisfied, `dJ_h = ∂_X L` at
+/// fixed nodal values. Moving vertex `c` by `δ` moves the points of its triangles by
+/// `φ_c δ`, and on a triangle `T` (where `∇y`, `∇p` are constant)
+///
+/// ```text
+/// ∂_c ∫_T ∇y·∇p = |T| [(∇y·∇p) ∇φ_c − (∇φ_c·∇y) ∇p − (∇φ_c·∇p) ∇y],
+/// ```
+///
+/// while `∂_c ∫_e p = t_e (p_c + p_d)/2` and `∂_c |e| = t_e` on a curve edge
+/// `e = (c, d)` with `t_e = (X_c − X_d)/|e|`. `D` does not touch `Γ`, so the misfit
+/// has no explicit dependence.
+pub fn curve_sensitivity(mesh: &BulkMesh, fields: &DesignFields, gamma: f64) -> Vec<Point<2>> {
+    let nc = mesh.curve_vertices;
+    let mut grad = vec![Point::<2>::zeros(); nc];
+    for t in mesh.triangles.iter().filter(|t| t.iter().any(|&v| v < nc)) {
+        let p = t.map(|i| mesh.points[i]);
+        let area = triangle_area(&mesh.points, t);
+        let g = basis_gradients(&p, area);
+        let gy: Point<2> = (0..3).map(|a| g[a] * fields.y[t[a]]).sum();
+        let gp: Point<2> = (0..3).map(|a| g[a] * fields.p[t[a]]).sum();
+        for a in (0..3).filter(|&a| t[a] < nc) {
+            grad[t[a]] -= (g[a] * gy.dot(&gp) - gp * g[a].dot(&gy) - gy * g[a].dot(&gp)) * area;
+        }
+    }
+    for &[a, b] in &mesh.curve_edges {
+        let d = mesh.points[a] - mesh.points[b];
+        let t = d / d.norm();
+        let w = 0.5 * (fields.p[a] + fields.p[b]) + gamma;
+        grad[a] += t * w;
+        grad[b] -= t * w;
+    }
+    grad
+}

@@ -5,14 +5,15 @@
 //!
 //! Which triangles belong to `Ω` (and to `D`) is decided by a flood fill over the
 //! triangles from the convex hull inwards: crossing a constraint edge of `Γ` or `Σ`
-//! flips "in `Ω`", crossing one of `∂D` flips "in `D`". Refinement splits constraint
-//! edges; the pieces inherit the boundary they lie on by walking the constraint chains
-//! from the input vertices.
+//! flips "in `Ω`", crossing one of `∂D` flips "in `D`". Refinement keeps the
+//! constraint edges whole (the boundaries are sampled evenly already), so the vertices
+//! and edges of `Γ` are exactly those of the curve mesh: a mesh built for one curve
+//! can follow the curve's vertices as they move ([`BulkMesh::with_curve_positions`]),
+//! and [`super::curve_sensitivity`] differentiates with respect to them.
 
 use super::domain::{loop_segments, DesignDomain};
 use super::BulkError;
 use crate::geometry::{CurveMesh, Point};
-use spade::handles::FixedVertexHandle;
 use spade::{AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation};
 use std::collections::VecDeque;
 
@@ -59,7 +60,7 @@ pub struct BulkMesh {
     pub in_control: Vec<bool>,
     /// Per vertex: on `Σ` (Dirichlet)?
     pub on_outer: Vec<bool>,
-    /// Edges of the triangulation on `Γ` (refinement may split curve segments).
+    /// Edges of the triangulation on `Γ` (the curve's segments, renumbered).
     pub curve_edges: Vec<[usize; 2]>,
     pub curve_vertices: usize,
 }
@@ -94,27 +95,16 @@ impl BulkMesh {
                 .with_max_allowed_area(opts.max_area)
                 .with_min_required_area(opts.min_area)
                 .with_max_additional_vertices(budget)
+                .keep_constraint_edges()
                 .exclude_outer_faces(false),
         );
         if !result.refinement_complete {
             tracing::debug!("bulk refinement stopped at its vertex budget ({budget})");
         }
 
-        // boundaries of the Steiner vertices on split constraint edges: walk the chains
+        // constraint edges are kept whole: every boundary vertex is an input vertex
         let nv = cdt.num_vertices();
         class.resize(nv, None);
-        let mut queue: VecDeque<usize> = (0..n_input).collect();
-        while let Some(v) = queue.pop_front() {
-            for e in cdt.vertex(FixedVertexHandle::from_index(v)).out_edges() {
-                if e.is_constraint_edge() {
-                    let w = e.to().fix().index();
-                    if class[w].is_none() {
-                        class[w] = class[v];
-                        queue.push_back(w);
-                    }
-                }
-            }
-        }
 
         // flood fill from the outer face: (in Ω, in D) parities. Crossing a
         // constraint edge of Γ or Σ flips the first, one of ∂D the second.
@@ -203,6 +193,29 @@ impl BulkMesh {
             }
         }
         Ok(BulkMesh { points: positions, triangles, in_control, on_outer, curve_edges, curve_vertices: n_curve })
+    }
+
+    /// The same triangulation with the curve's vertices moved to `positions` (all
+    /// other vertices fixed), if every triangle at the curve keeps its orientation and
+    /// an angle of at least `min_angle_deg`; `None` otherwise (then re-mesh).
+    pub fn with_curve_positions(&self, positions: &[Point<2>], min_angle_deg: f64) -> Option<BulkMesh> {
+        if positions.len() != self.curve_vertices {
+            return None;
+        }
+        let mut moved = self.clone();
+        moved.points[..self.curve_vertices].copy_from_slice(positions);
+        let min_sin = min_angle_deg.to_radians().sin();
+        for t in moved.triangles.iter().filter(|t| t.iter().any(|&v| v < self.curve_vertices)) {
+            let area = triangle_area(&moved.points, t);
+            // sin of every angle = 2·area / (product of its two sides)
+            for k in 0..3 {
+                let (a, b, c) = (moved.points[t[k]], moved.points[t[(k + 1) % 3]], moved.points[t[(k + 2) % 3]]);
+                if !(2.0 * area >= min_sin * (b - a).norm() * (c - a).norm()) {
+                    return None;
+                }
+            }
+        }
+        Some(moved)
     }
 
     /// Area of `Ω` and of `Ω ∩ D`.

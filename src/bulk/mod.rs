@@ -8,7 +8,7 @@ mod laplace;
 mod mesh;
 
 pub use domain::{DesignDomain, Polygon};
-pub use laplace::{solve_design_fields, DesignFields};
+pub use laplace::{curve_sensitivity, solve_design_fields, DesignFields};
 pub use mesh::{triangle_area, BulkMesh, MeshingOptions};
 
 /// Errors of bulk meshing and solving.

@@ -137,7 +137,8 @@ pub fn shape_design(
     let target = target(&spec.target, &domain)?;
     let mean_edge = initial.boundary_measure() / initial.num_elements() as f64;
     let meshing = MeshingOptions::for_domain(&domain, mean_edge);
-    let problem = ShapeDesign::new(Arc::new(domain), target, gamma, merge, min_area, meshing);
+    let mut problem = ShapeDesign::new(Arc::new(domain), target, gamma, merge, min_area, meshing);
+    problem.gradient = spec.gradient;
     match problem.solve(initial) {
         Ok(_) => Ok(problem),
         Err(BulkError::Inadmissible(m)) => {

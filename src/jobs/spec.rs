@@ -2,6 +2,7 @@
 //! field by its path (`flow.tau`, `initial.parts[1].radius`).
 
 use crate::flow::{ScalarProduct, SolverKind};
+use crate::problems::GradientKind;
 use serde::{Deserialize, Serialize};
 
 /// A spec error: the offending field's path and what is wrong with it.
@@ -91,6 +92,10 @@ pub struct ShapeDesignSpec {
     /// 1/200 of the perimeter of `Σ`.
     #[serde(default)]
     pub spacing: Option<f64>,
+    /// `discrete` (default: the exact gradient of the discrete functional) or
+    /// `continuous` (the paper's formula for `G`).
+    #[serde(default)]
+    pub gradient: GradientKind,
 }
 
 /// `problem.control`: `D` lies between `inner` and `outer`.

@@ -7,5 +7,5 @@ mod surface_diffusion;
 
 pub use curvature_flow::CurvatureFlow;
 pub use segmentation::Segmentation;
-pub use shape_design::{alpha_84, DesignSolution, ShapeDesign, Target};
+pub use shape_design::{alpha_84, DesignSolution, GradientKind, ShapeDesign, Target};
 pub use surface_diffusion::SurfaceDiffusion;

@@ -22,11 +22,12 @@
 //! negative values (there the L2 flow is backward parabolic), `h_e²` where `g` is
 //! well above its oscillation, and a linear blend in between.
 
-use crate::bulk::{solve_design_fields, BulkError, BulkMesh, DesignDomain, MeshingOptions};
+use crate::bulk::{curve_sensitivity, solve_design_fields, BulkError, BulkMesh, DesignDomain, MeshingOptions};
 use crate::fem::Weight;
 use crate::flow::{H1Weights, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
 use crate::geometry::{resolve_intersections, CurveMesh, Mesh, Point};
 use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
 use std::sync::{Arc, Mutex};
 
 /// The target `z_g` on `D`.
@@ -61,6 +62,19 @@ impl Target {
     }
 }
 
+/// How the shape gradient `G` is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GradientKind {
+    /// The exact gradient of the discrete `J_h` ([`curve_sensitivity`]), its normal
+    /// part per vertex: `G_i = ∂J_h/∂X_i · N⃗_i / |N⃗_i|²`.
+    #[default]
+    Discrete,
+    /// The paper's formula `G = (p + γ)κ + ∇_Γy·∇_Γp` with recovered tangential
+    /// derivatives.
+    Continuous,
+}
+
 /// State, adjoint and energy of one curve.
 #[derive(Debug, Clone)]
 pub struct DesignSolution {
@@ -71,13 +85,21 @@ pub struct DesignSolution {
     pub misfit: f64,
     /// `J = misfit + γ|Γ|`.
     pub energy: f64,
+    /// `∂J_h/∂X_i` at the curve's vertices (see [`curve_sensitivity`]).
+    pub sensitivity: Vec<Point<2>>,
 }
 
+/// The last solve: its curve, bulk mesh and solution.
 struct Cached {
     positions: Vec<Point<2>>,
     elements: Vec<[usize; 2]>,
+    bulk: Arc<BulkMesh>,
     solution: Arc<DesignSolution>,
 }
+
+/// Smallest angle (degrees) of the triangles at `Γ` for which a bulk mesh follows the
+/// moving curve instead of being rebuilt.
+pub const FOLLOW_MIN_ANGLE: f64 = 5.0;
 
 /// The shape-design functional on a fixed domain.
 pub struct ShapeDesign {
@@ -92,7 +114,12 @@ pub struct ShapeDesign {
     /// Loops below this area are dropped when crossing curves are merged.
     pub min_area: f64,
     pub meshing: MeshingOptions,
+    /// How `G` is computed (default: the exact gradient of the discrete functional).
+    pub gradient: GradientKind,
     cache: Mutex<Option<Cached>>,
+    /// The curve connectivity and bulk mesh of the state the last shape gradient was
+    /// taken at (the current step's), which trial curves follow.
+    base: Mutex<Option<(Vec<[usize; 2]>, Arc<BulkMesh>)>>,
 }
 
 impl std::fmt::Debug for ShapeDesign {
@@ -104,7 +131,10 @@ impl std::fmt::Debug for ShapeDesign {
 impl Clone for ShapeDesign {
     /// A copy with an empty solution cache.
     fn clone(&self) -> Self {
-        ShapeDesign::new(self.domain.clone(), self.target, self.gamma, self.merge, self.min_area, self.meshing)
+        let mut copy =
+            ShapeDesign::new(self.domain.clone(), self.target, self.gamma, self.merge, self.min_area, self.meshing);
+        copy.gradient = self.gradient;
+        copy
     }
 }
 
@@ -116,6 +146,7 @@ impl PartialEq for ShapeDesign {
             && self.merge == o.merge
             && self.min_area == o.min_area
             && self.meshing == o.meshing
+            && self.gradient == o.gradient
     }
 }
 
@@ -128,32 +159,59 @@ impl ShapeDesign {
         min_area: f64,
         meshing: MeshingOptions,
     ) -> Self {
-        ShapeDesign { domain, target, gamma, merge, min_area, meshing, cache: Mutex::new(None) }
+        ShapeDesign {
+            domain,
+            target,
+            gamma,
+            merge,
+            min_area,
+            meshing,
+            gradient: GradientKind::Discrete,
+            cache: Mutex::new(None),
+            base: Mutex::new(None),
+        }
     }
 
     /// Solves state and adjoint for a curve without crossings. `Err(Inadmissible)` if
     /// it leaves `Σ`, meets `D` or touches itself.
+    ///
+    /// The bulk mesh follows the curve: while the connectivity of `Γ` stays that of
+    /// the state of the current step and the triangles at `Γ` keep angles of at least
+    /// [`FOLLOW_MIN_ANGLE`], that state's triangulation is reused with the curve's
+    /// vertices moved. `J_h` is then a smooth function of the vertex positions with
+    /// the exact gradient [`curve_sensitivity`], and backtracking compares trial
+    /// curves with the current one on the same mesh; otherwise `Ω` is triangulated
+    /// afresh.
     pub fn solve(&self, mesh: &CurveMesh) -> Result<Arc<DesignSolution>, BulkError> {
-        if let Some(c) = self.cache.lock().expect("cache").as_ref() {
+        let mut cache = self.cache.lock().expect("cache");
+        if let Some(c) = cache.as_ref() {
             if c.positions == mesh.positions() && c.elements == mesh.elements() {
                 return Ok(c.solution.clone());
             }
         }
         self.domain.check_curve(mesh)?;
-        let bulk = BulkMesh::build(&self.domain, mesh, &self.meshing)?;
+        let base = self.base.lock().expect("base").clone();
+        let followed = base
+            .filter(|(elements, _)| elements.as_slice() == mesh.elements())
+            .and_then(|(_, bulk)| bulk.with_curve_positions(mesh.positions(), FOLLOW_MIN_ANGLE));
+        let bulk = match followed {
+            Some(b) => b,
+            None => BulkMesh::build(&self.domain, mesh, &self.meshing)?,
+        };
         let target = |x: Point<2>| self.target.value(x);
         let fields = solve_design_fields(&bulk, &target)?;
         let n = bulk.curve_vertices;
-        let energy = fields.misfit + self.gamma * mesh.boundary_measure();
         let solution = Arc::new(DesignSolution {
+            sensitivity: curve_sensitivity(&bulk, &fields, self.gamma),
             y: fields.y[..n].to_vec(),
             p: fields.p[..n].to_vec(),
             misfit: fields.misfit,
-            energy,
+            energy: fields.misfit + self.gamma * mesh.boundary_measure(),
         });
-        *self.cache.lock().expect("cache") = Some(Cached {
+        *cache = Some(Cached {
             positions: mesh.positions().to_vec(),
             elements: mesh.elements().to_vec(),
+            bulk: Arc::new(bulk),
             solution: solution.clone(),
         });
         Ok(solution)
@@ -225,12 +283,27 @@ impl<const D: usize> Problem<D> for ShapeDesign {
     fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
         let mesh = curve(state.mesh)?;
         let s = self.solve(mesh).map_err(Self::to_problem_error)?;
-        let dy = Self::tangential_derivative(mesh, &s.y);
-        let dp = Self::tangential_derivative(mesh, &s.p);
-        Ok(ShapeGradient {
-            g: s.p.iter().map(|p| p + self.gamma).collect(),
-            f: dy.iter().zip(&dp).map(|(a, b)| a * b).collect(),
-        })
+        // the trial curves of this step follow this state's bulk mesh
+        if let Some(c) = self.cache.lock().expect("cache").as_ref() {
+            *self.base.lock().expect("base") = Some((c.elements.clone(), c.bulk.clone()));
+        }
+        let g: Vec<f64> = s.p.iter().map(|p| p + self.gamma).collect();
+        let f = match self.gradient {
+            GradientKind::Continuous => {
+                let dy = Self::tangential_derivative(mesh, &s.y);
+                let dp = Self::tangential_derivative(mesh, &s.p);
+                dy.iter().zip(&dp).map(|(a, b)| a * b).collect()
+            }
+            // G_i from the discrete gradient; the part g κ stays implicit in the step
+            GradientKind::Discrete => (0..mesh.num_vertices())
+                .map(|i| {
+                    let nd = &state.matrices.lumped_normal[i];
+                    let n = Point::<2>::new(nd[0], nd[1]);
+                    s.sensitivity[i].dot(&n) / n.norm_squared() - g[i] * state.curvature[i]
+                })
+                .collect(),
+        };
+        Ok(ShapeGradient { g, f })
     }
 
     /// Paper eq. (84) with `g = p + γ`, `β = 1`.
