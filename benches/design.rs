@@ -1,8 +1,9 @@
 //! Shape design (paper §4.3.2, Test 1 domain): time per iteration and its parts —
 //! bulk meshing (spade CDT + refinement), the state and adjoint solves (assembly,
-//! one sparse Cholesky, two solves) and the whole flow step (which re-meshes and
-//! re-solves for every trial step of the backtracking) — for curves of 100, 400
-//! and 1,600 vertices, with the outer boundaries at their default spacing.
+//! one sparse Cholesky, two solves) and the whole flow step (which re-solves for
+//! every trial step of the backtracking, on the bulk mesh that follows the curve) —
+//! for curves of 100, 400 and 1,600 vertices, with the outer boundaries at their
+//! default spacing.
 //! Memory: peak resident set size after each size. `cargo bench --bench design`.
 
 use shapeflow::bulk::{solve_design_fields, BulkMesh};
