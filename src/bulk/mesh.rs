@@ -74,125 +74,35 @@ impl BulkMesh {
         let [ci, co] = domain.control();
         let (fixed_pts, fixed_segs) = loop_segments(&[outer, ci, co]);
         let n_outer = outer.points().len();
-        let mut vertices: Vec<Point2<f64>> = points.iter().map(|p| Point2::new(p.x, p.y)).collect();
-        vertices.extend(fixed_pts.iter().map(|p| Point2::new(p.x, p.y)));
-        let mut class: Vec<Option<Boundary>> = vec![Some(Boundary::Curve); n_curve];
-        class.extend((0..fixed_pts.len()).map(|i| Some(if i < n_outer { Boundary::Outer } else { Boundary::Control })));
+        let mut vertices: Vec<Point<2>> = points.to_vec();
+        vertices.extend(fixed_pts.iter());
+        let mut class: Vec<Boundary> = vec![Boundary::Curve; n_curve];
+        class.extend((0..fixed_pts.len()).map(|i| if i < n_outer { Boundary::Outer } else { Boundary::Control }));
         let mut edges: Vec<[usize; 2]> = segments.to_vec();
         edges.extend(fixed_segs.iter().map(|s| [s[0] + n_curve, s[1] + n_curve]));
-        let n_input = vertices.len();
-        let mut conflicts = 0usize;
-        let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
-            ConstrainedDelaunayTriangulation::try_bulk_load_cdt(vertices, edges, |_| conflicts += 1)
-                .map_err(|e| BulkError::Meshing(format!("triangulation: {e:?}")))?;
-        if conflicts > 0 || cdt.num_vertices() != n_input {
-            return Err(BulkError::Inadmissible("the curve touches itself or a fixed boundary".into()));
-        }
-        let budget = 20 * n_input + 200_000;
-        let result = cdt.refine(
-            RefinementParameters::new()
-                .with_angle_limit(AngleLimit::from_deg(opts.min_angle_deg))
-                .with_max_allowed_area(opts.max_area)
-                .with_min_required_area(opts.min_area)
-                .with_max_additional_vertices(budget)
-                .keep_constraint_edges()
-                .exclude_outer_faces(false),
-        );
-        if !result.refinement_complete {
-            tracing::debug!("bulk refinement stopped at its vertex budget ({budget})");
-        }
-
-        // constraint edges are kept whole: every boundary vertex is an input vertex
-        let nv = cdt.num_vertices();
-        class.resize(nv, None);
-
-        // flood fill from the outer face: (in Ω, in D) parities. Crossing a
-        // constraint edge of Γ or Σ flips the first, one of ∂D the second.
-        let crossing = |constraint: bool, a: usize, b: usize| -> (bool, bool) {
-            match (constraint, class[a].or(class[b])) {
-                (false, _) => (false, false),
-                (true, Some(Boundary::Control)) => (false, true),
-                (true, _) => (true, false),
-            }
+        // crossing a constraint edge of Γ or Σ flips "in Ω", one of ∂D "in D"
+        let flips = |a: usize, _b: usize| match class[a] {
+            Boundary::Control => (false, true),
+            _ => (true, false),
         };
-        let nf = cdt.num_all_faces();
-        let outer_face = spade::handles::OUTER_FACE.index();
-        // per inner face: the face across each edge (possibly the outer one) and the flips
-        let mut neighbours: Vec<[(usize, (bool, bool)); 3]> = vec![[(outer_face, (false, false)); 3]; nf];
-        for face in cdt.inner_faces() {
-            neighbours[face.fix().index()] = face.adjacent_edges().map(|e| {
-                let [a, b] = e.vertices().map(|v| v.fix().index());
-                (e.rev().face().fix().index(), crossing(e.is_constraint_edge(), a, b))
-            });
-        }
-        let mut state: Vec<Option<(bool, bool)>> = vec![None; nf];
-        state[outer_face] = Some((false, false));
-        // the outer face's neighbours are the inner faces that name it
-        let mut queue: VecDeque<usize> = VecDeque::new();
-        for f in (0..nf).filter(|&f| f != outer_face) {
-            if let Some(&(_, c)) = neighbours[f].iter().find(|(g, _)| *g == outer_face) {
-                state[f] = Some(c);
-                queue.push_back(f);
-            }
-        }
-        while let Some(f) = queue.pop_front() {
-            let s = state[f].expect("visited");
-            for (g, c) in neighbours[f] {
-                if state[g].is_none() {
-                    state[g] = Some((s.0 ^ c.0, s.1 ^ c.1));
-                    queue.push_back(g);
-                }
-            }
-        }
-
-        // keep the triangles of Ω, renumber their vertices (curve vertices first)
-        let mut index = vec![usize::MAX; nv];
-        for (i, slot) in index.iter_mut().enumerate().take(n_curve) {
-            *slot = i;
-        }
-        let mut positions: Vec<Point<2>> = points.to_vec();
-        let mut triangles = Vec::new();
-        let mut in_control = Vec::new();
-        for face in cdt.inner_faces() {
-            let Some((inside, control)) = state[face.fix().index()] else { continue };
-            if !inside {
-                continue;
-            }
-            let tri = face.vertices().map(|v| {
-                let i = v.fix().index();
-                if index[i] == usize::MAX {
-                    index[i] = positions.len();
-                    let p = v.position();
-                    positions.push(Point::<2>::new(p.x, p.y));
-                }
-                index[i]
-            });
-            triangles.push(tri);
-            in_control.push(control);
-        }
-        if triangles.is_empty() {
-            return Err(BulkError::Meshing("the bulk domain has no triangles".into()));
-        }
-        let mut on_outer = vec![false; positions.len()];
-        let mut curve_edges = Vec::new();
-        for (i, c) in class.iter().enumerate() {
-            if index[i] != usize::MAX && *c == Some(Boundary::Outer) {
-                on_outer[index[i]] = true;
-            }
-        }
-        for e in cdt.undirected_edges() {
-            if !e.is_constraint_edge() {
-                continue;
-            }
-            let [a, b] = e.vertices().map(|v| v.fix().index());
-            if class[a] == Some(Boundary::Curve) && class[b] == Some(Boundary::Curve) {
-                if index[a] == usize::MAX || index[b] == usize::MAX {
-                    return Err(BulkError::Meshing("a curve edge has no triangle of Ω".into()));
-                }
-                curve_edges.push([index[a], index[b]]);
-            }
-        }
-        Ok(BulkMesh { points: positions, triangles, in_control, on_outer, curve_edges, curve_vertices: n_curve })
+        let t = triangulate(&vertices, &edges, flips, n_curve, opts)?;
+        let on_outer = (0..t.points.len())
+            .map(|i| t.input_of.get(i).is_some_and(|&v| v != usize::MAX && class[v] == Boundary::Outer))
+            .collect();
+        let curve_edges = t
+            .constraint_edges
+            .iter()
+            .filter(|&&(a, b)| class[a] == Boundary::Curve && class[b] == Boundary::Curve)
+            .map(|&(a, b)| [t.index[a], t.index[b]])
+            .collect();
+        Ok(BulkMesh {
+            points: t.points,
+            triangles: t.triangles,
+            in_control: t.second,
+            on_outer,
+            curve_edges,
+            curve_vertices: n_curve,
+        })
     }
 
     /// The same triangulation with the curve's vertices moved to `positions` (all
@@ -243,6 +153,137 @@ impl BulkMesh {
         }
         worst
     }
+}
+
+/// A constrained Delaunay triangulation of the regions bounded by polygons.
+pub(crate) struct Triangulated {
+    /// The first `n_keep` input vertices in order, then the others in use.
+    pub points: Vec<Point<2>>,
+    /// Counter-clockwise triangles of the first region.
+    pub triangles: Vec<[usize; 3]>,
+    /// Per triangle: inside the second region?
+    pub second: Vec<bool>,
+    /// Per input vertex: its index in `points` (`usize::MAX` if on no kept triangle).
+    pub index: Vec<usize>,
+    /// Per vertex of `points` that is an input vertex: its input index
+    /// (`usize::MAX` for refinement vertices; only the first `index.len()` entries).
+    pub input_of: Vec<usize>,
+    /// The constraint edges, as input vertex pairs, whose both ends are kept.
+    pub constraint_edges: Vec<(usize, usize)>,
+}
+
+/// Triangulates the regions bounded by the constraint `edges` among `vertices`:
+/// spade's constrained Delaunay triangulation, refined to `opts` with the
+/// constraint edges kept whole (so every boundary vertex is an input vertex), and
+/// a flood fill from the outer face in which crossing the constraint edge `(a, b)`
+/// toggles the two region parities by `flips(a, b)`. The triangles of the first
+/// region are kept; the first `n_keep` input vertices come first, in order, and
+/// must all be on kept triangles.
+pub(crate) fn triangulate(
+    vertices: &[Point<2>],
+    edges: &[[usize; 2]],
+    flips: impl Fn(usize, usize) -> (bool, bool),
+    n_keep: usize,
+    opts: &MeshingOptions,
+) -> Result<Triangulated, BulkError> {
+    let n_input = vertices.len();
+    let mut conflicts = 0usize;
+    let input: Vec<Point2<f64>> = vertices.iter().map(|p| Point2::new(p.x, p.y)).collect();
+    let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
+        ConstrainedDelaunayTriangulation::try_bulk_load_cdt(input, edges.to_vec(), |_| conflicts += 1)
+            .map_err(|e| BulkError::Meshing(format!("triangulation: {e:?}")))?;
+    if conflicts > 0 || cdt.num_vertices() != n_input {
+        return Err(BulkError::Inadmissible("the curve touches itself or a fixed boundary".into()));
+    }
+    let budget = 20 * n_input + 200_000;
+    let result = cdt.refine(
+        RefinementParameters::new()
+            .with_angle_limit(AngleLimit::from_deg(opts.min_angle_deg))
+            .with_max_allowed_area(opts.max_area)
+            .with_min_required_area(opts.min_area)
+            .with_max_additional_vertices(budget)
+            .keep_constraint_edges()
+            .exclude_outer_faces(false),
+    );
+    if !result.refinement_complete {
+        tracing::debug!("bulk refinement stopped at its vertex budget ({budget})");
+    }
+    let crossing = |constraint: bool, a: usize, b: usize| -> (bool, bool) {
+        if constraint && a < n_input && b < n_input {
+            flips(a, b)
+        } else {
+            (false, false)
+        }
+    };
+    let nf = cdt.num_all_faces();
+    let outer_face = spade::handles::OUTER_FACE.index();
+    // per inner face: the face across each edge (possibly the outer one) and the flips
+    let mut neighbours: Vec<[(usize, (bool, bool)); 3]> = vec![[(outer_face, (false, false)); 3]; nf];
+    for face in cdt.inner_faces() {
+        neighbours[face.fix().index()] = face.adjacent_edges().map(|e| {
+            let [a, b] = e.vertices().map(|v| v.fix().index());
+            (e.rev().face().fix().index(), crossing(e.is_constraint_edge(), a, b))
+        });
+    }
+    let mut state: Vec<Option<(bool, bool)>> = vec![None; nf];
+    state[outer_face] = Some((false, false));
+    // the outer face's neighbours are the inner faces that name it
+    let mut queue: VecDeque<usize> = VecDeque::new();
+    for f in (0..nf).filter(|&f| f != outer_face) {
+        if let Some(&(_, c)) = neighbours[f].iter().find(|(g, _)| *g == outer_face) {
+            state[f] = Some(c);
+            queue.push_back(f);
+        }
+    }
+    while let Some(f) = queue.pop_front() {
+        let s = state[f].expect("visited");
+        for (g, c) in neighbours[f] {
+            if state[g].is_none() {
+                state[g] = Some((s.0 ^ c.0, s.1 ^ c.1));
+                queue.push_back(g);
+            }
+        }
+    }
+    // keep the triangles of the first region, renumber (the first n_keep first)
+    let nv = cdt.num_vertices();
+    let mut index = vec![usize::MAX; nv];
+    let mut points: Vec<Point<2>> = vertices[..n_keep].to_vec();
+    let mut input_of: Vec<usize> = (0..n_keep).collect();
+    for (i, slot) in index.iter_mut().enumerate().take(n_keep) {
+        *slot = i;
+    }
+    let mut triangles = Vec::new();
+    let mut second = Vec::new();
+    for face in cdt.inner_faces() {
+        let Some((inside, in_second)) = state[face.fix().index()] else { continue };
+        if !inside {
+            continue;
+        }
+        let tri = face.vertices().map(|v| {
+            let i = v.fix().index();
+            if index[i] == usize::MAX {
+                index[i] = points.len();
+                let p = v.position();
+                points.push(Point::<2>::new(p.x, p.y));
+                input_of.push(if i < n_input { i } else { usize::MAX });
+            }
+            index[i]
+        });
+        triangles.push(tri);
+        second.push(in_second);
+    }
+    if triangles.is_empty() {
+        return Err(BulkError::Meshing("the bulk domain has no triangles".into()));
+    }
+    let mut constraint_edges = Vec::new();
+    for e in cdt.undirected_edges().filter(|e| e.is_constraint_edge()) {
+        let [a, b] = e.vertices().map(|v| v.fix().index());
+        if a < n_input && b < n_input && index[a] != usize::MAX && index[b] != usize::MAX {
+            constraint_edges.push((a, b));
+        }
+    }
+    index.truncate(n_input);
+    Ok(Triangulated { points, triangles, second, index, input_of, constraint_edges })
 }
 
 /// Signed area of triangle `t`.

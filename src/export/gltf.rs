@@ -1,7 +1,9 @@
 //! glTF 2.0 binary (.glb) results, laid out per DESIGN.md §3:
 //!
 //! - curves: one `LINE_LOOP` primitive per component (z = 0), vertices in the
-//!   component's order (counter-clockwise for outer boundaries);
+//!   component's order (counter-clockwise for outer boundaries); on periodic curves
+//!   (the stressed film) a component winding around the period is a `LINE_STRIP`
+//!   over one period, its first vertex repeated at the end shifted by the period;
 //! - surfaces: one indexed `TRIANGLES` primitive with unit vertex `NORMAL`s;
 //! - per vertex: `_CURVATURE` (the discrete κ), `_NORMAL_VELOCITY` (V of the next
 //!   step) and `COLOR_0`, the curvature through a blue–white–red map scaled by the
@@ -88,12 +90,26 @@ impl Builder {
         self.accessors.len() - 1
     }
 
-    /// Attributes of the vertices `order` of `frame`.
-    fn attributes(&mut self, frame: &GltfFrame<'_>, order: &[usize], scale: f64) -> serde_json::Map<String, Value> {
+    /// Attributes of the vertices `order` of `frame`, each moved by `dx[k]` in `x`
+    /// (periodic curves; empty for none).
+    fn attributes(
+        &mut self,
+        frame: &GltfFrame<'_>,
+        order: &[usize],
+        dx: &[f64],
+        scale: f64,
+    ) -> serde_json::Map<String, Value> {
         let m = frame.mesh;
         let pos: Vec<f32> = order
             .iter()
-            .flat_map(|&v| (0..3).map(move |k| m.positions[v].get(k).copied().unwrap_or(0.0) as f32))
+            .enumerate()
+            .flat_map(|(k, &v)| {
+                let shift = dx.get(k).copied().unwrap_or(0.0);
+                (0..3).map(move |c| {
+                    let x = m.positions[v].get(c).copied().unwrap_or(0.0);
+                    (if c == 0 { x + shift } else { x }) as f32
+                })
+            })
             .collect();
         let kappa: Vec<f32> = order.iter().map(|&v| finite(frame.curvature[v])).collect();
         let vel: Vec<f32> = order.iter().map(|&v| finite(frame.normal_velocity[v])).collect();
@@ -112,13 +128,34 @@ impl Builder {
         let scale = curvature_scale(frame.curvature);
         let mut primitives = Vec::new();
         if m.dimension == 2 {
-            for cycle in segment_cycles(m.positions.len(), m.elements.iter().map(|e| (e[0], e[1]))) {
-                let attributes = self.attributes(frame, &cycle, scale);
-                primitives.push(json!({"attributes": attributes, "mode": 2, "material": 0}));
+            for mut cycle in segment_cycles(m.positions.len(), m.elements.iter().map(|e| (e[0], e[1]))) {
+                let Some(period) = m.period else {
+                    let attributes = self.attributes(frame, &cycle, &[], scale);
+                    primitives.push(json!({"attributes": attributes, "mode": 2, "material": 0}));
+                    continue;
+                };
+                // periodic: lifted continuously from a first vertex in [0, L); a
+                // component winding around the period is an open strip whose last
+                // vertex repeats the first one period further
+                let x = |v: usize| m.positions[v][0];
+                let mut dx = vec![x(cycle[0]).rem_euclid(period) - x(cycle[0])];
+                for k in 1..cycle.len() {
+                    let prev = x(cycle[k - 1]) + dx[k - 1];
+                    dx.push(period * ((prev - x(cycle[k])) / period).round());
+                }
+                let last = x(cycle[cycle.len() - 1]) + dx[cycle.len() - 1];
+                let closing = period * ((last - x(cycle[0])) / period).round();
+                let winds = (closing - dx[0]).abs() > 0.5 * period;
+                if winds {
+                    dx.push(closing);
+                    cycle.push(cycle[0]);
+                }
+                let attributes = self.attributes(frame, &cycle, &dx, scale);
+                primitives.push(json!({"attributes": attributes, "mode": if winds { 3 } else { 2 }, "material": 0}));
             }
         } else {
             let order: Vec<usize> = (0..m.positions.len()).collect();
-            let mut attributes = self.attributes(frame, &order, scale);
+            let mut attributes = self.attributes(frame, &order, &[], scale);
             let normals = vertex_normals(m);
             attributes.insert("NORMAL".into(), json!(self.floats(&normals, "VEC3", Some(ARRAY_BUFFER))));
             let idx: Vec<u32> = m.elements.iter().flat_map(|t| t.iter().map(|&v| v as u32)).collect();

@@ -190,8 +190,20 @@ impl<const D: usize> Matrices<D> {
 
     /// `A⃗ X`: the stiffness matrix applied to the vertex positions, `#V × D`
     /// (`(A X)_i ≈ m_i κ_i ν_i`, Dziuk's `−Δ_Γ X = κ ν`).
+    /// On periodic curves the positions are lifted per element (the period drops out).
     pub fn stiffness_times_positions(&self, mesh: &Mesh<D>, pattern: &Pattern<D>) -> Vec<Point<D>> {
         let mut out = vec![Point::<D>::zeros(); mesh.num_vertices()];
+        if mesh.period().is_some() {
+            for (e, el) in mesh.elements().iter().enumerate() {
+                let p = mesh.element_points(e);
+                for a in 0..D {
+                    for b in 0..D {
+                        out[el[a]] += p[b] * self.local_stiffness[e][(a, b)];
+                    }
+                }
+            }
+            return out;
+        }
         let x = mesh.positions();
         for j in 0..pattern.size() {
             for k in pattern.col_ptr()[j]..pattern.col_ptr()[j + 1] {

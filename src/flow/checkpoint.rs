@@ -10,6 +10,9 @@ pub struct MeshData {
     pub dimension: usize,
     pub positions: Vec<Vec<f64>>,
     pub elements: Vec<Vec<usize>>,
+    /// The period in `x` of a periodic curve (see [`Mesh::new_periodic`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub period: Option<f64>,
 }
 
 impl<const D: usize> From<&Mesh<D>> for MeshData {
@@ -18,6 +21,7 @@ impl<const D: usize> From<&Mesh<D>> for MeshData {
             dimension: D,
             positions: m.positions().iter().map(|p| p.iter().copied().collect()).collect(),
             elements: m.elements().iter().map(|e| e.to_vec()).collect(),
+            period: m.period(),
         }
     }
 }
@@ -42,7 +46,16 @@ impl MeshData {
             .enumerate()
             .map(|(element, e)| <[usize; D]>::try_from(e.as_slice()).map_err(|_| MeshError::RepeatedVertex { element }))
             .collect::<Result<Vec<_>, _>>()?;
-        Mesh::new(positions, elements)
+        match self.period {
+            None => Mesh::new(positions, elements),
+            Some(period) => {
+                let to_2d = |p: Point<D>| Point::<2>::new(p[0], p.get(1).copied().unwrap_or(f64::NAN));
+                let segments = elements.iter().map(|e| [e[0], e.get(1).copied().unwrap_or(usize::MAX)]).collect();
+                let curve = Mesh::<2>::new_periodic(positions.into_iter().map(to_2d).collect(), segments, period)?;
+                let any: Box<dyn std::any::Any> = Box::new(curve);
+                any.downcast::<Mesh<D>>().map(|m| *m).map_err(|_| MeshError::BadPeriod { period })
+            }
+        }
     }
 }
 

@@ -51,13 +51,13 @@ impl CurveManager {
     pub fn defaults_for(initial: &CurveMesh) -> CurveRemeshSettings {
         let mean = initial.boundary_measure() / initial.num_elements() as f64;
         let mut worst: f64 = 0.0;
-        for cyc in initial.cycles() {
-            let n = cyc.len();
+        for (l, shift) in initial.lifted_cycles() {
+            let n = l.len();
             for k in 0..n {
                 let (a, b, c) = (
-                    initial.positions()[cyc[(k + n - 1) % n]],
-                    initial.positions()[cyc[k]],
-                    initial.positions()[cyc[(k + 1) % n]],
+                    if k == 0 { l[n - 1] - shift } else { l[k - 1] },
+                    l[k],
+                    if k + 1 == n { l[0] + shift } else { l[k + 1] },
                 );
                 let (u, v) = (b - a, c - b);
                 // turning angle as the chord of the unit tangents, as in the kernels

@@ -4,7 +4,9 @@
 //! functions from a curve mesh to a curve mesh.
 
 use super::curves::{from_polylines, from_polylines_trusted};
-use super::{find_segment_intersections, CurveMesh, MeshError, Point};
+use super::intersect::find_periodic_intersections;
+use super::mesh::lift_near;
+use super::{find_segment_intersections, CurveMesh, Mesh, MeshError, Point};
 
 /// Parameters of curve mesh management.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -18,17 +20,71 @@ pub struct CurveRemeshSettings {
     pub min_area: f64,
 }
 
-type Loop = Vec<Point<2>>;
+/// One component as a polyline: its points and the shift of the closing segment
+/// (from the last point to `first + shift`; nonzero for a component winding around
+/// a periodic mesh).
+#[derive(Debug, Clone)]
+struct Loop {
+    p: Vec<Point<2>>,
+    shift: Point<2>,
+}
+
+impl Loop {
+    fn len(&self) -> usize {
+        self.p.len()
+    }
+
+    /// Point `k` for `−n ≤ k < 2n`, continued across the closing segment.
+    #[inline]
+    fn at(&self, k: isize) -> Point<2> {
+        let n = self.p.len() as isize;
+        if k < 0 {
+            self.p[(k + n) as usize] - self.shift
+        } else if k >= n {
+            self.p[(k - n) as usize] + self.shift
+        } else {
+            self.p[k as usize]
+        }
+    }
+}
 
 fn loops_of(mesh: &CurveMesh) -> Vec<Loop> {
-    mesh.cycles().iter().map(|c| c.iter().map(|&v| mesh.positions()[v]).collect()).collect()
+    mesh.lifted_cycles().into_iter().map(|(p, shift)| Loop { p, shift }).collect()
+}
+
+/// A curve mesh from polylines, periodic like `like`.
+fn rebuild(like: &CurveMesh, parts: Vec<Vec<Point<2>>>, validate: bool) -> Result<CurveMesh, MeshError> {
+    match like.period() {
+        None if validate => from_polylines(parts),
+        None => from_polylines_trusted(parts),
+        Some(l) => {
+            if parts.iter().all(|p| p.is_empty()) {
+                return Err(MeshError::Empty);
+            }
+            let mut positions = Vec::new();
+            let mut elements = Vec::new();
+            for part in parts {
+                let (base, n) = (positions.len(), part.len());
+                positions.extend(part.into_iter().map(|mut q| {
+                    q.x = q.x.rem_euclid(l);
+                    q
+                }));
+                elements.extend((0..n).map(|k| [base + k, base + (k + 1) % n]));
+            }
+            if validate {
+                Mesh::new_periodic(positions, elements, l)
+            } else {
+                Ok(Mesh::periodic_trusted(positions, elements, l))
+            }
+        }
+    }
 }
 
 fn cross(u: Point<2>, v: Point<2>) -> f64 {
     u.x * v.y - u.y * v.x
 }
 
-fn loop_area(l: &Loop) -> f64 {
+fn loop_area(l: &[Point<2>]) -> f64 {
     (0..l.len()).map(|k| 0.5 * cross(l[k], l[(k + 1) % l.len()])).sum()
 }
 
@@ -36,7 +92,7 @@ fn loop_area(l: &Loop) -> f64 {
 /// two adjacent unit tangents (`2 sin(β/2)`: the angle itself for small angles,
 /// monotone in it, and free of trigonometric calls).
 fn turning_angles(l: &Loop) -> Vec<f64> {
-    let n = l.len();
+    let n = l.len() as isize;
     let unit = |v: Point<2>| {
         let len = v.norm();
         if len > 0.0 {
@@ -45,19 +101,18 @@ fn turning_angles(l: &Loop) -> Vec<f64> {
             v
         }
     };
-    let t: Vec<Point<2>> = (0..n).map(|i| unit(l[(i + 1) % n] - l[i])).collect();
-    (0..n).map(|i| (t[i] - t[(i + n - 1) % n]).norm()).collect()
+    let t: Vec<Point<2>> = (0..n).map(|i| unit(l.at(i + 1) - l.at(i))).collect();
+    (0..n as usize).map(|i| (t[i] - t[(i + n as usize - 1) % n as usize]).norm()).collect()
 }
 
 /// Desired segment length at every vertex: `ε / κ_S` with `κ_S = β_S / h_S`, clamped
 /// to `[h_min, h_max]`.
 fn desired_sizes(l: &Loop, s: &CurveRemeshSettings) -> Vec<f64> {
-    let n = l.len();
     let beta = turning_angles(l);
-    (0..n)
+    (0..l.len() as isize)
         .map(|i| {
-            let h = 0.5 * ((l[i] - l[(i + n - 1) % n]).norm() + (l[(i + 1) % n] - l[i]).norm());
-            let kappa = beta[i] / h.max(f64::MIN_POSITIVE);
+            let h = 0.5 * ((l.at(i) - l.at(i - 1)).norm() + (l.at(i + 1) - l.at(i)).norm());
+            let kappa = beta[i as usize] / h.max(f64::MIN_POSITIVE);
             (s.epsilon / kappa.max(1e-300)).clamp(s.h_min, s.h_max)
         })
         .collect()
@@ -71,9 +126,8 @@ fn desired_sizes(l: &Loop, s: &CurveRemeshSettings) -> Vec<f64> {
 /// exactly (up to round-off).
 pub fn regularize_curve(mesh: &CurveMesh, sweeps: usize, sizes: Option<&CurveRemeshSettings>) -> CurveMesh {
     let mut pos = mesh.positions().to_vec();
-    for cyc in mesh.cycles() {
+    for (cyc, l) in mesh.cycles().iter().zip(loops_of(mesh)) {
         let n = cyc.len();
-        let l: Loop = cyc.iter().map(|&v| pos[v]).collect();
         let hd = match sizes {
             Some(s) => desired_sizes(&l, s),
             None => vec![1.0; n],
@@ -81,7 +135,8 @@ pub fn regularize_curve(mesh: &CurveMesh, sweeps: usize, sizes: Option<&CurveRem
         for _ in 0..sweeps {
             for k in 0..n {
                 let (ip, i, inx) = (cyc[(k + n - 1) % n], cyc[k], cyc[(k + 1) % n]);
-                let chord = pos[inx] - pos[ip];
+                let (prev, next) = (mesh.lift(pos[ip], &pos[i]), mesh.lift(pos[inx], &pos[i]));
+                let chord = next - prev;
                 let len = chord.norm();
                 if len <= 0.0 {
                     continue;
@@ -89,7 +144,7 @@ pub fn regularize_curve(mesh: &CurveMesh, sweeps: usize, sizes: Option<&CurveRem
                 let t = chord / len;
                 let (hp, hi, hn) = (hd[(k + n - 1) % n], hd[k], hd[(k + 1) % n]);
                 let lambda = (hp + hi) / (hp + 2.0 * hi + hn);
-                let target = pos[ip] + chord * lambda;
+                let target = prev + chord * lambda;
                 let alpha = (target - pos[i]).dot(&t);
                 pos[i] += t * alpha;
             }
@@ -110,7 +165,7 @@ pub fn adapt_curve(mesh: &CurveMesh, s: &CurveRemeshSettings) -> Result<Option<C
     for l in loops_of(mesh) {
         let n = l.len();
         let beta = turning_angles(&l);
-        let len: Vec<f64> = (0..n).map(|i| (l[(i + 1) % n] - l[i]).norm()).collect();
+        let len: Vec<f64> = (0..n as isize).map(|i| (l.at(i + 1) - l.at(i)).norm()).collect();
         let indicator = |i: usize| beta[i] * len[i].max(len[(i + n - 1) % n]);
         // coarsening: never two neighbours in one pass, keep at least 8 vertices
         let mut keep = vec![true; n];
@@ -127,21 +182,19 @@ pub fn adapt_curve(mesh: &CurveMesh, s: &CurveRemeshSettings) -> Result<Option<C
                 removed += 1;
             }
         }
-        let l2: Loop = (0..n).filter(|&i| keep[i]).map(|i| l[i]).collect();
+        let l2 = Loop { p: (0..n).filter(|&i| keep[i]).map(|i| l.p[i]).collect(), shift: l.shift };
         changed |= removed > 0;
         // refinement
-        let m = l2.len();
+        let m = l2.len() as isize;
         let beta2 = turning_angles(&l2);
-        let mut refined = Vec::with_capacity(2 * m);
+        let mut refined = Vec::with_capacity(2 * m as usize);
         for i in 0..m {
-            let j = (i + 1) % m;
-            let h = (l2[j] - l2[i]).norm();
-            refined.push(l2[i]);
-            let curved = beta2[i].max(beta2[j]) * h > s.epsilon && h > 2.0 * s.h_min;
+            let (a, b) = (l2.at(i), l2.at(i + 1));
+            let h = (b - a).norm();
+            refined.push(a);
+            let curved = beta2[i as usize].max(beta2[((i + 1) % m) as usize]) * h > s.epsilon && h > 2.0 * s.h_min;
             if h > s.h_max || curved {
-                let p0 = l2[(i + m - 1) % m];
-                let p3 = l2[(j + 1) % m];
-                refined.push((l2[i] * 9.0 + l2[j] * 9.0 - p0 - p3) / 16.0);
+                refined.push((a * 9.0 + b * 9.0 - l2.at(i - 1) - l2.at(i + 2)) / 16.0);
                 changed = true;
             }
         }
@@ -150,7 +203,7 @@ pub fn adapt_curve(mesh: &CurveMesh, s: &CurveRemeshSettings) -> Result<Option<C
     if !changed {
         return Ok(None);
     }
-    from_polylines_trusted(out).map(Some)
+    rebuild(mesh, out, false).map(Some)
 }
 
 /// Winding number of the point `p` with respect to closed loops (each a list of
@@ -174,34 +227,70 @@ pub fn winding_number<L: AsRef<[Point<2>]>>(loops: &[L], p: Point<2>) -> i32 {
     w
 }
 
+/// The winding number of `p` for a curve mesh, periodic or not. On the cylinder,
+/// where a component winding in `+x` has its interior above it, the vertical ray
+/// from `p` upwards is followed to `y = +∞` (interior of the winding components,
+/// exterior of the closed ones): the number is the count of winding components,
+/// plus one for each segment running in `−x` above `p`, minus one for each running
+/// in `+x` (half-open in `x`, every image of `p` considered).
+pub fn mesh_winding_number(mesh: &CurveMesh, p: Point<2>) -> i32 {
+    let Some(period) = mesh.period() else {
+        let loops: Vec<Vec<Point<2>>> = mesh.lifted_cycles().into_iter().map(|(l, _)| l).collect();
+        return winding_number(&loops, p);
+    };
+    let mut w: i32 = mesh.windings().iter().map(|&k| k as i32).sum();
+    for e in 0..mesh.num_elements() {
+        let [a, b] = mesh.element_points(e);
+        let (lo, hi) = (a.x.min(b.x), a.x.max(b.x));
+        // the image of p.x in [lo, lo + L)
+        let x = p.x + period * ((lo - p.x) / period).ceil();
+        if !(x >= lo && x < hi) {
+            continue;
+        }
+        let y = a.y + (b.y - a.y) * (x - a.x) / (b.x - a.x);
+        if y > p.y {
+            w += if b.x < a.x { 1 } else { -1 };
+        }
+    }
+    w
+}
+
 /// Topological changes: where segments of the same or of different components
 /// cross, the curves are cut and reconnected (each crossing swaps the successors of
 /// the two crossing segments), and of the loops so formed those that bound the
 /// region of positive winding number (inside on the left, outside on the right, or
 /// the reverse for holes) are kept; the others (doubly covered lenses, inverted
-/// slivers) and loops with `|area| < min_area` are dropped. The crossing points
-/// themselves are then removed from the kept loops, so that loops which met at a
-/// crossing do not touch. Two overlapping circles become one
-/// curve; a curve pinched into a figure eight becomes two. Returns `None` if no
-/// segments cross.
+/// slivers) and closed loops with `|area| < min_area` are dropped. The crossing
+/// points themselves are then removed from the kept loops, so that loops which met
+/// at a crossing do not touch. Two overlapping circles become one curve; a curve
+/// pinched into a figure eight becomes two; on the cylinder, a winding curve that
+/// touches itself or its periodic image encloses a closed component. Returns `None`
+/// if no segments cross.
 pub fn resolve_intersections(mesh: &CurveMesh, min_area: f64) -> Result<Option<CurveMesh>, MeshError> {
     let pts = mesh.positions();
     let segs = mesh.elements();
-    let hits = find_segment_intersections(pts, segs);
+    let hits = match mesh.period() {
+        Some(l) => find_periodic_intersections(pts, segs, l),
+        None => find_segment_intersections(pts, segs),
+    };
     if hits.is_empty() {
         return Ok(None);
     }
-    let original = loops_of(mesh);
-    // nodes: the mesh vertices, then two per crossing (one on each segment)
+    // nodes: the mesh vertices, then two per crossing (one on each segment, each in
+    // the frame of its segment's first vertex)
     let nv = pts.len();
     let mut node_pos: Vec<Point<2>> = pts.to_vec();
     let mut on_segment: Vec<Vec<(f64, usize)>> = vec![Vec::new(); segs.len()];
     let mut partner = Vec::new();
+    let along = |e: usize, s: f64| {
+        let [a, b] = mesh.element_points(e);
+        a + (b - a) * s
+    };
     for h in &hits {
         let na = node_pos.len();
-        node_pos.push(h.point);
+        node_pos.push(along(h.a, h.s));
         let nb = node_pos.len();
-        node_pos.push(h.point);
+        node_pos.push(along(h.b, h.t));
         on_segment[h.a].push((h.s, na));
         on_segment[h.b].push((h.t, nb));
         partner.push((na, nb));
@@ -222,50 +311,55 @@ pub fn resolve_intersections(mesh: &CurveMesh, min_area: f64) -> Result<Option<C
     for &(na, nb) in &partner {
         next.swap(na, nb);
     }
+    let lift = |p: Point<2>, near: &Point<2>| lift_near(mesh.period(), p, near);
     let mut seen = vec![false; node_pos.len()];
     let mut loops: Vec<(Loop, Vec<bool>)> = Vec::new();
     for start in 0..node_pos.len() {
         if seen[start] || (start < nv && next[start] == usize::MAX) {
             continue;
         }
-        let mut l = Vec::new();
+        let mut l: Vec<Point<2>> = Vec::new();
         let mut is_crossing = Vec::new();
         let mut v = start;
         while !seen[v] {
             seen[v] = true;
-            l.push(node_pos[v]);
+            let p = match l.last() {
+                Some(prev) => lift(node_pos[v], prev),
+                None => node_pos[v],
+            };
+            l.push(p);
             is_crossing.push(v >= nv);
             v = next[v];
         }
         if l.len() >= 3 {
-            loops.push((l, is_crossing));
+            let shift = lift(l[0], l.last().unwrap()) - l[0];
+            loops.push((Loop { p: l, shift }, is_crossing));
         }
     }
     let mut kept = Vec::new();
     for (l, is_crossing) in loops {
-        let area = loop_area(&l);
-        if area.abs() < min_area || l.len() < 3 {
+        let n = l.len();
+        if l.shift.norm() == 0.0 && loop_area(&l.p).abs() < min_area {
             continue;
         }
         // probe just left and right of the longest segment's midpoint
-        let n = l.len();
-        let k =
-            (0..n).max_by(|&i, &j| (l[(i + 1) % n] - l[i]).norm().total_cmp(&(l[(j + 1) % n] - l[j]).norm())).unwrap();
-        let (a, b) = (l[k], l[(k + 1) % n]);
+        let seg_len = |i: usize| (l.at(i as isize + 1) - l.at(i as isize)).norm();
+        let k = (0..n).max_by(|&i, &j| seg_len(i).total_cmp(&seg_len(j))).unwrap();
+        let (a, b) = (l.at(k as isize), l.at(k as isize + 1));
         let d = b - a;
         let normal_left = Point::<2>::new(-d.y, d.x).normalize();
         let mid = (a + b) * 0.5;
         let eps = 1e-6 * d.norm().max(1e-12);
-        let left = winding_number(&original, mid + normal_left * eps) > 0;
-        let right = winding_number(&original, mid - normal_left * eps) > 0;
+        let left = mesh_winding_number(mesh, mid + normal_left * eps) > 0;
+        let right = mesh_winding_number(mesh, mid - normal_left * eps) > 0;
         if left != right {
-            let l: Loop = l.into_iter().zip(is_crossing).filter(|(_, c)| !c).map(|(p, _)| p).collect();
-            if l.len() >= 3 {
-                kept.push(l);
+            let p: Vec<Point<2>> = l.p.into_iter().zip(is_crossing).filter(|(_, c)| !c).map(|(p, _)| p).collect();
+            if p.len() >= 3 {
+                kept.push(p);
             }
         }
     }
-    from_polylines(kept).map(Some)
+    rebuild(mesh, kept, true).map(Some)
 }
 
 #[cfg(test)]
@@ -345,13 +439,13 @@ mod tests {
         let out = resolve_intersections(&crossed, 1e-6).unwrap().unwrap();
         assert_eq!(out.num_components(), 2);
         for cyc in out.cycles() {
-            let l: Loop = cyc.iter().map(|&v| out.positions()[v]).collect();
+            let l: Vec<Point<2>> = cyc.iter().map(|&v| out.positions()[v]).collect();
             assert!(loop_area(&l) > 0.0, "each lobe counter-clockwise");
         }
         // areas: each lobe ∫ |y| dx over the lobe, by symmetry equal
         let total = out.enclosed_measure();
         let lobes: Vec<f64> =
-            out.cycles().iter().map(|c| loop_area(&c.iter().map(|&v| out.positions()[v]).collect())).collect();
+            out.cycles().iter().map(|c| loop_area(&c.iter().map(|&v| out.positions()[v]).collect::<Vec<_>>())).collect();
         assert!((lobes[0] - lobes[1]).abs() < 1e-3 * total);
     }
 }

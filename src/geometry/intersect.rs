@@ -20,6 +20,59 @@ pub struct SegmentHit {
 /// share an endpoint index are neighbours and are not reported unless they overlap
 /// collinearly. The result is sorted by `(a, b)`.
 pub fn find_segment_intersections(points: &[Point<2>], segments: &[[usize; 2]]) -> Vec<SegmentHit> {
+    find_with_ids(points, segments, None)
+}
+
+/// Intersections of a curve on the cylinder `R/LZ × R` (see
+/// [`super::Mesh::new_periodic`]), including those with periodic images: every
+/// segment is lifted to start in `0 ≤ x < L`, segments reaching past `x = L` (or
+/// below 0) get a copy shifted by `∓L`, and the pairs are found among those. Hits
+/// name the original segments (`a < b`), `s` and `t` are the parameters along them
+/// and `point` is one representative of the crossing point modulo `L`.
+pub fn find_periodic_intersections(points: &[Point<2>], segments: &[[usize; 2]], period: f64) -> Vec<SegmentHit> {
+    let mut pts = Vec::with_capacity(4 * segments.len());
+    let mut ids = Vec::with_capacity(4 * segments.len());
+    let mut segs = Vec::with_capacity(2 * segments.len());
+    let mut origin = Vec::with_capacity(2 * segments.len());
+    for (e, &[a, b]) in segments.iter().enumerate() {
+        let mut p = points[a];
+        p.x = p.x.rem_euclid(period);
+        let mut q = points[b];
+        q.x += period * ((p.x - q.x) / period).round();
+        let mut push = |dx: f64| {
+            let k = pts.len();
+            pts.push(Point::<2>::new(p.x + dx, p.y));
+            pts.push(Point::<2>::new(q.x + dx, q.y));
+            ids.extend([a, b]);
+            segs.push([k, k + 1]);
+            origin.push(e);
+        };
+        push(0.0);
+        if q.x > period {
+            push(-period);
+        } else if q.x < 0.0 {
+            push(period);
+        }
+    }
+    let mut hits: Vec<SegmentHit> = find_with_ids(&pts, &segs, Some(&ids))
+        .into_iter()
+        .filter_map(|h| {
+            let (ea, eb) = (origin[h.a], origin[h.b]);
+            if ea == eb {
+                return None;
+            }
+            let (a, b, s, t) = if ea < eb { (ea, eb, h.s, h.t) } else { (eb, ea, h.t, h.s) };
+            Some(SegmentHit { a, b, s, t, point: h.point })
+        })
+        .collect();
+    hits.sort_by(|x, y| (x.a, x.b).cmp(&(y.a, y.b)));
+    hits.dedup_by(|x, y| (x.a, x.b) == (y.a, y.b));
+    hits
+}
+
+/// The finder; `ids` (if given) maps point indices to vertex identities for the
+/// test whether two segments are neighbours.
+fn find_with_ids(points: &[Point<2>], segments: &[[usize; 2]], ids: Option<&[usize]>) -> Vec<SegmentHit> {
     if segments.len() < 2 {
         return Vec::new();
     }
@@ -85,7 +138,7 @@ pub fn find_segment_intersections(points: &[Point<2>], segments: &[[usize; 2]]) 
             for &sb in &bucket[j + 1..] {
                 let (a, b) = if sa < sb { (sa as usize, sb as usize) } else { (sb as usize, sa as usize) };
                 if a != b {
-                    if let Some(h) = intersect_pair(points, segments, a, b) {
+                    if let Some(h) = intersect_pair(points, segments, ids, a, b) {
                         hits.push(h);
                     }
                 }
@@ -96,7 +149,7 @@ pub fn find_segment_intersections(points: &[Point<2>], segments: &[[usize; 2]]) 
         for other in 0..segments.len() {
             if other != l && !(long.contains(&other) && other < l) {
                 let (a, b) = if l < other { (l, other) } else { (other, l) };
-                if let Some(h) = intersect_pair(points, segments, a, b) {
+                if let Some(h) = intersect_pair(points, segments, ids, a, b) {
                     hits.push(h);
                 }
             }
@@ -112,11 +165,19 @@ fn cross(u: Point<2>, v: Point<2>) -> f64 {
     u.x * v.y - u.y * v.x
 }
 
-fn intersect_pair(points: &[Point<2>], segments: &[[usize; 2]], a: usize, b: usize) -> Option<SegmentHit> {
+fn intersect_pair(
+    points: &[Point<2>],
+    segments: &[[usize; 2]],
+    ids: Option<&[usize]>,
+    a: usize,
+    b: usize,
+) -> Option<SegmentHit> {
     let (sa, sb) = (segments[a], segments[b]);
     let (p, p2) = (points[sa[0]], points[sa[1]]);
     let (q, q2) = (points[sb[0]], points[sb[1]]);
-    let shares = sa[0] == sb[0] || sa[0] == sb[1] || sa[1] == sb[0] || sa[1] == sb[1];
+    let id = |v: usize| ids.map_or(v, |ids| ids[v]);
+    let (ia, ib) = (sa.map(id), sb.map(id));
+    let shares = ia[0] == ib[0] || ia[0] == ib[1] || ia[1] == ib[0] || ia[1] == ib[1];
     if !shares
         && (p.x.max(p2.x) < q.x.min(q2.x)
             || q.x.max(q2.x) < p.x.min(p2.x)

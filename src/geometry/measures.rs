@@ -19,7 +19,21 @@ pub struct MeshQuality {
 impl<const D: usize> Mesh<D> {
     /// Signed enclosed measure: area `½ Σ (x_a y_b − x_b y_a)` (2D) or volume
     /// `⅙ Σ p_a · (p_b × p_c)` (3D). Positive for outward orientation.
+    ///
+    /// Periodic curves: `−Σ (x_b − x_a)(y_a + y_b)/2 = −∮ y dx` over the lifted
+    /// segments, which is invariant under shifts by the period; for a component
+    /// winding in `+x` it is minus the area between it and `y = 0`, so the sum is the
+    /// area of the closed components minus that under the winding ones (its
+    /// variation under a normal motion is `∫_Γ V`, as for closed curves).
     pub fn enclosed_measure(&self) -> f64 {
+        if self.period().is_some() {
+            return (0..self.num_elements())
+                .map(|e| {
+                    let p = self.element_points(e);
+                    -0.5 * (p[1][0] - p[0][0]) * (p[0][1] + p[1][1])
+                })
+                .sum();
+        }
         (0..self.num_elements()).map(|e| simplex::enclosed_contribution(&self.element_points(e))).sum()
     }
 

@@ -34,6 +34,10 @@ pub enum MeshError {
     NonManifoldVertex { vertex: usize },
     #[error("enclosed {what} is {value:e} <= 0: elements are oriented inward (expected counter-clockwise curves / outward-facing triangles)")]
     InwardOrientation { what: &'static str, value: f64 },
+    #[error("the period must be a positive number (got {period})")]
+    BadPeriod { period: f64 },
+    #[error("curve component through vertex {vertex} winds {winding} times around the period; 0 (closed, counter-clockwise) or 1 (in +x) is allowed")]
+    BadWinding { vertex: usize, winding: i64 },
     #[error("segments {a} and {b} intersect")]
     SelfIntersection { a: usize, b: usize },
 }
@@ -48,6 +52,11 @@ pub enum MeshError {
 pub struct Mesh<const D: usize> {
     positions: Vec<Point<D>>,
     elements: Vec<[usize; D]>,
+    /// Curves only: the period `L` in `x` of a curve on the cylinder `R/LZ × R`.
+    /// Positions are then representatives modulo `L`, and a segment `[a, b]` runs
+    /// from `X_a` to the image of `X_b` nearest to it, `X_b + L·round((x_a − x_b)/L) e_x`
+    /// (segments are shorter than `L/2` in `x`). See [`Mesh::new_periodic`].
+    period: Option<f64>,
 }
 
 /// Closed curves in the plane.
@@ -64,21 +73,33 @@ impl<const D: usize> Mesh<D> {
     /// area/volume must be positive (outward orientation).
     pub fn new(positions: Vec<Point<D>>, elements: Vec<[usize; D]>) -> Result<Self, MeshError> {
         validate::validate(&positions, &elements)?;
-        Ok(Mesh { positions, elements })
+        Ok(Mesh { positions, elements, period: None })
     }
 
     /// A mesh produced by the remeshing kernels, whose connectivity is valid by
     /// construction; only debug builds re-check it.
     pub(crate) fn from_trusted_parts(positions: Vec<Point<D>>, elements: Vec<[usize; D]>) -> Self {
         debug_assert!(elements.iter().all(|e| e.iter().all(|&v| v < positions.len())));
-        Mesh { positions, elements }
+        Mesh { positions, elements, period: None }
+    }
+
+    /// The period `L` in `x` of a periodic curve mesh, `None` for ordinary meshes.
+    pub fn period(&self) -> Option<f64> {
+        self.period
+    }
+
+    /// The image of `p` (a vertex position) nearest to `near` in `x` under the
+    /// period, or `p` itself for non-periodic meshes.
+    #[inline]
+    pub fn lift(&self, p: Point<D>, near: &Point<D>) -> Point<D> {
+        lift_near(self.period, p, near)
     }
 
     /// Same connectivity, new positions (the flow's update `X_{n+1} = X_n + τ V⃗`).
     /// Panics if the number of positions changes.
     pub fn with_positions(&self, positions: Vec<Point<D>>) -> Self {
         assert_eq!(positions.len(), self.positions.len());
-        Mesh { positions, elements: self.elements.clone() }
+        Mesh { positions, elements: self.elements.clone(), period: self.period }
     }
 
     /// Replace the positions in place (same count).
@@ -107,7 +128,8 @@ impl<const D: usize> Mesh<D> {
     #[inline]
     pub fn element_points(&self, e: usize) -> [Point<D>; D] {
         let el = &self.elements[e];
-        std::array::from_fn(|k| self.positions[el[k]])
+        let first = self.positions[el[0]];
+        std::array::from_fn(|k| if k == 0 { first } else { self.lift(self.positions[el[k]], &first) })
     }
 
     /// Measure (length or area) and unit outward normal of element `e`.
@@ -157,7 +179,66 @@ impl<const D: usize> Mesh<D> {
     }
 }
 
+/// `p` shifted by a multiple of the period in `x` to lie nearest to `near`.
+#[inline]
+pub(crate) fn lift_near<const D: usize>(period: Option<f64>, mut p: Point<D>, near: &Point<D>) -> Point<D> {
+    if let Some(l) = period {
+        p[0] += l * ((near[0] - p[0]) / l).round();
+    }
+    p
+}
+
 impl Mesh<2> {
+    /// Validated constructor of a curve on the cylinder `R/LZ × R` (period `L` in
+    /// `x`): the checks of [`Mesh::new`] on the lifted segments, intersections
+    /// including those with periodic images; every component winds `w ∈ {0, 1}`
+    /// times around the cylinder (`w = 1`: in the `+x` direction, the region on its
+    /// left, above it, is the interior) and a closed component (`w = 0`) runs
+    /// counter-clockwise.
+    pub fn new_periodic(positions: Vec<Point<2>>, elements: Vec<[usize; 2]>, period: f64) -> Result<Self, MeshError> {
+        if !(period.is_finite() && period > 0.0) {
+            return Err(MeshError::BadPeriod { period });
+        }
+        let mesh = Mesh { positions, elements, period: Some(period) };
+        validate::validate_periodic(&mesh)?;
+        Ok(mesh)
+    }
+
+    /// A periodic curve from the remeshing kernels (valid by construction).
+    pub(crate) fn periodic_trusted(positions: Vec<Point<2>>, elements: Vec<[usize; 2]>, period: f64) -> Self {
+        debug_assert!(elements.iter().all(|e| e.iter().all(|&v| v < positions.len())));
+        Mesh { positions, elements, period: Some(period) }
+    }
+
+    /// Components as lifted polylines: each cycle of [`Mesh::cycles`] with every
+    /// vertex moved to the image nearest its predecessor, and the component's shift
+    /// (the closing segment runs from the last point to `first + shift`; zero
+    /// unless the component winds around a periodic mesh).
+    pub fn lifted_cycles(&self) -> Vec<(Vec<Point<2>>, Point<2>)> {
+        self.cycles()
+            .iter()
+            .map(|c| {
+                let mut pts: Vec<Point<2>> = Vec::with_capacity(c.len());
+                for &v in c {
+                    let p = match pts.last() {
+                        Some(prev) => self.lift(self.positions[v], prev),
+                        None => self.positions[v],
+                    };
+                    pts.push(p);
+                }
+                let closing = self.lift(pts[0], pts.last().unwrap());
+                (pts.clone(), closing - pts[0])
+            })
+            .collect()
+    }
+
+    /// Number of times each component of [`Mesh::cycles`] winds around the cylinder
+    /// (0 for non-periodic meshes).
+    pub fn windings(&self) -> Vec<i64> {
+        let l = self.period.unwrap_or(f64::INFINITY);
+        self.lifted_cycles().iter().map(|(_, shift)| (shift.x / l).round() as i64).collect()
+    }
+
     /// The closed polygons of a curve mesh as vertex index cycles, each in the
     /// direction of its segments (counter-clockwise for outer boundaries), ordered by
     /// their smallest vertex index.

@@ -12,9 +12,11 @@ mod surface_remesh;
 mod surfaces;
 mod validate;
 
-pub use curve_remesh::{adapt_curve, regularize_curve, resolve_intersections, winding_number, CurveRemeshSettings};
+pub use curve_remesh::{
+    adapt_curve, mesh_winding_number, regularize_curve, resolve_intersections, winding_number, CurveRemeshSettings,
+};
 pub use curves::{circle, ellipse, polygon, rectangle, union};
-pub use intersect::{find_segment_intersections, SegmentHit};
+pub use intersect::{find_periodic_intersections, find_segment_intersections, SegmentHit};
 pub use measures::MeshQuality;
 pub use mesh::{segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};
 pub use surface_remesh::{

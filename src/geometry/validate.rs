@@ -1,9 +1,64 @@
 //! Validation of a mesh at construction (see [`super::Mesh::new`]).
 
-use super::{simplex, MeshError, Point};
+use super::{simplex, Mesh, MeshError, Point};
 use std::collections::HashMap;
 
 pub(super) fn validate<const D: usize>(positions: &[Point<D>], elements: &[[usize; D]]) -> Result<(), MeshError> {
+    basic_checks(positions, elements, |el| std::array::from_fn(|k| positions[el[k]]))?;
+    match D {
+        2 => {
+            validate_curve(positions.len(), elements)?;
+            let pts: Vec<Point<2>> = positions.iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
+            let segs: Vec<[usize; 2]> = elements.iter().map(|e| [e[0], e[1]]).collect();
+            if let Some(h) = super::find_segment_intersections(&pts, &segs).first() {
+                return Err(MeshError::SelfIntersection { a: h.a, b: h.b });
+            }
+        }
+        3 => validate_surface(positions.len(), elements)?,
+        _ => unreachable!(),
+    }
+    let enclosed: f64 =
+        elements.iter().map(|el| simplex::enclosed_contribution(&std::array::from_fn(|k| positions[el[k]]))).sum();
+    if enclosed <= 0.0 {
+        let what = if D == 2 { "area" } else { "volume" };
+        return Err(MeshError::InwardOrientation { what, value: enclosed });
+    }
+    Ok(())
+}
+
+/// [`validate`] for a curve on the cylinder (see [`Mesh::new_periodic`]).
+pub(super) fn validate_periodic(mesh: &Mesh<2>) -> Result<(), MeshError> {
+    let (positions, elements) = (mesh.positions(), mesh.elements());
+    let period = mesh.period().expect("periodic mesh");
+    basic_checks(positions, elements, |el| {
+        let first = positions[el[0]];
+        [first, mesh.lift(positions[el[1]], &first)]
+    })?;
+    validate_curve(positions.len(), elements)?;
+    let cycles = mesh.cycles();
+    for ((cycle, (points, _)), w) in cycles.iter().zip(mesh.lifted_cycles()).zip(mesh.windings()) {
+        let area: f64 = (0..points.len()).map(|k| cross(points[k], points[(k + 1) % points.len()])).sum();
+        if !(w == 1 || (w == 0 && area > 0.0)) {
+            return Err(MeshError::BadWinding { vertex: cycle[0], winding: w });
+        }
+    }
+    if let Some(h) = super::intersect::find_periodic_intersections(positions, elements, period).first() {
+        return Err(MeshError::SelfIntersection { a: h.a, b: h.b });
+    }
+    Ok(())
+}
+
+fn cross(a: Point<2>, b: Point<2>) -> f64 {
+    a.x * b.y - a.y * b.x
+}
+
+/// Coordinates finite, indices in range, no repeated vertex, no degenerate or
+/// duplicate element, every vertex used.
+fn basic_checks<const D: usize>(
+    positions: &[Point<D>],
+    elements: &[[usize; D]],
+    points_of: impl Fn(&[usize; D]) -> [Point<D>; D],
+) -> Result<(), MeshError> {
     if elements.is_empty() {
         return Err(MeshError::Empty);
     }
@@ -30,8 +85,7 @@ pub(super) fn validate<const D: usize>(positions: &[Point<D>], elements: &[[usiz
                 }
             }
         }
-        let p: [Point<D>; D] = std::array::from_fn(|k| positions[el[k]]);
-        let (m, _) = simplex::measure_and_normal(&p);
+        let (m, _) = simplex::measure_and_normal(&points_of(el));
         if m <= tiny {
             return Err(MeshError::Degenerate { element: e });
         }
@@ -47,24 +101,6 @@ pub(super) fn validate<const D: usize>(positions: &[Point<D>], elements: &[[usiz
             return Err(MeshError::Duplicate { element: e, other });
         }
         seen.insert(key, e);
-    }
-    match D {
-        2 => {
-            validate_curve(n, elements)?;
-            let pts: Vec<Point<2>> = positions.iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
-            let segs: Vec<[usize; 2]> = elements.iter().map(|e| [e[0], e[1]]).collect();
-            if let Some(h) = super::find_segment_intersections(&pts, &segs).first() {
-                return Err(MeshError::SelfIntersection { a: h.a, b: h.b });
-            }
-        }
-        3 => validate_surface(n, elements)?,
-        _ => unreachable!(),
-    }
-    let enclosed: f64 =
-        elements.iter().map(|el| simplex::enclosed_contribution(&std::array::from_fn(|k| positions[el[k]]))).sum();
-    if enclosed <= 0.0 {
-        let what = if D == 2 { "area" } else { "volume" };
-        return Err(MeshError::InwardOrientation { what, value: enclosed });
     }
     Ok(())
 }
