@@ -22,6 +22,7 @@
 pub mod bulk;
 pub mod export;
 pub mod fem;
+pub mod film;
 pub mod flow;
 pub mod geometry;
 pub mod imaging;

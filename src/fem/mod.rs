@@ -10,7 +10,9 @@ mod assemble;
 mod cholesky;
 pub mod element;
 mod pattern;
+mod recovery;
 
 pub use assemble::{Matrices, Weight};
 pub use cholesky::SparseCholesky;
 pub use pattern::{csc_mul, Pattern};
+pub use recovery::tangential_derivative;

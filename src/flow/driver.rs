@@ -5,7 +5,8 @@
 //! `V⃗`, and then
 //! 1. *geometric control* (paper §4.1): if `τ max_T |V⃗(z_a) − V⃗(z_b)| / h_T > ε`
 //!    the step is retried with `τ ← 0.9 ε τ / ratio`;
-//! 2. *tangling*: an element that degenerates or flips halves `τ`;
+//! 2. *tangling*: an element that degenerates or flips halves `τ`; so does a change
+//!    of the enclosed measure above `conservation` (relative, when set);
 //! 3. *backtracking* (paper §3.2): while `J(Γ_{n+1}) > J(Γ_n)`, halve `τ`.
 //!
 //! Below `τ_min` the run stops with [`StopReason::TauMin`] on the last good state.
@@ -68,6 +69,11 @@ pub struct FlowSettings {
     /// Constant α, β of the plain `h1` product.
     pub alpha: f64,
     pub beta: f64,
+    /// Largest relative change of the enclosed measure per step (`None`: no
+    /// check). For area-conserving (`H^{-1}`) flows, whose steps conserve it up to
+    /// `O(τ²)`: a larger change halves τ.
+    #[serde(default)]
+    pub conservation: Option<f64>,
 }
 
 impl Default for FlowSettings {
@@ -84,6 +90,7 @@ impl Default for FlowSettings {
             step_control: Some(0.5),
             alpha: 1e-2,
             beta: 1.0,
+            conservation: None,
         }
     }
 }
@@ -341,6 +348,14 @@ impl<'p, const D: usize> Flow<'p, D> {
                     return Err(FlowError::Tangled { element, time: self.time });
                 }
                 continue;
+            }
+            if let Some(tol) = s.conservation {
+                let (a0, a1) = (self.mesh.enclosed_measure(), candidate.enclosed_measure());
+                if (a1 - a0).abs() > tol * a0.abs() {
+                    tau *= 0.5;
+                    report.reductions += 1;
+                    continue;
+                }
             }
             let energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
             if energy.is_nan() || energy == f64::NEG_INFINITY {

@@ -444,8 +444,72 @@ mod tests {
         }
         // areas: each lobe ∫ |y| dx over the lobe, by symmetry equal
         let total = out.enclosed_measure();
-        let lobes: Vec<f64> =
-            out.cycles().iter().map(|c| loop_area(&c.iter().map(|&v| out.positions()[v]).collect::<Vec<_>>())).collect();
+        let lobes: Vec<f64> = out
+            .cycles()
+            .iter()
+            .map(|c| loop_area(&c.iter().map(|&v| out.positions()[v]).collect::<Vec<_>>()))
+            .collect();
         assert!((lobes[0] - lobes[1]).abs() < 1e-3 * total);
+    }
+}
+
+#[cfg(test)]
+mod periodic_tests {
+    use super::*;
+
+    /// A flat film (y = 0.5 on a period of 1) with a groove whose walls cross at its
+    /// neck, enclosing a bulb below.
+    fn pinched_groove() -> CurveMesh {
+        let mut pts: Vec<Point<2>> = Vec::new();
+        for i in 0..8 {
+            pts.push(Point::<2>::new(0.05 * i as f64, 0.5));
+        }
+        pts.extend([
+            Point::<2>::new(0.4, 0.5),
+            Point::<2>::new(0.46, 0.4),
+            Point::<2>::new(0.52, 0.3),
+            Point::<2>::new(0.45, 0.2),
+            Point::<2>::new(0.45, 0.1),
+            Point::<2>::new(0.55, 0.1),
+            Point::<2>::new(0.55, 0.2),
+            Point::<2>::new(0.48, 0.3),
+            Point::<2>::new(0.54, 0.4),
+            Point::<2>::new(0.6, 0.5),
+        ]);
+        for i in 1..8 {
+            pts.push(Point::<2>::new(0.6 + 0.05 * i as f64, 0.5));
+        }
+        let n = pts.len();
+        Mesh::periodic_trusted(pts, (0..n).map(|i| [i, (i + 1) % n]).collect(), 1.0)
+    }
+
+    #[test]
+    fn periodic_winding_counts_gas_above_the_film_and_in_voids() {
+        let m = pinched_groove();
+        assert_eq!(mesh_winding_number(&m, Point::<2>::new(0.2, 0.7)), 1);
+        assert_eq!(mesh_winding_number(&m, Point::<2>::new(1.2, 0.7)), 1);
+        assert_eq!(mesh_winding_number(&m, Point::<2>::new(0.2, 0.3)), 0);
+        assert_eq!(mesh_winding_number(&m, Point::<2>::new(0.5, 0.15)), 1);
+        assert_eq!(mesh_winding_number(&m, Point::<2>::new(-0.5, 0.15)), 1);
+        assert_eq!(mesh_winding_number(&m, Point::<2>::new(0.5, 0.45)), 1);
+    }
+
+    #[test]
+    fn a_film_whose_groove_walls_cross_encloses_a_void() {
+        let m = pinched_groove();
+        let before = m.enclosed_measure();
+        let out = resolve_intersections(&m, 1e-9).unwrap().unwrap();
+        assert_eq!(out.num_components(), 2);
+        let mut w = out.windings();
+        w.sort();
+        assert_eq!(w, vec![0, 1]);
+        // the void runs counter-clockwise; the areas add up to the old one up to the
+        // removed crossing points (a few triangles of the coarse polygon)
+        for ((pts, _), w) in out.lifted_cycles().iter().zip(out.windings()) {
+            if w == 0 {
+                assert!(loop_area(pts) > 0.01, "void area {}", loop_area(pts));
+            }
+        }
+        assert!((out.enclosed_measure() - before).abs() < 2e-3, "{} vs {before}", out.enclosed_measure());
     }
 }

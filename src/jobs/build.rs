@@ -216,6 +216,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         step_control,
         alpha,
         beta,
+        conservation: None,
     };
     let checkpoint_every = in_range("output.checkpoint_every", spec.output.checkpoint_every, 1, usize::MAX)?;
     Ok(PreparedJob { spec, mesh, problem, settings, checkpoint_every, curve_manager, surface_manager, image })

@@ -3,9 +3,11 @@
 mod curvature_flow;
 mod segmentation;
 mod shape_design;
+mod stressed_film;
 mod surface_diffusion;
 
 pub use curvature_flow::CurvatureFlow;
 pub use segmentation::Segmentation;
 pub use shape_design::{alpha_84, DesignSolution, GradientKind, ShapeDesign, Target};
+pub use stressed_film::StressedFilm;
 pub use surface_diffusion::SurfaceDiffusion;

@@ -23,10 +23,9 @@
 //! well above its oscillation, and a linear blend in between.
 
 use crate::bulk::{curve_sensitivity, solve_design_fields, BulkError, BulkMesh, DesignDomain, MeshingOptions};
-use crate::fem::Weight;
+use crate::fem::{tangential_derivative, Weight};
 use crate::flow::{H1Weights, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
 use crate::geometry::{resolve_intersections, CurveMesh, Mesh, Point};
-use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 use std::sync::{Arc, Mutex};
 
@@ -217,33 +216,6 @@ impl ShapeDesign {
         Ok(solution)
     }
 
-    /// Tangential derivatives `∂_s u` at the vertices by patch recovery: the slope at
-    /// `s = 0` of the least-squares quadratic in arclength through the values at the
-    /// vertex and its two neighbours on either side (exact for quadratics, so `O(h²)`
-    /// for smooth `u`, and it averages out the mesh-level noise of the bulk traces).
-    /// Loops of fewer than five vertices use the length-weighted mean of the
-    /// difference quotients of the adjacent edges.
-    fn tangential_derivative(mesh: &CurveMesh, u: &[f64]) -> Vec<f64> {
-        let x = mesh.positions();
-        let mut out = vec![0.0; mesh.num_vertices()];
-        for cyc in mesh.cycles() {
-            let n = cyc.len();
-            let len: Vec<f64> = (0..n).map(|k| (x[cyc[(k + 1) % n]] - x[cyc[k]]).norm()).collect();
-            for k in 0..n {
-                let (lp, ln) = (len[(k + n - 1) % n], len[k]);
-                if n < 5 {
-                    out[cyc[k]] = (u[cyc[(k + 1) % n]] - u[cyc[(k + n - 1) % n]]) / (lp + ln);
-                    continue;
-                }
-                // arclength offsets of k−2..k+2
-                let s = [-(len[(k + n - 2) % n] + lp), -lp, 0.0, ln, ln + len[(k + 1) % n]];
-                let v: [f64; 5] = std::array::from_fn(|j| u[cyc[(k + n + j - 2) % n]]);
-                out[cyc[k]] = quadratic_slope(&s, &v);
-            }
-        }
-        out
-    }
-
     fn to_problem_error(e: BulkError) -> ProblemError {
         ProblemError(e.to_string())
     }
@@ -290,8 +262,8 @@ impl<const D: usize> Problem<D> for ShapeDesign {
         let g: Vec<f64> = s.p.iter().map(|p| p + self.gamma).collect();
         let f = match self.gradient {
             GradientKind::Continuous => {
-                let dy = Self::tangential_derivative(mesh, &s.y);
-                let dp = Self::tangential_derivative(mesh, &s.p);
+                let dy = tangential_derivative(mesh, &s.y);
+                let dp = tangential_derivative(mesh, &s.p);
                 dy.iter().zip(&dp).map(|(a, b)| a * b).collect()
             }
             // G_i from the discrete gradient; the part g κ stays implicit in the step
@@ -323,20 +295,6 @@ impl<const D: usize> Problem<D> for ShapeDesign {
     fn default_scalar_product(&self) -> ScalarProduct {
         ScalarProduct::H1Newton
     }
-}
-
-/// Slope at 0 of the least-squares quadratic through `(s_j, v_j)` (normal equations,
-/// with `s` scaled by its spread).
-fn quadratic_slope(s: &[f64; 5], v: &[f64; 5]) -> f64 {
-    let scale = (s[4] - s[0]).abs().max(f64::MIN_POSITIVE);
-    let (mut m, mut r) = (Matrix3::<f64>::zeros(), Vector3::<f64>::zeros());
-    for (&sj, &vj) in s.iter().zip(v) {
-        let t = sj / scale;
-        let phi = Vector3::new(1.0, t, t * t);
-        m += phi * phi.transpose();
-        r += phi * vj;
-    }
-    m.lu().solve(&r).map_or(0.0, |c| c[1] / scale)
 }
 
 /// `α_e` of paper eq. (84) from the values of `g` at the ends of edge `e` and `h_e²`.

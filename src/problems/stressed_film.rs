@@ -1,0 +1,149 @@
+//! The epitaxially stressed film (paper §1.3, §2.2.3, §4.4.2): the `H^{-1}` gradient
+//! flow of `J = ∫_Ω |∇y|² + γ|Γ|` on the film's free surface and voids, i.e.
+//! `V = Δ_Γ(γκ + |∇y|²)` along the outward normal `ν` of `Ω`.
+//!
+//! Signs: the curve mesh has the gas as its interior (see [`crate::film`]), so its
+//! normal is `n = −ν`, its curvature `κ_Γ = −κ` and its velocity `V_Γ = −V`; along `n`,
+//! `G_Γ = γκ_Γ − |∇y|²` (`g = γ`, `f = −|∇y|²`). Since `∂_ν y = 0` on `Γ`,
+//! `|∇y|² = (∂_s y)²`, and `∂_s y` is recovered from the P1 trace of `y` on `Γ`
+//! ([`tangential_derivative`], second order); the gradients of the triangles at `Γ`
+//! are only first-order accurate there, and the exact gradient of the discrete
+//! energy (with the bulk vertices held) carries an `O(1)` mesh-distortion bias that
+//! shifts the growth rate of the linear instability (measured; not used). With `g`
+//! constant the field is constant and the flow is plain surface diffusion of the
+//! periodic curve (no bulk mesh is built).
+
+use crate::bulk::{BulkError, MeshingOptions};
+use crate::fem::tangential_derivative;
+use crate::film::{solve_stress, FilmCell, FilmMesh, StressField};
+use crate::flow::{Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
+use crate::geometry::{find_periodic_intersections, resolve_intersections, CurveMesh, Mesh, Point};
+use std::sync::{Arc, Mutex};
+
+/// The stressed film in its cell.
+pub struct StressedFilm {
+    pub cell: FilmCell,
+    /// Surface tension `γ > 0`.
+    pub gamma: f64,
+    pub meshing: MeshingOptions,
+    /// Topology changes on: crossing candidates are reconnected (voids pinch off).
+    pub merge: bool,
+    /// Loops below this area are dropped when curves are reconnected.
+    pub min_area: f64,
+    cache: Mutex<Option<(Vec<Point<2>>, Vec<[usize; 2]>, Arc<(FilmMesh, StressField)>)>>,
+}
+
+impl StressedFilm {
+    pub fn new(cell: FilmCell, gamma: f64, meshing: MeshingOptions, merge: bool, min_area: f64) -> Self {
+        StressedFilm { cell, gamma, meshing, merge, min_area, cache: Mutex::new(None) }
+    }
+
+    /// Meshing options for a curve of mean segment length `h`: 28°, triangle areas
+    /// at most `(4h)²`.
+    pub fn meshing_for(h: f64) -> MeshingOptions {
+        MeshingOptions { min_angle_deg: 28.0, max_area: h * h, min_area: 0.0025 * h * h }
+    }
+
+    /// The film mesh and field of a curve (cached for the last curve); `None` when
+    /// `g` is constant.
+    pub fn solve(&self, curve: &CurveMesh) -> Result<Option<Arc<(FilmMesh, StressField)>>, BulkError> {
+        if self.cell.boundary.is_constant() {
+            return Ok(None);
+        }
+        let mut cache = self.cache.lock().expect("cache");
+        if let Some((p, e, s)) = cache.as_ref() {
+            if p == curve.positions() && e == curve.elements() {
+                return Ok(Some(s.clone()));
+            }
+        }
+        let mesh = FilmMesh::build(&self.cell, curve, &self.meshing)?;
+        let field = solve_stress(&mesh, &self.cell)?;
+        let s = Arc::new((mesh, field));
+        *cache = Some((curve.positions().to_vec(), curve.elements().to_vec(), s.clone()));
+        Ok(Some(s))
+    }
+}
+
+fn curve<const D: usize>(mesh: &Mesh<D>) -> Result<&CurveMesh, ProblemError> {
+    (mesh as &dyn std::any::Any)
+        .downcast_ref::<CurveMesh>()
+        .ok_or_else(|| ProblemError("the stressed film needs a curve (2D)".into()))
+}
+
+/// Unit tangents at the vertices: the normalized sum of the adjacent unit segment
+/// directions.
+fn unit_tangents(c: &CurveMesh) -> Vec<Point<2>> {
+    let mut t = vec![Point::<2>::zeros(); c.num_vertices()];
+    for (e, &[a, b]) in c.elements().iter().enumerate() {
+        let [p, q] = c.element_points(e);
+        let d = (q - p).normalize();
+        t[a] += d;
+        t[b] += d;
+    }
+    t.iter().map(|v| v.normalize()).collect()
+}
+
+fn problem_error(e: BulkError) -> ProblemError {
+    ProblemError(format!("stressed film: {e}"))
+}
+
+impl<const D: usize> Problem<D> for StressedFilm {
+    fn name(&self) -> &'static str {
+        "stressed_film"
+    }
+
+    /// A candidate whose curves cross is evaluated as the curve it becomes (the mesh
+    /// manager reconnects it after the step) when topology changes are on; `+∞` if it
+    /// crosses otherwise or leaves the cell (then the step is shortened).
+    fn energy(&self, mesh: &Mesh<D>) -> Result<f64, ProblemError> {
+        let mut c = curve(mesh)?;
+        let resolved;
+        if let Some(l) = c.period() {
+            if !find_periodic_intersections(c.positions(), c.elements(), l).is_empty() {
+                if !self.merge {
+                    return Ok(f64::INFINITY);
+                }
+                match resolve_intersections(c, self.min_area) {
+                    Ok(Some(m)) => {
+                        resolved = m;
+                        c = &resolved;
+                    }
+                    _ => return Ok(f64::INFINITY),
+                }
+            }
+        }
+        match self.solve(c) {
+            Ok(s) => Ok(s.map_or(0.0, |s| s.1.energy) + self.gamma * c.boundary_measure()),
+            Err(BulkError::Inadmissible(_)) => Ok(f64::INFINITY),
+            Err(e) => Err(problem_error(e)),
+        }
+    }
+
+    fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
+        let c = curve(state.mesh)?;
+        let n = c.num_vertices();
+        // ∂_ν y = 0 on Γ: |∇y|² = (∂_s y)², recovered from the trace of y on Γ. The
+        // trace jumps by bL across the walls (g = a + bx + cy there), w = y − bx does
+        // not: ∂_s y = ∂_s w + b t_x.
+        let f = match self.solve(c).map_err(problem_error)? {
+            None => vec![0.0; n],
+            Some(s) => {
+                let (mesh, field) = (&s.0, &s.1);
+                let b = self.cell.boundary.b;
+                let w: Vec<f64> = (0..n).map(|i| field.y[i] - b * mesh.points[i].x).collect();
+                let dw = tangential_derivative(c, &w);
+                let t = unit_tangents(c);
+                dw.iter().zip(&t).map(|(d, t)| -(d + b * t.x).powi(2)).collect()
+            }
+        };
+        Ok(ShapeGradient { g: vec![self.gamma; n], f })
+    }
+
+    fn default_scalar_product(&self) -> ScalarProduct {
+        ScalarProduct::HMinus1
+    }
+
+    fn is_physical(&self) -> bool {
+        true
+    }
+}
