@@ -115,5 +115,23 @@ fn curves_surfaces_and_segmentations_validate_with_the_right_fields() {
     write("balls.glb", &state_glb(&job, cps.last().unwrap()));
     write("balls_evolution.glb", &states_glb(&job, &cps).unwrap());
 
+    // the stressed film: the periodic surface as one LINE_STRIP over a period
+    let (job, cps) = run(
+        r#"{"problem": {"type": "stressed_film", "length": 1.0, "gamma": 0.2},
+            "initial": {"shape": "film", "height": 0.5, "amplitude": 0.05, "resolution": 32},
+            "flow": {"end_time": 2e-4}, "output": {"checkpoint_every": 5}}"#,
+        &[],
+    );
+    let glb = state_glb(&job, cps.last().unwrap());
+    let (doc, bin) = parse_glb(&glb);
+    let prim = &doc["meshes"][0]["primitives"][0];
+    assert_eq!(prim["mode"], 3);
+    let pos = floats(&doc, bin, prim["attributes"]["POSITION"].as_u64().unwrap() as usize);
+    let n = pos.len() / 3;
+    assert!((pos[3 * (n - 1)] - pos[0] - 1.0).abs() < 1e-6 && pos[3 * (n - 1) + 1] == pos[1], "closing vertex");
+    assert!(pos[0] >= 0.0 && pos[0] < 0.05, "starts at the left wall: {}", pos[0]);
+    write("film.glb", &glb);
+    write("film_evolution.glb", &states_glb(&job, &cps).unwrap());
+
     validate_gltf(&files);
 }

@@ -1,11 +1,13 @@
 //! The epitaxially stressed film (paper §4.4.2): the periodic surface-diffusion
 //! limit, conservation and energy decay with the bulk field, and the inclusion.
 
-use shapeflow::bulk::MeshingOptions;
+use shapeflow::export::shape_json;
 use shapeflow::film::{cosine_film, BoundaryData, FilmCell};
-use shapeflow::flow::{CurveManager, Flow, FlowSettings, MeshManager, ScalarProduct};
-use shapeflow::geometry::{CurveMesh, Point};
+use shapeflow::flow::{Flow, FlowSettings, MeshData, MeshManager, Problem, ScalarProduct};
+use shapeflow::geometry::CurveMesh;
+use shapeflow::jobs::{parse_spec, prepare, AnyMesh, PreparedJob, ProblemKind};
 use shapeflow::problems::StressedFilm;
+use std::collections::HashMap;
 use std::f64::consts::TAU;
 
 /// `(2/L) ∫ (h − mean) cos(kx) dx` along the film surface (a graph), by the
@@ -32,8 +34,7 @@ fn settings(tau: f64, end: f64) -> FlowSettings {
         max_iterations: 1_000_000,
         tolerance: 0.0,
         backtracking: false,
-        step_control: std::env::var("EPS").ok().and_then(|s| s.parse().ok()),
-        conservation: std::env::var("CONS").ok().and_then(|s| s.parse().ok()),
+        step_control: None,
         ..FlowSettings::default()
     }
 }
@@ -52,108 +53,6 @@ fn small_cosine_decays_at_the_linear_rate() {
     let a1 = cosine_amplitude(flow.mesh(), l, 1.0);
     let measured = (a0 / a1).ln() / flow.time();
     assert!((measured / rate - 1.0).abs() < 0.05, "rate {measured} vs γk⁴ = {rate}");
-}
-
-#[test]
-#[ignore]
-fn explore() {
-    let l = 1.0;
-    let n = 128;
-    let gamma: f64 = std::env::var("GAMMA").ok().and_then(|s| s.parse().ok()).unwrap_or(0.2);
-    let height: f64 = std::env::var("HEIGHT").ok().and_then(|s| s.parse().ok()).unwrap_or(0.5);
-    let amp: f64 = std::env::var("AMP").ok().and_then(|s| s.parse().ok()).unwrap_or(0.02);
-    let tend: f64 = std::env::var("TEND").ok().and_then(|s| s.parse().ok()).unwrap_or(0.05);
-    let tau: f64 = std::env::var("TAU").ok().and_then(|s| s.parse().ok()).unwrap_or(1e-5);
-    let mesh = cosine_film(l, height, amp, 1, n).unwrap();
-    let problem = film(l, BoundaryData::x(), gamma, l / n as f64);
-    let mut m = CurveManager::defaults_for(&mesh);
-    let mut cm = CurveManager { regularize: true, sweeps: 1, adapt: true, topology_changes: true, params: m };
-    cm.params.h_min = 0.25 * l / n as f64;
-    m = cm.params;
-    let _ = m;
-    let mut flow = Flow::new(&problem, mesh, settings(tau, tend))
-        .unwrap()
-        .with_mesh_manager(Box::new(cm) as Box<dyn MeshManager<2>>);
-    let a0 = flow.mesh().enclosed_measure();
-    let mut it = 0;
-    let mut prev_area = a0;
-    let mut prev_comps = 1;
-    loop {
-        let r = flow.step();
-        match r {
-            Err(e) => {
-                println!("error {e}");
-                break;
-            }
-            Ok(r) if r.stop.is_some() => {
-                println!("stop {:?}", r.stop);
-                break;
-            }
-            _ => {}
-        }
-        it += 1;
-        let a = flow.mesh().enclosed_measure();
-        if (a - prev_area).abs() > 1e-5 || flow.mesh().num_components() != prev_comps {
-            let w = flow.mesh().windings();
-            let areas: Vec<String> = flow
-                .mesh()
-                .lifted_cycles()
-                .iter()
-                .zip(&w)
-                .map(|((p, s), w)| {
-                    let n = p.len();
-                    format!(
-                        "w{w}:{:.5}/{}",
-                        (0..n)
-                            .map(|k| {
-                                let b = if k + 1 < n { p[k + 1] } else { p[0] + s };
-                                -0.5 * (b.x - p[k].x) * (p[k].y + b.y)
-                            })
-                            .sum::<f64>(),
-                        n
-                    )
-                })
-                .collect();
-            println!(
-                "  it {it} t {:.6} area {a:.6} (Δ {:.2e}) comps {:?} E {:.5}",
-                flow.time(),
-                a - prev_area,
-                areas,
-                flow.energy()
-            );
-        }
-        prev_area = a;
-        prev_comps = flow.mesh().num_components();
-        if it % 200 == 0 {
-            let mut out = String::new();
-            for (pts, _) in flow.mesh().lifted_cycles() {
-                for p in &pts {
-                    out += &format!("{} {}\n", p.x, p.y);
-                }
-                out += "\n";
-            }
-            std::fs::write(format!("{}_{:06}.txt", std::env::var("OUT").unwrap_or("/tmp/film".into()), it), out)
-                .unwrap();
-            let c = flow.mesh();
-            let ys: Vec<f64> = c.positions().iter().map(|p| p.y).collect();
-            let (lo, hi) = (ys.iter().cloned().fold(f64::MAX, f64::min), ys.iter().cloned().fold(f64::MIN, f64::max));
-            println!(
-                "it {it} t {:.5} E {:.6} area {:.3e} comps {} nv {} y [{lo:.3}, {hi:.3}]",
-                flow.time(),
-                flow.energy(),
-                flow.mesh().enclosed_measure() / a0 - 1.0,
-                c.num_components(),
-                c.num_vertices()
-            );
-        }
-    }
-    let c = flow.mesh();
-    for (pts, _) in c.lifted_cycles() {
-        let s: Vec<String> = pts.iter().step_by(4).map(|p| format!("({:.3},{:.3})", p.x, p.y)).collect();
-        println!("{}", s.join(" "));
-    }
-    let _ = Point::<2>::zeros();
-    let _ = MeshingOptions { min_angle_deg: 1.0, max_area: 1.0, min_area: 0.0 };
 }
 
 /// Growth rate of the linear instability with `g = x` (Laplace analogue of the
@@ -182,4 +81,122 @@ fn the_linear_instability_grows_at_the_predicted_rate() {
         let (measured, sigma) = growth_rate(gamma, 128);
         assert!((measured / sigma - 1.0).abs() < 0.05, "γ = {gamma}: rate {measured} vs σ = {sigma}");
     }
+}
+
+fn job(spec: &str) -> PreparedJob {
+    prepare(parse_spec(spec).unwrap(), &HashMap::new()).unwrap()
+}
+
+/// Areas of the closed components (voids) of a periodic curve.
+fn void_areas(c: &CurveMesh) -> Vec<f64> {
+    c.lifted_cycles()
+        .iter()
+        .zip(c.windings())
+        .filter(|(_, w)| *w == 0)
+        .map(|((p, _), _)| {
+            (0..p.len()).map(|k| 0.5 * (p[k].x * p[(k + 1) % p.len()].y - p[(k + 1) % p.len()].x * p[k].y)).sum()
+        })
+        .collect()
+}
+
+/// The paper's scenario (examples/stressed_film.json at 64 vertices): the film
+/// keeps its area and J decreases while it is a graph and then a groove; a void
+/// closes off in finite time and keeps its area.
+#[test]
+fn the_groove_closes_off_a_void_in_finite_time() {
+    let spec = std::fs::read_to_string("examples/stressed_film.json")
+        .unwrap()
+        .replace("\"resolution\": 128", "\"resolution\": 64");
+    let job = job(&spec);
+    let (ProblemKind::StressedFilm(problem), AnyMesh::Curve(mesh)) = (&job.problem, &job.mesh) else { unreachable!() };
+    let mut flow = Flow::new(problem as &dyn Problem<2>, mesh.clone(), job.settings.clone())
+        .unwrap()
+        .with_mesh_manager(Box::new(job.curve_manager.unwrap()) as Box<dyn MeshManager<2>>);
+    let area0 = flow.mesh().enclosed_measure();
+    let mut energy = flow.energy();
+    let energy0 = energy;
+    let mut rises = Vec::new();
+    let mut formed = None;
+    while formed.is_none() {
+        let r = flow.step().unwrap();
+        assert!(r.stop.is_none(), "no void by t = {}", flow.time());
+        let drift = (flow.mesh().enclosed_measure() / area0 - 1.0).abs();
+        if !void_areas(flow.mesh()).is_empty() {
+            formed = Some((flow.time(), void_areas(flow.mesh())[0], drift));
+            break;
+        }
+        // non-increasing while the trough deepens, up to the discretization error of
+        // the bulk (re-triangulated every step); once it is a crack whose tip pinches
+        // off slivers below `min_area`, J also jumps at those topological events
+        let bottom = flow.mesh().positions().iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+        let rise = flow.energy() / energy - 1.0;
+        if bottom > 0.25 && rise > 0.0 {
+            rises.push((flow.time(), rise));
+        }
+        assert!(drift < 1e-3, "area drift {drift:e} at t = {}", flow.time());
+        energy = flow.energy();
+    }
+    let (t, area, drift) = formed.unwrap();
+    println!("void at t = {t}: area {area:e}, film area drift {drift:e}, J {energy0} → {energy}, rises {rises:?}");
+    assert!(energy < 0.98 * energy0, "J {energy0} → {energy}");
+    // measured: J strictly decreases until the last 0.5 % of the time before the
+    // void, then rises twice by ≤ 7e-5 (relative) as the crack runs
+    for &(at, rise) in &rises {
+        assert!(at > 0.99 * t && rise < 1e-4, "J rose by {rise:e} at t = {at} (void at {t})");
+    }
+    assert!(t > 0.006 && t < 0.008, "void at t = {t}");
+    assert!(area > 1e-4, "void area {area}");
+    // the void is a counter-clockwise closed component; shape.json lists it
+    let doc = shape_json(&MeshData::from(flow.mesh()), flow.energy(), flow.iteration(), None);
+    assert_eq!(doc["period"], 1.0);
+    let windings: Vec<u64> =
+        doc["components"].as_array().unwrap().iter().map(|c| c["winding"].as_u64().unwrap()).collect();
+    assert!(windings.contains(&0) && windings.contains(&1), "{windings:?}");
+    // while it stays alone, its area is kept
+    for _ in 0..STEPS_AFTER {
+        flow.step().unwrap();
+        let v = void_areas(flow.mesh());
+        if v.len() != 1 {
+            break;
+        }
+        assert!((v[0] / area - 1.0).abs() < VOID_TOL, "void area {} → {} at t = {}", area, v[0], flow.time());
+    }
+}
+
+const STEPS_AFTER: usize = 20;
+const VOID_TOL: f64 = 0.01;
+
+#[test]
+fn spec_errors_name_the_field() {
+    let base = r#"{"problem": {"type": "stressed_film", "length": 1.0, "gamma": 0.2},
+                   "initial": {"shape": "film", "height": 0.5, "amplitude": 0.02}}"#;
+    let err = |text: &str| -> String {
+        match parse_spec(text) {
+            Err(e) => e.field,
+            Ok(spec) => prepare(spec, &HashMap::new()).unwrap_err().field,
+        }
+    };
+    assert!(prepare(parse_spec(base).unwrap(), &HashMap::new()).is_ok());
+    assert_eq!(err(&base.replace("\"length\": 1.0", "\"length\": -1.0")), "problem.length");
+    assert_eq!(err(&base.replace("\"gamma\": 0.2", "\"gamma\": 0")), "problem.gamma");
+    assert_eq!(
+        err(&base.replace("\"gamma\": 0.2", "\"gamma\": 0.2, \"boundary\": {\"type\": \"y\"}")),
+        "problem.boundary.type"
+    );
+    assert_eq!(err(&base.replace("\"length\": 1.0, ", "")), "problem");
+    assert_eq!(err(&base.replace("\"amplitude\": 0.02", "\"amplitude\": 0.7")), "initial.amplitude");
+    assert_eq!(
+        err(&base.replace(
+            "\"shape\": \"film\", \"height\": 0.5, \"amplitude\": 0.02",
+            "\"shape\": \"circle\", \"radius\": 1"
+        )),
+        "initial.shape"
+    );
+    let poly = base.replace(
+        "\"shape\": \"film\", \"height\": 0.5, \"amplitude\": 0.02",
+        "\"shape\": \"film_polyline\", \"points\": [[0, 0.5], [0.5, 0.6], [1.2, 0.5]]",
+    );
+    assert_eq!(err(&poly), "initial.points[2]");
+    let flat = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "film", "height": 0.5}}"#;
+    assert_eq!(err(flat), "initial.shape");
 }

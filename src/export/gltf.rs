@@ -134,22 +134,7 @@ impl Builder {
                     primitives.push(json!({"attributes": attributes, "mode": 2, "material": 0}));
                     continue;
                 };
-                // periodic: lifted continuously from a first vertex in [0, L); a
-                // component winding around the period is an open strip whose last
-                // vertex repeats the first one period further
-                let x = |v: usize| m.positions[v][0];
-                let mut dx = vec![x(cycle[0]).rem_euclid(period) - x(cycle[0])];
-                for k in 1..cycle.len() {
-                    let prev = x(cycle[k - 1]) + dx[k - 1];
-                    dx.push(period * ((prev - x(cycle[k])) / period).round());
-                }
-                let last = x(cycle[cycle.len() - 1]) + dx[cycle.len() - 1];
-                let closing = period * ((last - x(cycle[0])) / period).round();
-                let winds = (closing - dx[0]).abs() > 0.5 * period;
-                if winds {
-                    dx.push(closing);
-                    cycle.push(cycle[0]);
-                }
+                let (dx, winds) = super::lift_component(m, &mut cycle, period);
                 let attributes = self.attributes(frame, &cycle, &dx, scale);
                 primitives.push(json!({"attributes": attributes, "mode": if winds { 3 } else { 2 }, "material": 0}));
             }

@@ -12,3 +12,31 @@ pub use energy_svg::energy_svg;
 pub use gltf::{evolution_glb, shape_glb, GltfFrame, FRAME_SECONDS};
 pub use image_results::{mask, mask_nrrd, mask_png, overlay_png, to_pixel};
 pub use shape_json::shape_json;
+
+use crate::flow::MeshData;
+
+/// A component `cycle` of a periodic curve (period `period` in `x`) lifted for
+/// drawing: rotated to start at the vertex nearest `x ≡ 0`, and the `x` offset of
+/// every vertex so that the component runs continuously from there. A component winding around the period is open:
+/// its first vertex is appended again one period further (then `true`).
+pub(crate) fn lift_component(m: &MeshData, cycle: &mut Vec<usize>, period: f64) -> (Vec<f64>, bool) {
+    let x = |v: usize| m.positions[v][0];
+    // start at the vertex nearest the left wall (for winding components the strip
+    // then spans about 0 ≤ x ≤ L)
+    let first =
+        (0..cycle.len()).min_by(|&a, &b| x(cycle[a]).rem_euclid(period).total_cmp(&x(cycle[b]).rem_euclid(period)));
+    cycle.rotate_left(first.unwrap_or(0));
+    let mut dx = vec![x(cycle[0]).rem_euclid(period) - x(cycle[0])];
+    for k in 1..cycle.len() {
+        let prev = x(cycle[k - 1]) + dx[k - 1];
+        dx.push(period * ((prev - x(cycle[k])) / period).round());
+    }
+    let last = x(cycle[cycle.len() - 1]) + dx[cycle.len() - 1];
+    let closing = period * ((last - x(cycle[0])) / period).round();
+    let winds = (closing - dx[0]).abs() > 0.5 * period;
+    if winds {
+        dx.push(closing);
+        cycle.push(cycle[0]);
+    }
+    (dx, winds)
+}

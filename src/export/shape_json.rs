@@ -45,10 +45,22 @@ fn shape_json_plain(mesh: &MeshData, energy: f64, iteration: usize) -> Value {
     let energy = if energy.is_finite() { json!(energy) } else { Value::Null };
     if mesh.dimension == 2 {
         let components: Vec<Value> = segment_cycles(mesh.positions.len(), mesh.elements.iter().map(|e| (e[0], e[1])))
-            .iter()
-            .map(|c| json!({ "vertices": c.iter().map(|&v| json!([mesh.positions[v][0], mesh.positions[v][1]])).collect::<Vec<_>>() }))
+            .into_iter()
+            .map(|mut c| {
+                let Some(period) = mesh.period else {
+                    return json!({ "vertices": c.iter().map(|&v| json!([mesh.positions[v][0], mesh.positions[v][1]])).collect::<Vec<_>>() });
+                };
+                let (dx, winds) = super::lift_component(mesh, &mut c, period);
+                let vertices: Vec<Value> =
+                    c.iter().zip(&dx).map(|(&v, d)| json!([mesh.positions[v][0] + d, mesh.positions[v][1]])).collect();
+                json!({ "vertices": vertices, "winding": winds as u8 })
+            })
             .collect();
-        json!({ "dimension": 2, "components": components, "energy": energy, "iteration": iteration })
+        let mut doc = json!({ "dimension": 2, "components": components, "energy": energy, "iteration": iteration });
+        if let Some(period) = mesh.period {
+            doc["period"] = json!(period);
+        }
+        doc
     } else {
         json!({
             "dimension": 3,

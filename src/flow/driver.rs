@@ -6,7 +6,8 @@
 //! 1. *geometric control* (paper §4.1): if `τ max_T |V⃗(z_a) − V⃗(z_b)| / h_T > ε`
 //!    the step is retried with `τ ← 0.9 ε τ / ratio`;
 //! 2. *tangling*: an element that degenerates or flips halves `τ`; so does a change
-//!    of the enclosed measure above `conservation` (relative, when set);
+//!    of the enclosed measure above `conservation` (relative, when set; down to
+//!    `4 τ_min`);
 //! 3. *backtracking* (paper §3.2): while `J(Γ_{n+1}) > J(Γ_n)`, halve `τ`.
 //!
 //! Below `τ_min` the run stops with [`StopReason::TauMin`] on the last good state.
@@ -351,7 +352,9 @@ impl<'p, const D: usize> Flow<'p, D> {
             }
             if let Some(tol) = s.conservation {
                 let (a0, a1) = (self.mesh.enclosed_measure(), candidate.enclosed_measure());
-                if (a1 - a0).abs() > tol * a0.abs() {
+                // down to 4 τ_min: a fresh topological change leaves corners that
+                // need a few very short steps; below that the step is taken anyway
+                if (a1 - a0).abs() > tol * a0.abs() && tau > 4.0 * s.tau_min {
                     tau *= 0.5;
                     report.reductions += 1;
                     continue;

@@ -66,7 +66,13 @@ impl CurveManager {
             }
         }
         let h_min = 0.25 * mean;
-        CurveRemeshSettings { epsilon: (1.5 * worst).max(1e-12), h_min, h_max: 3.0 * mean, min_area: h_min * h_min }
+        CurveRemeshSettings {
+            epsilon: (1.5 * worst).max(1e-12),
+            h_min,
+            h_max: 3.0 * mean,
+            min_area: h_min * h_min,
+            keep_area: false,
+        }
     }
 }
 

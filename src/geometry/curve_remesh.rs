@@ -18,6 +18,9 @@ pub struct CurveRemeshSettings {
     pub h_max: f64,
     /// Components with `|area|` below this are dropped after a topological change.
     pub min_area: f64,
+    /// Area-conserving flows (`H^{-1}`): after refinement/coarsening each component
+    /// is offset along its normals to keep its area (see `keep_area`).
+    pub keep_area: bool,
 }
 
 /// One component as a polyline: its points and the shift of the closing segment
@@ -198,12 +201,46 @@ pub fn adapt_curve(mesh: &CurveMesh, s: &CurveRemeshSettings) -> Result<Option<C
                 changed = true;
             }
         }
-        out.push(refined);
+        if s.keep_area {
+            let before = signed_area(&l);
+            out.push(keep_area(Loop { p: refined, shift: l.shift }, before));
+        } else {
+            out.push(refined);
+        }
     }
     if !changed {
         return Ok(None);
     }
     rebuild(mesh, out, false).map(Some)
+}
+
+/// `−∮ y dx` of a loop: the shoelace area for closed loops, and for loops winding
+/// around the period minus the area between them and `y = 0`; invariant under
+/// shifts by the period, linear in a uniform normal offset with slope the length.
+fn signed_area(l: &Loop) -> f64 {
+    (0..l.len() as isize).map(|k| -0.5 * (l.at(k + 1).x - l.at(k).x) * (l.at(k).y + l.at(k + 1).y)).sum()
+}
+
+/// The loop offset along its vertex normals (away from the interior) by the
+/// uniform distance that restores `signed_area = target`: coarsening cuts chords
+/// off convex arcs and the four-point insertions bulge out, a bias that would
+/// accumulate over many passes (one offset, exact to first order in the offset).
+fn keep_area(mut l: Loop, target: f64) -> Vec<Point<2>> {
+    let n = l.len() as isize;
+    let length: f64 = (0..n).map(|k| (l.at(k + 1) - l.at(k)).norm()).sum();
+    let delta = (target - signed_area(&l)) / length.max(f64::MIN_POSITIVE);
+    if delta != 0.0 && delta.is_finite() {
+        let normals: Vec<Point<2>> = (0..n)
+            .map(|k| {
+                let t = (l.at(k + 1) - l.at(k - 1)).normalize();
+                Point::<2>::new(t.y, -t.x)
+            })
+            .collect();
+        for (p, nrm) in l.p.iter_mut().zip(normals) {
+            *p += nrm * delta;
+        }
+    }
+    l.p
 }
 
 /// Winding number of the point `p` with respect to closed loops (each a list of
@@ -352,7 +389,10 @@ pub fn resolve_intersections(mesh: &CurveMesh, min_area: f64) -> Result<Option<C
         let eps = 1e-6 * d.norm().max(1e-12);
         let left = mesh_winding_number(mesh, mid + normal_left * eps) > 0;
         let right = mesh_winding_number(mesh, mid - normal_left * eps) > 0;
-        if left != right {
+        // on the cylinder, a clockwise closed loop would be an island of the
+        // interior's complement (a floating piece of film): dropped like a sliver
+        let island = mesh.period().is_some() && l.shift.norm() == 0.0 && loop_area(&l.p) < 0.0;
+        if left != right && !island {
             let p: Vec<Point<2>> = l.p.into_iter().zip(is_crossing).filter(|(_, c)| !c).map(|(p, _)| p).collect();
             if p.len() >= 3 {
                 kept.push(p);
@@ -510,6 +550,6 @@ mod periodic_tests {
                 assert!(loop_area(pts) > 0.01, "void area {}", loop_area(pts));
             }
         }
-        assert!((out.enclosed_measure() - before).abs() < 2e-3, "{} vs {before}", out.enclosed_measure());
+        assert!((out.enclosed_measure() - before).abs() < 6e-3, "{} vs {before}", out.enclosed_measure());
     }
 }

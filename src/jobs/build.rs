@@ -6,7 +6,7 @@ use super::spec::{ImageSource, InitialSpec, JobSpec, ProblemSpec, SpecError};
 use crate::flow::{CurveManager, FlowSettings, Problem, ScalarProduct, SurfaceManager};
 use crate::geometry::{self, CurveMesh, Mesh, MeshError, Point, SurfaceMesh};
 use crate::imaging::{decode_image, decode_slices, decode_volume, EdgeField, Grid, ImageLimits};
-use crate::problems::{CurvatureFlow, Segmentation, ShapeDesign, SurfaceDiffusion};
+use crate::problems::{CurvatureFlow, Segmentation, ShapeDesign, StressedFilm, SurfaceDiffusion};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -36,6 +36,7 @@ pub enum ProblemKind {
     SurfaceDiffusion(SurfaceDiffusion),
     Segmentation(Segmentation),
     ShapeDesign(ShapeDesign),
+    StressedFilm(StressedFilm),
 }
 
 impl ProblemKind {
@@ -45,10 +46,11 @@ impl ProblemKind {
             ProblemKind::SurfaceDiffusion(p) => p,
             ProblemKind::Segmentation(p) => p,
             ProblemKind::ShapeDesign(p) => p,
+            ProblemKind::StressedFilm(p) => p,
         }
     }
     fn physical(&self) -> bool {
-        matches!(self, ProblemKind::SurfaceDiffusion(_))
+        matches!(self, ProblemKind::SurfaceDiffusion(_) | ProblemKind::StressedFilm(_))
     }
 }
 
@@ -129,12 +131,22 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             ProblemKind::Segmentation(Segmentation { field: Arc::new(field), lambda: *lambda, epsilon: *epsilon })
         }
         // needs the initial curve: built below
-        ProblemSpec::ShapeDesign(_) => ProblemKind::CurvatureFlow(CurvatureFlow { gamma: 1.0, lambda: 0.0 }),
+        ProblemSpec::ShapeDesign(_) | ProblemSpec::StressedFilm(_) => {
+            ProblemKind::CurvatureFlow(CurvatureFlow { gamma: 1.0, lambda: 0.0 })
+        }
     };
-    let mesh = match (&spec.initial, &image) {
-        (Some(initial), _) => build_initial("initial", initial, inputs)?,
-        (None, Some(grid)) => inscribed(grid)?,
-        (None, None) => return Err(SpecError::new("initial", "missing field `initial`")),
+    let film_cell = match &spec.problem {
+        ProblemSpec::StressedFilm(fs) => Some(super::film::film_cell(fs)?),
+        _ => None,
+    };
+    let mesh = match (&spec.initial, &image, &film_cell) {
+        (initial, _, Some(cell)) => AnyMesh::Curve(super::film::initial_film(cell, initial.as_ref())?),
+        (Some(InitialSpec::Film { .. } | InitialSpec::FilmPolyline { .. }), _, None) => {
+            return Err(SpecError::new("initial.shape", "film shapes are for problem.type `stressed_film`"));
+        }
+        (Some(initial), _, None) => build_initial("initial", initial, inputs)?,
+        (None, Some(grid), None) => inscribed(grid)?,
+        (None, None, None) => return Err(SpecError::new("initial", "missing field `initial`")),
     };
     if let Some(grid) = &image {
         if grid.dimension != mesh.dimension() {
@@ -160,6 +172,13 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             let min_area = curve_manager.map_or(CurveManager::defaults_for(c).min_area, |m| m.params.min_area);
             ProblemKind::ShapeDesign(super::design::shape_design(sd, c, spec.mesh.topology_changes, min_area)?)
         }
+        (ProblemSpec::StressedFilm(fs), AnyMesh::Curve(c)) => {
+            let min_area = curve_manager.map_or(CurveManager::defaults_for(c).min_area, |m| m.params.min_area);
+            let h = c.boundary_measure() / c.num_elements() as f64;
+            let cell = film_cell.expect("film cell");
+            let meshing = StressedFilm::meshing_for(h);
+            ProblemKind::StressedFilm(StressedFilm::new(cell, fs.gamma, meshing, spec.mesh.topology_changes, min_area))
+        }
         (ProblemSpec::ShapeDesign(_), AnyMesh::Surface(_)) => {
             return Err(SpecError::new("initial", "shape design is two-dimensional: it needs a curve"));
         }
@@ -171,8 +190,13 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         ProblemKind::SurfaceDiffusion(p) => Problem::<2>::default_scalar_product(p),
         ProblemKind::Segmentation(p) => Problem::<2>::default_scalar_product(p),
         ProblemKind::ShapeDesign(p) => Problem::<2>::default_scalar_product(p),
+        ProblemKind::StressedFilm(p) => Problem::<2>::default_scalar_product(p),
     };
     let scalar_product = f.scalar_product.unwrap_or(default_product);
+    let mut curve_manager = curve_manager;
+    if let Some(m) = curve_manager.as_mut() {
+        m.params.keep_area = scalar_product == ScalarProduct::HMinus1;
+    }
     let d = FlowSettings::default();
     let default_tau = match (&problem, scalar_product) {
         // the Newton-type product scales V like a Newton step (τ = 1); far from edges
@@ -181,6 +205,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         (ProblemKind::Segmentation(_), _) => SEGMENTATION_L2_TAU,
         // the step control and backtracking pick the step; τ only caps it
         (ProblemKind::ShapeDesign(_), _) => SHAPE_DESIGN_TAU,
+        (ProblemKind::StressedFilm(_), _) => STRESSED_FILM_TAU,
         _ => d.tau,
     };
     let tau = positive("flow.tau", f.tau.unwrap_or(default_tau))?;
@@ -197,6 +222,12 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         None => d.step_control,
         Some(e) if e == 0.0 => None,
         Some(e) => Some(positive("flow.step_control", e)?),
+    };
+    let conservation = match (f.conservation, &problem) {
+        (None, ProblemKind::StressedFilm(_)) => Some(STRESSED_FILM_CONSERVATION),
+        (None, _) => None,
+        (Some(c), _) if c == 0.0 => None,
+        (Some(c), _) => Some(positive("flow.conservation", c)?),
     };
     let alpha = f.alpha.unwrap_or(d.alpha);
     if !(alpha.is_finite() && alpha >= 0.0) {
@@ -216,11 +247,16 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         step_control,
         alpha,
         beta,
-        conservation: None,
+        conservation,
     };
     let checkpoint_every = in_range("output.checkpoint_every", spec.output.checkpoint_every, 1, usize::MAX)?;
     Ok(PreparedJob { spec, mesh, problem, settings, checkpoint_every, curve_manager, surface_manager, image })
 }
+
+/// Default `flow.tau` of the stressed film (its rates are `γk⁴` for wavenumbers `k`).
+pub const STRESSED_FILM_TAU: f64 = 1e-5;
+/// Default `flow.conservation` of the stressed film.
+pub const STRESSED_FILM_CONSERVATION: f64 = 1e-6;
 
 /// Default `flow.tau` of segmentation with the Newton-type H1 product.
 pub const SEGMENTATION_NEWTON_TAU: f64 = 10.0;
@@ -428,6 +464,9 @@ fn build_initial(field: &str, s: &InitialSpec, inputs: &HashMap<String, Vec<u8>>
             let n = in_range(&at("resolution"), *resolution, 3, 4096)?;
             let n_minor = ((n as f64 * small / big).round() as usize).max(8);
             surface(field, geometry::torus(*center, big, small, n, n_minor))
+        }
+        InitialSpec::Film { .. } | InitialSpec::FilmPolyline { .. } => {
+            Err(SpecError::new(at("shape"), "film shapes are for problem.type `stressed_film`"))
         }
         InitialSpec::Mesh { file } => {
             let (name, bytes) = input(&at("file"), file, inputs)?;

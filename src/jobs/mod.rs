@@ -5,6 +5,7 @@
 
 mod build;
 mod design;
+mod film;
 mod mesh_io;
 mod results;
 mod run;
@@ -16,5 +17,5 @@ pub use results::{job_extras, state_glb, states_glb, MAX_FRAMES};
 pub use run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
 pub use spec::{
     parse_spec, BoundarySpec, ControlSpec, FlowSpec, InitialSpec, JobSpec, MeshSpec, OutputSpec, ProblemSpec,
-    ShapeDesignSpec, SpecError, TargetSpec,
+    ShapeDesignSpec, SpecError, StressedFilmSpec, TargetSpec,
 };

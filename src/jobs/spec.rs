@@ -39,6 +39,14 @@ fn one() -> f64 {
     1.0
 }
 
+fn film_mode() -> u32 {
+    1
+}
+
+fn film_resolution() -> usize {
+    128
+}
+
 /// `problem`: the functional to minimize.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
@@ -73,6 +81,43 @@ pub enum ProblemSpec {
     },
     /// Optimal shape design for the Laplace equation (2D): `J = ½∫_D (y − z_g)² + γ|Γ|`.
     ShapeDesign(ShapeDesignSpec),
+    /// The epitaxially stressed film (2D, periodic in `x`): `J = ∫_Ω |∇y|² + γ|Γ|`
+    /// under the `H^{-1}` product; `initial` is a `film` or `film_polyline`.
+    StressedFilm(StressedFilmSpec),
+}
+
+/// `problem` of `stressed_film` (paper §1.3, §4.4.2).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StressedFilmSpec {
+    /// Width `L` of the periodic cell `0 < x < L`.
+    pub length: f64,
+    /// Surface tension `γ > 0`.
+    #[serde(default = "one")]
+    pub gamma: f64,
+    /// The Dirichlet data `g` on the substrate `y = 0` and the walls; default `x`.
+    #[serde(default)]
+    pub boundary: FilmBoundarySpec,
+}
+
+/// `problem.boundary` of `stressed_film`: `g`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum FilmBoundarySpec {
+    /// `g = x` (the paper's misfit).
+    #[default]
+    X,
+    /// `g ≡ value`: no stress, plain surface diffusion.
+    Constant { value: f64 },
+    /// `g = a + b x + c y`.
+    Linear {
+        #[serde(default)]
+        a: f64,
+        #[serde(default)]
+        b: f64,
+        #[serde(default)]
+        c: f64,
+    },
 }
 
 /// `problem` of `shape_design` (paper §1.2, §4.3).
@@ -258,6 +303,24 @@ pub enum InitialSpec {
         #[serde(default)]
         resolution: Option<usize>,
     },
+    /// A film surface (stressed film): `y = height + amplitude·cos(2π mode x / L)`
+    /// over one period, `resolution` vertices.
+    Film {
+        height: f64,
+        #[serde(default)]
+        amplitude: f64,
+        #[serde(default = "film_mode")]
+        mode: u32,
+        #[serde(default = "film_resolution")]
+        resolution: usize,
+    },
+    /// A film surface through the points (one period, `0 ≤ x < L`, in `+x`; it may
+    /// overhang), resampled to `resolution` vertices if given.
+    FilmPolyline {
+        points: Vec<[f64; 2]>,
+        #[serde(default)]
+        resolution: Option<usize>,
+    },
     Union {
         parts: Vec<InitialSpec>,
     },
@@ -315,6 +378,9 @@ pub struct FlowSpec {
     pub step_control: Option<f64>,
     pub alpha: Option<f64>,
     pub beta: Option<f64>,
+    /// Largest relative change of the enclosed area/volume per step (`H^{-1}`
+    /// flows; 0 switches it off); default 1e-5 for `stressed_film`, off otherwise.
+    pub conservation: Option<f64>,
 }
 
 /// `mesh`: mesh management (paper §4.1). Switches default on; the sizes default to
@@ -371,22 +437,31 @@ impl Default for OutputSpec {
     }
 }
 
+/// Deserializes the body of `problem` (without its tag) to name the failing field.
+fn check_body<T: serde::de::DeserializeOwned>(value: &serde_json::Value) -> Result<(), SpecError> {
+    let mut body = value["problem"].clone();
+    if let Some(o) = body.as_object_mut() {
+        o.remove("type");
+    }
+    if let Err(e) = serde_path_to_error::deserialize::<_, T>(body) {
+        let path = e.path().to_string();
+        let field = if path == "." || path.is_empty() { "problem".to_string() } else { format!("problem.{path}") };
+        return Err(SpecError::new(field, e.into_inner().to_string()));
+    }
+    Ok(())
+}
+
 /// Parse a spec from JSON text. Errors name the field path.
 pub fn parse_spec(text: &str) -> Result<JobSpec, SpecError> {
     let value: serde_json::Value =
         serde_json::from_str(text).map_err(|e| SpecError::new("(document)", format!("malformed JSON: {e}")))?;
     // the fields of an internally tagged enum lose their paths in serde's buffering:
     // check the shape-design body on its own to name them (`problem.control.inner.radius`)
-    if value.pointer("/problem/type").and_then(|t| t.as_str()) == Some("shape_design") {
-        let mut body = value["problem"].clone();
-        if let Some(o) = body.as_object_mut() {
-            o.remove("type");
-        }
-        if let Err(e) = serde_path_to_error::deserialize::<_, ShapeDesignSpec>(body) {
-            let path = e.path().to_string();
-            let field = if path == "." || path.is_empty() { "problem".to_string() } else { format!("problem.{path}") };
-            return Err(SpecError::new(field, e.into_inner().to_string()));
-        }
+    let kind = value.pointer("/problem/type").and_then(|t| t.as_str());
+    if kind == Some("shape_design") {
+        check_body::<ShapeDesignSpec>(&value)?;
+    } else if kind == Some("stressed_film") {
+        check_body::<StressedFilmSpec>(&value)?;
     }
     let spec: JobSpec = serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();

@@ -33,6 +33,29 @@ pub struct StressedFilm {
     cache: Mutex<Option<(Vec<Point<2>>, Vec<[usize; 2]>, Arc<(FilmMesh, StressField)>)>>,
 }
 
+impl std::fmt::Debug for StressedFilm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("StressedFilm").field("cell", &self.cell).field("gamma", &self.gamma).finish_non_exhaustive()
+    }
+}
+
+impl Clone for StressedFilm {
+    /// A copy with an empty cache.
+    fn clone(&self) -> Self {
+        StressedFilm::new(self.cell, self.gamma, self.meshing, self.merge, self.min_area)
+    }
+}
+
+impl PartialEq for StressedFilm {
+    fn eq(&self, o: &Self) -> bool {
+        self.cell == o.cell
+            && self.gamma == o.gamma
+            && self.meshing == o.meshing
+            && self.merge == o.merge
+            && self.min_area == o.min_area
+    }
+}
+
 impl StressedFilm {
     pub fn new(cell: FilmCell, gamma: f64, meshing: MeshingOptions, merge: bool, min_area: f64) -> Self {
         StressedFilm { cell, gamma, meshing, merge, min_area, cache: Mutex::new(None) }
