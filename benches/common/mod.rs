@@ -4,6 +4,7 @@ use std::time::Instant;
 
 /// Repeat `f` until at least `budget` seconds and 3 runs, after one warm-up run
 /// (symbolic factorizations, allocations); mean seconds per run.
+#[allow(dead_code)]
 pub fn time_it(budget: f64, mut f: impl FnMut()) -> f64 {
     f();
     let start = Instant::now();

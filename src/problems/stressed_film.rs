@@ -62,7 +62,9 @@ impl StressedFilm {
     }
 
     /// Meshing options for a curve of mean segment length `h`: 28°, triangle areas
-    /// at most `(4h)²`.
+    /// at most `h²` (the field's perturbation decays over `1/k` below the surface;
+    /// with areas up to `(4h)²` the growth rate of the instability was 1.5 % lower at
+    /// 128 vertices).
     pub fn meshing_for(h: f64) -> MeshingOptions {
         MeshingOptions { min_angle_deg: 28.0, max_area: h * h, min_area: 0.0025 * h * h }
     }
