@@ -19,7 +19,9 @@ fn main() {
     println!("| vertices | first void at t | void area | film area drift | J(0) → J | steps | ms / step | peak RSS |");
     println!("|---|---|---|---|---|---|---|---|");
     for n in sizes {
-        let spec = example.replace("\"resolution\": 128", &format!("\"resolution\": {n}"));
+        let spec = example
+            .replace("\"resolution\": 128", &format!("\"resolution\": {n}"))
+            .replace("\"end_time\": 0.0068", "\"end_time\": 0.0085");
         let job = prepare(parse_spec(&spec).unwrap(), &HashMap::new()).unwrap();
         let (ProblemKind::StressedFilm(problem), AnyMesh::Curve(mesh)) = (&job.problem, &job.mesh) else {
             unreachable!()
