@@ -232,6 +232,14 @@ impl Mesh<2> {
             .collect()
     }
 
+    /// Pairs of crossing or touching segments (with periodic images on the cylinder).
+    pub fn crossings(&self) -> Vec<super::SegmentHit> {
+        match self.period {
+            Some(l) => super::find_periodic_intersections(&self.positions, &self.elements, l),
+            None => super::find_segment_intersections(&self.positions, &self.elements),
+        }
+    }
+
     /// Number of times each component of [`Mesh::cycles`] winds around the cylinder
     /// (0 for non-periodic meshes).
     pub fn windings(&self) -> Vec<i64> {

@@ -160,7 +160,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             ));
         }
     }
-    let (curve_manager, surface_manager) = match &mesh {
+    let (mut curve_manager, surface_manager) = match &mesh {
         AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
         AnyMesh::Surface(m) => {
             let pinch_off = spec.mesh.pinch_off.unwrap_or(!matches!(early, ProblemKind::Segmentation(_)));
@@ -173,8 +173,13 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             ProblemKind::ShapeDesign(super::design::shape_design(sd, c, spec.mesh.topology_changes, min_area)?)
         }
         (ProblemSpec::StressedFilm(fs), AnyMesh::Curve(c)) => {
-            let min_area = curve_manager.map_or(CurveManager::defaults_for(c).min_area, |m| m.params.min_area);
+            // voids below (1.5 h)² are dropped: slivers cut off at a crack tip have
+            // a handful of vertices and move too fast to be followed
             let h = c.boundary_measure() / c.num_elements() as f64;
+            let min_area = spec.mesh.min_area.unwrap_or(2.25 * h * h);
+            if let Some(m) = curve_manager.as_mut() {
+                m.params.min_area = min_area;
+            }
             let cell = film_cell.expect("film cell");
             let meshing = StressedFilm::meshing_for(h);
             ProblemKind::StressedFilm(StressedFilm::new(cell, fs.gamma, meshing, spec.mesh.topology_changes, min_area))
@@ -193,7 +198,6 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         ProblemKind::StressedFilm(p) => Problem::<2>::default_scalar_product(p),
     };
     let scalar_product = f.scalar_product.unwrap_or(default_product);
-    let mut curve_manager = curve_manager;
     if let Some(m) = curve_manager.as_mut() {
         m.params.keep_area = scalar_product == ScalarProduct::HMinus1;
     }

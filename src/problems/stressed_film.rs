@@ -17,7 +17,7 @@ use crate::bulk::{BulkError, MeshingOptions};
 use crate::fem::tangential_derivative;
 use crate::film::{solve_stress, FilmCell, FilmMesh, StressField};
 use crate::flow::{Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
-use crate::geometry::{find_periodic_intersections, resolve_intersections, CurveMesh, Mesh, Point};
+use crate::geometry::{resolve_intersections, CurveMesh, Mesh, Point};
 use std::sync::{Arc, Mutex};
 
 /// The stressed film in its cell.
@@ -123,8 +123,8 @@ impl<const D: usize> Problem<D> for StressedFilm {
     fn energy(&self, mesh: &Mesh<D>) -> Result<f64, ProblemError> {
         let mut c = curve(mesh)?;
         let resolved;
-        if let Some(l) = c.period() {
-            if !find_periodic_intersections(c.positions(), c.elements(), l).is_empty() {
+        if c.period().is_some() {
+            if !c.crossings().is_empty() {
                 if !self.merge {
                     return Ok(f64::INFINITY);
                 }
