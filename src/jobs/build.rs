@@ -176,7 +176,10 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             // voids below (1.5 h)² are dropped: slivers cut off at a crack tip have
             // a handful of vertices and move too fast to be followed
             let h = c.boundary_measure() / c.num_elements() as f64;
-            let min_area = spec.mesh.min_area.unwrap_or(2.25 * h * h);
+            let min_area = match spec.mesh.min_area {
+                Some(a) => positive("mesh.min_area", a)?,
+                None => 2.25 * h * h,
+            };
             if let Some(m) = curve_manager.as_mut() {
                 m.params.min_area = min_area;
             }
