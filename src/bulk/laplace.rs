@@ -152,42 +152,23 @@ fn basis_gradients(p: &[Point<2>; 3], area: f64) -> [Point<2>; 3] {
 /// has no explicit dependence.
 pub fn curve_sensitivity(mesh: &BulkMesh, fields: &DesignFields, gamma: f64) -> Vec<Point<2>> {
     let nc = mesh.curve_vertices;
-    let mut grad = form_sensitivity(&mesh.points, &mesh.triangles, nc, &fields.y, &fields.p);
-    grad.iter_mut().for_each(|g| *g = -*g);
+    let mut grad = vec![Point::<2>::zeros(); nc];
+    for t in mesh.triangles.iter().filter(|t| t.iter().any(|&v| v < nc)) {
+        let p = t.map(|i| mesh.points[i]);
+        let area = triangle_area(&mesh.points, t);
+        let g = basis_gradients(&p, area);
+        let gy: Point<2> = (0..3).map(|a| g[a] * fields.y[t[a]]).sum();
+        let gp: Point<2> = (0..3).map(|a| g[a] * fields.p[t[a]]).sum();
+        for a in (0..3).filter(|&a| t[a] < nc) {
+            grad[t[a]] -= (g[a] * gy.dot(&gp) - gp * g[a].dot(&gy) - gy * g[a].dot(&gp)) * area;
+        }
+    }
     for &[a, b] in &mesh.curve_edges {
         let d = mesh.points[a] - mesh.points[b];
         let t = d / d.norm();
         let w = 0.5 * (fields.p[a] + fields.p[b]) + gamma;
         grad[a] += t * w;
         grad[b] -= t * w;
-    }
-    grad
-}
-
-/// The gradient of `a(y, p) = ∫ ∇y·∇p` (P1 on `triangles`, nodal values fixed) with
-/// respect to the positions of the vertices `0..moving`: on a triangle `T` (where
-/// `∇y`, `∇p` are constant), moving vertex `c` by `δ` moves its points by `φ_c δ`, and
-///
-/// ```text
-/// ∂_c ∫_T ∇y·∇p = |T| [(∇y·∇p) ∇φ_c − (∇φ_c·∇y) ∇p − (∇φ_c·∇p) ∇y].
-/// ```
-fn form_sensitivity(
-    points: &[Point<2>],
-    triangles: &[[usize; 3]],
-    moving: usize,
-    y: &[f64],
-    p: &[f64],
-) -> Vec<Point<2>> {
-    let mut grad = vec![Point::<2>::zeros(); moving];
-    for t in triangles.iter().filter(|t| t.iter().any(|&v| v < moving)) {
-        let x = t.map(|i| points[i]);
-        let area = triangle_area(points, t);
-        let g = basis_gradients(&x, area);
-        let gy: Point<2> = (0..3).map(|a| g[a] * y[t[a]]).sum();
-        let gp: Point<2> = (0..3).map(|a| g[a] * p[t[a]]).sum();
-        for a in (0..3).filter(|&a| t[a] < moving) {
-            grad[t[a]] += (g[a] * gy.dot(&gp) - gp * g[a].dot(&gy) - gy * g[a].dot(&gp)) * area;
-        }
     }
     grad
 }

@@ -36,6 +36,7 @@ pub fn solve_stress(mesh: &FilmMesh, cell: &FilmCell) -> Result<StressField, Bul
             }
         }
     }
+    let full = k.clone();
     // y = g on the Dirichlet vertices; their columns move to the right-hand side
     let g: Vec<f64> =
         (0..n).map(|i| if mesh.dirichlet[i] { cell.boundary.value(mesh.points[i]) } else { 0.0 }).collect();
@@ -59,16 +60,8 @@ pub fn solve_stress(mesh: &FilmMesh, cell: &FilmCell) -> Result<StressField, Bul
     if let Some(i) = y.iter().position(|v| !v.is_finite()) {
         return Err(BulkError::Solver(format!("the film field is not finite at bulk vertex {i}")));
     }
-    let energy = mesh
-        .triangles
-        .iter()
-        .map(|t| {
-            let area = triangle_area(&mesh.points, t);
-            let x = t.map(|i| mesh.points[i]);
-            let local = cotangent_stiffness(&x, area);
-            let v = nalgebra::Vector3::new(y[t[0]], y[t[1]], y[t[2]]);
-            v.dot(&(local * v))
-        })
-        .sum();
+    let mut ky = vec![0.0; n];
+    pattern.mul(&full, &y, &mut ky);
+    let energy = y.iter().zip(&ky).map(|(a, b)| a * b).sum();
     Ok(StressField { y, energy })
 }

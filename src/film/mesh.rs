@@ -132,9 +132,4 @@ impl FilmMesh {
         let dirichlet = t.input_of.iter().map(|&i| on_wall(i)).collect();
         Ok(FilmMesh { points: t.points, triangles: t.triangles, dirichlet, curve_vertices: nc })
     }
-
-    /// Area of the film.
-    pub fn area(&self) -> f64 {
-        self.triangles.iter().map(|t| crate::bulk::triangle_area(&self.points, t)).sum()
-    }
 }

@@ -315,6 +315,7 @@ impl<'p, const D: usize> Flow<'p, D> {
         let s = &self.settings;
         let matrices = &self.matrices;
         let (ax, grad, product) = (&lin.ax, &lin.grad, &lin.product);
+        let a0 = if s.conservation.is_some() { self.mesh.enclosed_measure() } else { 0.0 };
         loop {
             if tau < s.tau_min {
                 report.stop = Some(StopReason::TauMin);
@@ -351,7 +352,7 @@ impl<'p, const D: usize> Flow<'p, D> {
                 continue;
             }
             if let Some(tol) = s.conservation {
-                let (a0, a1) = (self.mesh.enclosed_measure(), candidate.enclosed_measure());
+                let a1 = candidate.enclosed_measure();
                 // down to 4 τ_min: a fresh topological change leaves corners that
                 // need a few very short steps; below that the step is taken anyway
                 if (a1 - a0).abs() > tol * a0.abs() && tau > 4.0 * s.tau_min {

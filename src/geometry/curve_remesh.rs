@@ -4,7 +4,7 @@
 //! functions from a curve mesh to a curve mesh.
 
 use super::curves::{from_polylines, from_polylines_trusted};
-use super::intersect::find_periodic_intersections;
+use super::intersect::{cross, find_periodic_intersections};
 use super::mesh::lift_near;
 use super::{find_segment_intersections, CurveMesh, Mesh, MeshError, Point};
 
@@ -81,10 +81,6 @@ fn rebuild(like: &CurveMesh, parts: Vec<Vec<Point<2>>>, validate: bool) -> Resul
             }
         }
     }
-}
-
-fn cross(u: Point<2>, v: Point<2>) -> f64 {
-    u.x * v.y - u.y * v.x
 }
 
 fn loop_area(l: &[Point<2>]) -> f64 {

@@ -161,7 +161,8 @@ fn find_with_ids(points: &[Point<2>], segments: &[[usize; 2]], ids: Option<&[usi
     hits
 }
 
-fn cross(u: Point<2>, v: Point<2>) -> f64 {
+/// The scalar cross product `u × v`.
+pub(super) fn cross(u: Point<2>, v: Point<2>) -> f64 {
     u.x * v.y - u.y * v.x
 }
 

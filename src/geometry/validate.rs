@@ -1,5 +1,6 @@
 //! Validation of a mesh at construction (see [`super::Mesh::new`]).
 
+use super::intersect::cross;
 use super::{simplex, Mesh, MeshError, Point};
 use std::collections::HashMap;
 
@@ -46,10 +47,6 @@ pub(super) fn validate_periodic(mesh: &Mesh<2>) -> Result<(), MeshError> {
         return Err(MeshError::SelfIntersection { a: h.a, b: h.b });
     }
     Ok(())
-}
-
-fn cross(a: Point<2>, b: Point<2>) -> f64 {
-    a.x * b.y - a.y * b.x
 }
 
 /// Coordinates finite, indices in range, no repeated vertex, no degenerate or

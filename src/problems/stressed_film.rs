@@ -123,19 +123,17 @@ impl<const D: usize> Problem<D> for StressedFilm {
     fn energy(&self, mesh: &Mesh<D>) -> Result<f64, ProblemError> {
         let mut c = curve(mesh)?;
         let resolved;
-        if c.period().is_some() {
-            if !c.crossings().is_empty() {
-                if !self.merge {
-                    return Ok(f64::INFINITY);
+        if self.merge {
+            match resolve_intersections(c, self.min_area) {
+                Ok(Some(m)) => {
+                    resolved = m;
+                    c = &resolved;
                 }
-                match resolve_intersections(c, self.min_area) {
-                    Ok(Some(m)) => {
-                        resolved = m;
-                        c = &resolved;
-                    }
-                    _ => return Ok(f64::INFINITY),
-                }
+                Ok(None) => {}
+                Err(_) => return Ok(f64::INFINITY),
             }
+        } else if !c.crossings().is_empty() {
+            return Ok(f64::INFINITY);
         }
         match self.solve(c) {
             Ok(s) => Ok(s.map_or(0.0, |s| s.1.energy) + self.gamma * c.boundary_measure()),
