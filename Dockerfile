@@ -7,7 +7,9 @@ COPY migrations migrations
 COPY api api
 COPY benches benches
 COPY examples examples
-RUN cargo build --release --bin shapeflow
+# --locked: the image builds exactly the dependency versions of Cargo.lock;
+# the release profile keeps line tables for backtraces, which the image does not need
+RUN cargo build --release --locked --bin shapeflow && strip target/release/shapeflow
 
 FROM debian:bookworm-slim
 RUN useradd --system --home /data shapeflow && mkdir -p /data && chown shapeflow /data
