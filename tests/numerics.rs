@@ -276,6 +276,34 @@ fn stop_reasons_converged_cancelled_and_tau_min() {
     assert_eq!(flow.iteration(), 7);
 }
 
+/// Physical evolutions measure convergence as a rate: a stretch of steps forced far
+/// below the cap (here by a tight step control) changes the energy little per step
+/// but is no steady state; the per-step rule stops it as converged, the per-time
+/// rule runs on.
+#[test]
+fn forced_small_steps_are_not_convergence_of_a_physical_flow() {
+    let problem = SurfaceDiffusion { gamma: 1.0 };
+    let start = || ellipse([0.0, 0.0], [1.5, 1.0], 0.0, 64).unwrap();
+    let settings = |per_time: bool| FlowSettings {
+        scalar_product: ScalarProduct::HMinus1,
+        tau: 1e-2,
+        step_control: Some(1e-4),
+        tolerance: 1e-4,
+        tolerance_per_time: per_time,
+        backtracking: false,
+        max_iterations: 200,
+        ..FlowSettings::default()
+    };
+    let mut flow = Flow::new(&problem, start(), settings(false)).unwrap();
+    assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::Converged);
+    let mut flow = Flow::new(&problem, start(), settings(true)).unwrap();
+    assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::MaxIterations);
+    // and a real steady state (the circle) still converges under the per-time rule
+    let steady = FlowSettings { step_control: None, tolerance: 1e-9, max_iterations: 20_000, ..settings(true) };
+    let mut flow = Flow::new(&problem, start(), steady).unwrap();
+    assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::Converged);
+}
+
 /// Linear stability of the circle and the sphere under surface diffusion: a mode
 /// `cos kθ` on the unit circle decays at `k²(k²−1)`, a zonal `P₂` mode on the unit
 /// sphere at `l(l+1)(l−1)(l+2) = 24` (time scale of `V = Δ_Γ κ`, κ the sum of the

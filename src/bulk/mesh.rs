@@ -45,6 +45,8 @@ enum Boundary {
     Curve,
     Outer,
     Control,
+    /// A seed inside `Ω`.
+    Interior,
 }
 
 /// A P1 triangulation of `Ω`.
@@ -63,11 +65,27 @@ pub struct BulkMesh {
     /// Edges of the triangulation on `Γ` (the curve's segments, renumbered).
     pub curve_edges: Vec<[usize; 2]>,
     pub curve_vertices: usize,
+    /// Per vertex: on none of `Γ`, `Σ`, `∂D` (a refinement point or a seed).
+    pub free: Vec<bool>,
 }
 
 impl BulkMesh {
     /// Triangulates `Ω` for the curve `Γ` (admissible: see [`DesignDomain::check_curve`]).
     pub fn build(domain: &DesignDomain, curve: &CurveMesh, opts: &MeshingOptions) -> Result<BulkMesh, BulkError> {
+        Self::build_seeded(domain, curve, opts, &[])
+    }
+
+    /// [`Self::build`] with `seeds`: interior points of `Ω` inserted before the
+    /// refinement (they must lie inside `Ω`, off its boundaries). Seeding with the
+    /// free vertices of an earlier mesh, away from `Γ`, gives the same triangles
+    /// there (the Delaunay triangulation of the same points), so `J_h` does not jump
+    /// by its discretization error each time `Ω` is triangulated afresh.
+    pub fn build_seeded(
+        domain: &DesignDomain,
+        curve: &CurveMesh,
+        opts: &MeshingOptions,
+        seeds: &[Point<2>],
+    ) -> Result<BulkMesh, BulkError> {
         let (points, segments) = (curve.positions(), curve.elements());
         let n_curve = points.len();
         let outer = domain.outer();
@@ -76,8 +94,10 @@ impl BulkMesh {
         let n_outer = outer.points().len();
         let mut vertices: Vec<Point<2>> = points.to_vec();
         vertices.extend(fixed_pts.iter());
+        vertices.extend_from_slice(seeds);
         let mut class: Vec<Boundary> = vec![Boundary::Curve; n_curve];
         class.extend((0..fixed_pts.len()).map(|i| if i < n_outer { Boundary::Outer } else { Boundary::Control }));
+        class.extend(seeds.iter().map(|_| Boundary::Interior));
         let mut edges: Vec<[usize; 2]> = segments.to_vec();
         edges.extend(fixed_segs.iter().map(|s| [s[0] + n_curve, s[1] + n_curve]));
         // crossing a constraint edge of Γ or Σ flips "in Ω", one of ∂D "in D"
@@ -86,9 +106,9 @@ impl BulkMesh {
             _ => (true, false),
         };
         let t = triangulate(&vertices, &edges, flips, n_curve, opts)?;
-        let on_outer = (0..t.points.len())
-            .map(|i| t.input_of.get(i).is_some_and(|&v| v != usize::MAX && class[v] == Boundary::Outer))
-            .collect();
+        let class_of = |i: usize| t.input_of.get(i).filter(|&&v| v != usize::MAX).map(|&v| class[v]);
+        let on_outer = (0..t.points.len()).map(|i| class_of(i) == Some(Boundary::Outer)).collect();
+        let free = (0..t.points.len()).map(|i| matches!(class_of(i), None | Some(Boundary::Interior))).collect();
         let curve_edges = t
             .constraint_edges
             .iter()
@@ -102,6 +122,7 @@ impl BulkMesh {
             on_outer,
             curve_edges,
             curve_vertices: n_curve,
+            free,
         })
     }
 

@@ -61,7 +61,8 @@ pub struct FlowSettings {
     pub tau_min: f64,
     pub max_iterations: usize,
     pub end_time: Option<f64>,
-    /// Stop when `|J_{n+1} − J_n| ≤ tolerance·|J_n|` (0 disables).
+    /// Stop when `|J_{n+1} − J_n| ≤ tolerance·|J_n|` (0 disables; see also
+    /// `tolerance_per_time`).
     pub tolerance: f64,
     /// Halve τ until the energy decreases.
     pub backtracking: bool,
@@ -75,6 +76,12 @@ pub struct FlowSettings {
     /// `O(τ²)`: a larger change halves τ.
     #[serde(default)]
     pub conservation: Option<f64>,
+    /// Physical evolutions: compare the energy change with `tolerance·|J_n|·τ/τ_cap`
+    /// (`τ_cap` = [`Self::tau`]), a relative rate of change, so that a run of steps
+    /// forced far below the cap (a fresh topological change, a pinch) is not taken
+    /// for convergence.
+    #[serde(default)]
+    pub tolerance_per_time: bool,
 }
 
 impl Default for FlowSettings {
@@ -92,6 +99,7 @@ impl Default for FlowSettings {
             alpha: 1e-2,
             beta: 1.0,
             conservation: None,
+            tolerance_per_time: false,
         }
     }
 }
@@ -379,7 +387,8 @@ impl<'p, const D: usize> Flow<'p, D> {
             self.energy = energy;
             self.iteration += 1;
             report.accepted = true;
-            if s.tolerance > 0.0 && (previous - energy).abs() <= s.tolerance * previous.abs() {
+            let scale = if s.tolerance_per_time { tau / s.tau } else { 1.0 };
+            if s.tolerance > 0.0 && (previous - energy).abs() <= s.tolerance * previous.abs() * scale {
                 report.stop = Some(StopReason::Converged);
             }
             if self.manage_mesh()? {

@@ -52,7 +52,7 @@ impl Loop {
 }
 
 fn loops_of(mesh: &CurveMesh) -> Vec<Loop> {
-    mesh.lifted_cycles().into_iter().map(|(p, shift)| Loop { p, shift }).collect()
+    mesh.cycles().iter().map(|c| lifted_loop(mesh, c)).collect()
 }
 
 /// A curve mesh from polylines, periodic like `like`.
@@ -87,31 +87,44 @@ fn loop_area(l: &[Point<2>]) -> f64 {
     (0..l.len()).map(|k| 0.5 * cross(l[k], l[(k + 1) % l.len()])).sum()
 }
 
+/// Lengths of the segments of a loop: `len[i] = |X_{i+1} − X_i|` (the last one the
+/// closing segment).
+fn segment_lengths(l: &Loop) -> Vec<f64> {
+    let n = l.len();
+    (0..n).map(|i| (if i + 1 == n { l.p[0] + l.shift } else { l.p[i + 1] } - l.p[i]).norm()).collect()
+}
+
 /// Turning angle at every vertex of a loop, measured as the chord `|t₁ − t₂|` of the
 /// two adjacent unit tangents (`2 sin(β/2)`: the angle itself for small angles,
-/// monotone in it, and free of trigonometric calls).
-fn turning_angles(l: &Loop) -> Vec<f64> {
-    let n = l.len() as isize;
-    let unit = |v: Point<2>| {
-        let len = v.norm();
-        if len > 0.0 {
-            v / len
+/// monotone in it, and free of trigonometric calls); `len` from [`segment_lengths`].
+fn turning_angles(l: &Loop, len: &[f64]) -> Vec<f64> {
+    let n = l.len();
+    let tangent = |i: usize| {
+        let d = if i + 1 == n { l.p[0] + l.shift } else { l.p[i + 1] } - l.p[i];
+        if len[i] > 0.0 {
+            d / len[i]
         } else {
-            v
+            d
         }
     };
-    let t: Vec<Point<2>> = (0..n).map(|i| unit(l.at(i + 1) - l.at(i))).collect();
-    (0..n as usize).map(|i| (t[i] - t[(i + n as usize - 1) % n as usize]).norm()).collect()
+    let mut beta = Vec::with_capacity(n);
+    let mut before = tangent(n - 1);
+    for i in 0..n {
+        let t = tangent(i);
+        beta.push((t - before).norm());
+        before = t;
+    }
+    beta
 }
 
 /// Desired segment length at every vertex: `ε / κ_S` with `κ_S = β_S / h_S`, clamped
 /// to `[h_min, h_max]`.
-fn desired_sizes(l: &Loop, s: &CurveRemeshSettings) -> Vec<f64> {
-    let beta = turning_angles(l);
-    (0..l.len() as isize)
+fn desired_sizes(len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> Vec<f64> {
+    let n = len.len();
+    (0..n)
         .map(|i| {
-            let h = 0.5 * ((l.at(i) - l.at(i - 1)).norm() + (l.at(i + 1) - l.at(i)).norm());
-            let kappa = beta[i as usize] / h.max(f64::MIN_POSITIVE);
+            let h = 0.5 * (len[if i == 0 { n - 1 } else { i - 1 }] + len[i]);
+            let kappa = beta[i] / h.max(f64::MIN_POSITIVE);
             (s.epsilon / kappa.max(1e-300)).clamp(s.h_min, s.h_max)
         })
         .collect()
@@ -125,31 +138,64 @@ fn desired_sizes(l: &Loop, s: &CurveRemeshSettings) -> Vec<f64> {
 /// exactly (up to round-off).
 pub fn regularize_curve(mesh: &CurveMesh, sweeps: usize, sizes: Option<&CurveRemeshSettings>) -> CurveMesh {
     let mut pos = mesh.positions().to_vec();
-    for (cyc, l) in mesh.cycles().iter().zip(loops_of(mesh)) {
-        let n = cyc.len();
+    let cycles = mesh.cycles();
+    for cyc in &cycles {
+        let mut l = lifted_loop(mesh, cyc);
+        let n = l.len();
+        if n < 3 {
+            continue;
+        }
         let hd = match sizes {
-            Some(s) => desired_sizes(&l, s),
+            Some(s) => {
+                let len = segment_lengths(&l);
+                desired_sizes(&len, &turning_angles(&l, &len), s)
+            }
             None => vec![1.0; n],
         };
+        let start = l.p.clone();
         for _ in 0..sweeps {
             for k in 0..n {
-                let (ip, i, inx) = (cyc[(k + n - 1) % n], cyc[k], cyc[(k + 1) % n]);
-                let (prev, next) = (mesh.lift(pos[ip], &pos[i]), mesh.lift(pos[inx], &pos[i]));
+                let (kp, kn) = (if k == 0 { n - 1 } else { k - 1 }, if k + 1 == n { 0 } else { k + 1 });
+                let prev = if k == 0 { l.p[kp] - l.shift } else { l.p[kp] };
+                let next = if k + 1 == n { l.p[kn] + l.shift } else { l.p[kn] };
                 let chord = next - prev;
                 let len = chord.norm();
                 if len <= 0.0 {
                     continue;
                 }
                 let t = chord / len;
-                let (hp, hi, hn) = (hd[(k + n - 1) % n], hd[k], hd[(k + 1) % n]);
+                let (hp, hi, hn) = (hd[kp], hd[k], hd[kn]);
                 let lambda = (hp + hi) / (hp + 2.0 * hi + hn);
                 let target = prev + chord * lambda;
-                let alpha = (target - pos[i]).dot(&t);
-                pos[i] += t * alpha;
+                let alpha = (target - l.p[k]).dot(&t);
+                l.p[k] += t * alpha;
             }
+        }
+        // back to the mesh's own representatives (lifting shifted some by periods)
+        for ((&v, p), p0) in cyc.iter().zip(&l.p).zip(&start) {
+            pos[v] += p - p0;
         }
     }
     mesh.with_positions(pos)
+}
+
+/// The cycle `cyc` of `mesh` as a loop lifted vertex by vertex.
+fn lifted_loop(mesh: &CurveMesh, cyc: &[usize]) -> Loop {
+    let x = mesh.positions();
+    let mut p: Vec<Point<2>> = Vec::with_capacity(cyc.len());
+    if mesh.period().is_none() {
+        p.extend(cyc.iter().map(|&v| x[v]));
+        return Loop { p, shift: Point::<2>::zeros() };
+    }
+    for &v in cyc {
+        let q = match p.last() {
+            Some(prev) => mesh.lift(x[v], prev),
+            None => x[v],
+        };
+        p.push(q);
+    }
+    let shift = mesh.lift(p[0], p.last().unwrap()) - p[0];
+    Loop { p, shift }
 }
 
 /// Refinement and coarsening. A segment is split (at the four-point subdivision
@@ -163,43 +209,54 @@ pub fn adapt_curve(mesh: &CurveMesh, s: &CurveRemeshSettings) -> Result<Option<C
     let mut out = Vec::new();
     for l in loops_of(mesh) {
         let n = l.len();
-        let beta = turning_angles(&l);
-        let len: Vec<f64> = (0..n as isize).map(|i| (l.at(i + 1) - l.at(i)).norm()).collect();
-        let indicator = |i: usize| beta[i] * len[i].max(len[(i + n - 1) % n]);
+        let area = if s.keep_area { signed_area(&l) } else { 0.0 };
+        let len = segment_lengths(&l);
+        let beta = turning_angles(&l, &len);
+        let before = |i: usize| if i == 0 { n - 1 } else { i - 1 };
         // coarsening: never two neighbours in one pass, keep at least 8 vertices
         let mut keep = vec![true; n];
         let mut removed = 0;
         for i in 0..n {
-            if n - removed <= 8 || !keep[(i + n - 1) % n] {
+            if n - removed <= 8 || !keep[before(i)] {
                 continue;
             }
-            let short = len[i].min(len[(i + n - 1) % n]) < s.h_min;
-            let flat = indicator(i) < s.epsilon / 8.0;
-            let merged = len[i] + len[(i + n - 1) % n];
-            if (short || flat) && merged <= s.h_max && (i + 1 < n || keep[0]) {
+            let (lp, li) = (len[before(i)], len[i]);
+            let short = li.min(lp) < s.h_min;
+            let flat = beta[i] * li.max(lp) < s.epsilon / 8.0;
+            if (short || flat) && li + lp <= s.h_max && (i + 1 < n || keep[0]) {
                 keep[i] = false;
                 removed += 1;
             }
         }
-        let l2 = Loop { p: (0..n).filter(|&i| keep[i]).map(|i| l.p[i]).collect(), shift: l.shift };
-        changed |= removed > 0;
+        let (l2, len2, beta2) = if removed > 0 {
+            let l2 = Loop { p: (0..n).filter(|&i| keep[i]).map(|i| l.p[i]).collect(), shift: l.shift };
+            let len2 = segment_lengths(&l2);
+            let beta2 = turning_angles(&l2, &len2);
+            (l2, len2, beta2)
+        } else {
+            (l, len, beta)
+        };
         // refinement
-        let m = l2.len() as isize;
-        let beta2 = turning_angles(&l2);
-        let mut refined = Vec::with_capacity(2 * m as usize);
+        let m = l2.len();
+        let mut refined = Vec::with_capacity(m + m / 4);
+        let mut split = false;
         for i in 0..m {
-            let (a, b) = (l2.at(i), l2.at(i + 1));
-            let h = (b - a).norm();
-            refined.push(a);
-            let curved = beta2[i as usize].max(beta2[((i + 1) % m) as usize]) * h > s.epsilon && h > 2.0 * s.h_min;
+            let h = len2[i];
+            refined.push(l2.p[i]);
+            let curved = beta2[i].max(beta2[if i + 1 == m { 0 } else { i + 1 }]) * h > s.epsilon && h > 2.0 * s.h_min;
             if h > s.h_max || curved {
-                refined.push((a * 9.0 + b * 9.0 - l2.at(i - 1) - l2.at(i + 2)) / 16.0);
-                changed = true;
+                let k = i as isize;
+                refined.push((l2.at(k) * 9.0 + l2.at(k + 1) * 9.0 - l2.at(k - 1) - l2.at(k + 2)) / 16.0);
+                split = true;
             }
         }
+        if removed == 0 && !split {
+            out.push(refined);
+            continue;
+        }
+        changed = true;
         if s.keep_area {
-            let before = signed_area(&l);
-            out.push(keep_area(Loop { p: refined, shift: l.shift }, before));
+            out.push(keep_area(Loop { p: refined, shift: l2.shift }, area));
         } else {
             out.push(refined);
         }

@@ -119,6 +119,9 @@ pub struct ShapeDesign {
     /// The curve connectivity and bulk mesh of the state the last shape gradient was
     /// taken at (the current step's), which trial curves follow.
     base: Mutex<Option<(Vec<[usize; 2]>, Arc<BulkMesh>)>>,
+    /// The free vertices of the first triangulation: seeds of the later ones, away
+    /// from `Γ` (see [`BulkMesh::build_seeded`]).
+    background: Mutex<Option<Vec<Point<2>>>>,
 }
 
 impl std::fmt::Debug for ShapeDesign {
@@ -168,6 +171,7 @@ impl ShapeDesign {
             gradient: GradientKind::Discrete,
             cache: Mutex::new(None),
             base: Mutex::new(None),
+            background: Mutex::new(None),
         }
     }
 
@@ -195,7 +199,7 @@ impl ShapeDesign {
             .and_then(|(_, bulk)| bulk.with_curve_positions(mesh.positions(), FOLLOW_MIN_ANGLE));
         let bulk = match followed {
             Some(b) => b,
-            None => BulkMesh::build(&self.domain, mesh, &self.meshing)?,
+            None => self.triangulate(mesh)?,
         };
         let target = |x: Point<2>| self.target.value(x);
         let fields = solve_design_fields(&bulk, &target)?;
@@ -216,9 +220,60 @@ impl ShapeDesign {
         Ok(solution)
     }
 
+    /// `Ω` triangulated afresh for `curve`, seeded with the first triangulation's
+    /// free vertices that lie in `Ω` at least two segment lengths away from `Γ`
+    /// (unseeded if that fails).
+    fn triangulate(&self, curve: &CurveMesh) -> Result<BulkMesh, BulkError> {
+        let mut background = self.background.lock().expect("background");
+        if let Some(points) = background.as_ref() {
+            let seeds = seeds_away_from(points, curve);
+            if let Ok(bulk) = BulkMesh::build_seeded(&self.domain, curve, &self.meshing, &seeds) {
+                return Ok(bulk);
+            }
+            return BulkMesh::build(&self.domain, curve, &self.meshing);
+        }
+        let bulk = BulkMesh::build(&self.domain, curve, &self.meshing)?;
+        *background = Some(bulk.points.iter().zip(&bulk.free).filter(|(_, &f)| f).map(|(p, _)| *p).collect());
+        Ok(bulk)
+    }
+
     fn to_problem_error(e: BulkError) -> ProblemError {
         ProblemError(e.to_string())
     }
+}
+
+/// The points of `background` outside the holes of `curve` (winding number 0) and
+/// farther than `2 h_max` from it (`h_max` its longest segment).
+fn seeds_away_from(background: &[Point<2>], curve: &CurveMesh) -> Vec<Point<2>> {
+    let x = curve.positions();
+    let segments: Vec<(Point<2>, Point<2>)> = curve.elements().iter().map(|s| (x[s[0]], x[s[1]])).collect();
+    let h_max = segments.iter().map(|(a, b)| (b - a).norm()).fold(0.0, f64::max);
+    let delta = 2.0 * h_max;
+    let (mut lo, mut hi) = (Point::<2>::repeat(f64::INFINITY), Point::<2>::repeat(f64::NEG_INFINITY));
+    for p in x {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let (lo, hi) = (lo.add_scalar(-delta), hi.add_scalar(delta));
+    let keep = |p: &Point<2>| {
+        if p.x < lo.x || p.y < lo.y || p.x > hi.x || p.y > hi.y {
+            return true;
+        }
+        let mut winding = 0i32;
+        for (a, b) in &segments {
+            let (ab, ap) = (b - a, p - a);
+            let t = (ap.dot(&ab) / ab.norm_squared().max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+            if (ap - ab * t).norm_squared() <= delta * delta {
+                return false;
+            }
+            if (a.y <= p.y) != (b.y <= p.y) {
+                let cross = ab.x * ap.y - ab.y * ap.x;
+                winding += if b.y > a.y { i32::from(cross > 0.0) } else { -i32::from(cross < 0.0) };
+            }
+        }
+        winding == 0
+    };
+    background.iter().filter(|p| keep(p)).copied().collect()
 }
 
 /// The curve behind a mesh of dimension `D` (shape design is two-dimensional; the
