@@ -61,14 +61,23 @@ pub fn regularize_surface(mesh: &SurfaceMesh, sweeps: usize) -> SurfaceMesh {
             let mut c = Point::<3>::zeros();
             let mut w = 0.0;
             let mut g = Point::<3>::zeros();
+            normals.clear();
             for &t in star {
                 let tr = tris[t];
-                let k = tr.iter().position(|&x| x == v).unwrap();
-                let (j, l) = (tr[(k + 1) % 3], tr[(k + 2) % 3]);
-                let area = 0.5 * tri_normal(&p, &tr).norm();
+                let (j, l) = if tr[0] == v {
+                    (tr[1], tr[2])
+                } else if tr[1] == v {
+                    (tr[2], tr[0])
+                } else {
+                    (tr[0], tr[1])
+                };
+                // (X_j − X_v) × (X_l − X_v): the triangle's normal times twice its area
+                let n = (p[j] - p[v]).cross(&(p[l] - p[v]));
+                let area = 0.5 * n.norm();
                 c += (p[v] + p[j] + p[l]) * (area / 3.0);
                 w += area;
                 g += p[j].cross(&p[l]) / 6.0;
+                normals.push(n);
             }
             let gg = g.norm_squared();
             if w <= 0.0 || gg <= 0.0 {
@@ -77,8 +86,6 @@ pub fn regularize_surface(mesh: &SurfaceMesh, sweeps: usize) -> SurfaceMesh {
             let mut d = c / w - p[v];
             d -= g * (d.dot(&g) / gg);
             let old = p[v];
-            normals.clear();
-            normals.extend(star.iter().map(|&t| tri_normal(&p, &tris[t])));
             p[v] = old + d;
             let ok = star.iter().zip(&normals).all(|(&t, n0)| {
                 let n1 = tri_normal(&p, &tris[t]);
@@ -156,6 +163,27 @@ pub fn surface_edges(n: usize, tris: &[[usize; 3]]) -> Vec<SurfaceEdge> {
     out
 }
 
+/// Unit normals of the triangles.
+fn unit_normals(p: &[Point<3>], tris: &[[usize; 3]]) -> Vec<Point<3>> {
+    tris.iter().map(|t| tri_normal(p, t).normalize()).collect()
+}
+
+/// Per triangle: its vertex with an angle wider than `max_deg`, or `usize::MAX`.
+fn wide_vertices(p: &[Point<3>], tris: &[[usize; 3]], max_deg: f64) -> Vec<usize> {
+    let cos_max = max_deg.to_radians().cos();
+    tris.iter()
+        .map(|t| {
+            (0..3)
+                .find(|&k| {
+                    let (c, a, b) = (p[t[k]], p[t[(k + 1) % 3]], p[t[(k + 2) % 3]]);
+                    let (u, w) = (a - c, b - c);
+                    u.dot(&w) < cos_max * u.norm() * w.norm()
+                })
+                .map_or(usize::MAX, |k| t[k])
+        })
+        .collect()
+}
+
 /// Index of edge `{a, b}` in a sorted edge list.
 fn edge_index(edges: &[SurfaceEdge], a: usize, b: usize) -> Option<usize> {
     let key = (a.min(b), a.max(b));
@@ -188,8 +216,10 @@ pub fn edge_statistics(mesh: &SurfaceMesh) -> (f64, f64, f64) {
 /// exact on a sphere with exact normals. Triangles with one, two or three split edges
 /// are divided into two, three or four.
 fn split_edges(p: &mut Vec<Point<3>>, tris: &[[usize; 3]], s: &SurfaceRemeshSettings) -> Option<Vec<[usize; 3]>> {
-    let normals = vertex_normals(p, tris);
     let edges = surface_edges(p.len(), tris);
+    let unit = unit_normals(p, tris);
+    let wide = wide_vertices(p, tris, s.max_angle_deg);
+    let mut normals: Option<Vec<Point<3>>> = None;
     let mut mid = vec![usize::MAX; edges.len()];
     let mut count = 0;
     for (k, edge) in edges.iter().enumerate() {
@@ -199,15 +229,13 @@ fn split_edges(p: &mut Vec<Point<3>>, tris: &[[usize; 3]], s: &SurfaceRemeshSett
         }
         let ts = &edge.t;
         let h = (p[b] - p[a]).norm();
-        let (n0, n1) = (tri_normal(p, &tris[ts[0]]).normalize(), tri_normal(p, &tris[ts[1]]).normalize());
-        let beta = n0.dot(&n1).clamp(-1.0, 1.0).acos();
-        let cos_max = s.max_angle_deg.to_radians().cos();
-        let wide = ts.iter().any(|&t| {
-            let c = tris[t].iter().copied().find(|&x| x != a && x != b).unwrap();
-            let (u, w) = (p[a] - p[c], p[b] - p[c]);
-            u.dot(&w) < cos_max * u.norm() * w.norm()
-        });
-        if h > s.h_max || (h * beta > s.epsilon && h > 2.0 * s.h_min) || wide {
+        // the edge faces a wide angle of one of its triangles
+        let faces_wide = ts.iter().any(|&t| wide[t] != usize::MAX && wide[t] != a && wide[t] != b);
+        let split = h > s.h_max
+            || faces_wide
+            || (h > 2.0 * s.h_min && h * unit[ts[0]].dot(&unit[ts[1]]).clamp(-1.0, 1.0).acos() > s.epsilon);
+        if split {
+            let normals = normals.get_or_insert_with(|| vertex_normals(p, tris));
             let e = p[b] - p[a];
             let nm = (normals[a] + normals[b]).normalize();
             let lift = e.dot(&(normals[b] - normals[a])) / 8.0;
@@ -266,22 +294,30 @@ fn split_edges(p: &mut Vec<Point<3>>, tris: &[[usize; 3]], s: &SurfaceRemeshSett
 /// and pass.
 fn collapse_edges(p: &mut [Point<3>], tris: &mut Vec<[usize; 3]>, s: &SurfaceRemeshSettings) -> bool {
     let n = p.len();
-    let (start, list) = vertex_triangles(n, tris);
     let edges = surface_edges(n, tris);
+    let unit = unit_normals(p, tris);
     let mut flat_vertex = vec![true; n];
     for e in &edges {
         let (a, b, ts) = (e.a, e.b, e.t);
-        if ts[1] != usize::MAX {
-            let (n0, n1) = (tri_normal(p, &tris[ts[0]]).normalize(), tri_normal(p, &tris[ts[1]]).normalize());
-            let beta = n0.dot(&n1).clamp(-1.0, 1.0).acos();
+        if ts[1] != usize::MAX && (flat_vertex[a] || flat_vertex[b]) {
+            let beta = unit[ts[0]].dot(&unit[ts[1]]).clamp(-1.0, 1.0).acos();
             if (p[b] - p[a]).norm() * beta >= s.epsilon / 8.0 {
                 flat_vertex[a] = false;
                 flat_vertex[b] = false;
             }
         }
     }
-    let mut keys: Vec<(f64, usize, usize)> = edges.iter().map(|e| ((p[e.b] - p[e.a]).norm(), e.a, e.b)).collect();
+    // the candidates, shortest first
+    let mut keys: Vec<(f64, usize, usize)> = edges
+        .iter()
+        .map(|e| ((p[e.b] - p[e.a]).norm(), e.a, e.b))
+        .filter(|&(h, a, b)| h < s.h_min || (flat_vertex[a] && flat_vertex[b] && h < 0.5 * s.h_max))
+        .collect();
+    if keys.is_empty() {
+        return false;
+    }
     keys.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+    let (start, list) = vertex_triangles(n, tris);
     let mut locked = vec![false; n];
     let mut dead = vec![false; tris.len()];
     let mut remap: Vec<usize> = (0..n).collect();
@@ -389,14 +425,14 @@ fn flip_edges(p: &[Point<3>], tris: &mut [[usize; 3]], s: &SurfaceRemeshSettings
         let c = t0[(k0 + 2) % 3];
         let Some(k1) = (0..3).find(|&k| t1[k] == b && t1[(k + 1) % 3] == a) else { continue };
         let d = t1[(k1 + 2) % 3];
-        if c == d || edge_index(&edges, c, d).is_some() || added.contains(&(c.min(d), c.max(d))) {
-            continue;
-        }
         let dev =
             |va: i64, vb: i64, vc: i64, vd: i64| (va - 6).pow(2) + (vb - 6).pow(2) + (vc - 6).pow(2) + (vd - 6).pow(2);
         let before = dev(valence[a], valence[b], valence[c], valence[d]);
         let after = dev(valence[a] - 1, valence[b] - 1, valence[c] + 1, valence[d] + 1);
         if after >= before {
+            continue;
+        }
+        if c == d || edge_index(&edges, c, d).is_some() || added.contains(&(c.min(d), c.max(d))) {
             continue;
         }
         let (n0, n1) = (tri_normal(p, &t0), tri_normal(p, &t1));
