@@ -25,7 +25,7 @@
 use crate::bulk::{curve_sensitivity, solve_design_fields, BulkError, BulkMesh, DesignDomain, MeshingOptions};
 use crate::fem::{tangential_derivative, Weight};
 use crate::flow::{H1Weights, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
-use crate::geometry::{resolve_intersections, CurveMesh, Mesh, Point};
+use crate::geometry::{resolve_intersections, winding_number, CurveMesh, Mesh, Point};
 use serde::{Deserialize, Serialize};
 use std::sync::{Arc, Mutex};
 
@@ -247,33 +247,23 @@ impl ShapeDesign {
 fn seeds_away_from(background: &[Point<2>], curve: &CurveMesh) -> Vec<Point<2>> {
     let x = curve.positions();
     let segments: Vec<(Point<2>, Point<2>)> = curve.elements().iter().map(|s| (x[s[0]], x[s[1]])).collect();
-    let h_max = segments.iter().map(|(a, b)| (b - a).norm()).fold(0.0, f64::max);
-    let delta = 2.0 * h_max;
+    let loops: Vec<Vec<Point<2>>> = curve.lifted_cycles().into_iter().map(|(l, _)| l).collect();
+    let delta = 2.0 * segments.iter().map(|(a, b)| (b - a).norm()).fold(0.0, f64::max);
     let (mut lo, mut hi) = (Point::<2>::repeat(f64::INFINITY), Point::<2>::repeat(f64::NEG_INFINITY));
     for p in x {
         lo = lo.inf(p);
         hi = hi.sup(p);
     }
     let (lo, hi) = (lo.add_scalar(-delta), hi.add_scalar(delta));
-    let keep = |p: &Point<2>| {
-        if p.x < lo.x || p.y < lo.y || p.x > hi.x || p.y > hi.y {
-            return true;
-        }
-        let mut winding = 0i32;
-        for (a, b) in &segments {
+    let near = |p: &Point<2>| {
+        segments.iter().any(|(a, b)| {
             let (ab, ap) = (b - a, p - a);
             let t = (ap.dot(&ab) / ab.norm_squared().max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
-            if (ap - ab * t).norm_squared() <= delta * delta {
-                return false;
-            }
-            if (a.y <= p.y) != (b.y <= p.y) {
-                let cross = ab.x * ap.y - ab.y * ap.x;
-                winding += if b.y > a.y { i32::from(cross > 0.0) } else { -i32::from(cross < 0.0) };
-            }
-        }
-        winding == 0
+            (ap - ab * t).norm_squared() <= delta * delta
+        })
     };
-    background.iter().filter(|p| keep(p)).copied().collect()
+    let outside_box = |p: &Point<2>| p.x < lo.x || p.y < lo.y || p.x > hi.x || p.y > hi.y;
+    background.iter().filter(|p| outside_box(p) || (!near(p) && winding_number(&loops, **p) == 0)).copied().collect()
 }
 
 /// The curve behind a mesh of dimension `D` (shape design is two-dimensional; the
@@ -384,6 +374,41 @@ mod tests {
         // p̄ = osc gives h²
         assert!((alpha_84(0.1, 0.3, 0.04) - 0.04).abs() < 1e-12);
         assert_eq!(alpha_84(0.0, 0.0, 0.01), 1.0);
+    }
+
+    /// A fresh triangulation seeded from an earlier one keeps the earlier triangles
+    /// over `D` exactly; an unseeded one does not.
+    #[test]
+    fn seeded_triangulation_keeps_the_far_field() {
+        use crate::bulk::Polygon;
+        use crate::geometry::circle;
+        use std::collections::BTreeSet;
+        let ring = |what: &str, r: f64, n: usize| Polygon::from_curve(what, circle([0.0, 0.0], r, n)).unwrap();
+        let domain = DesignDomain::new(ring("outer", 3.0, 96), ring("inner", 2.0, 64), ring("outer", 2.5, 80)).unwrap();
+        let opts = MeshingOptions::for_domain(&domain, 0.1);
+        let first = BulkMesh::build(&domain, &circle([0.0, 0.0], 0.5, 32).unwrap(), &opts).unwrap();
+        let background: Vec<Point<2>> =
+            first.points.iter().zip(&first.free).filter(|(_, &f)| f).map(|(p, _)| *p).collect();
+        let over_d = |m: &BulkMesh| -> BTreeSet<[[u64; 2]; 3]> {
+            m.triangles
+                .iter()
+                .zip(&m.in_control)
+                .filter(|(_, &c)| c)
+                .map(|(t, _)| {
+                    let mut v = t.map(|i| [m.points[i].x.to_bits(), m.points[i].y.to_bits()]);
+                    v.sort();
+                    v
+                })
+                .collect()
+        };
+        let moved = circle([0.05, -0.03], 0.6, 40).unwrap();
+        let seeds = seeds_away_from(&background, &moved);
+        assert!(seeds.len() < background.len(), "seeds near the new curve are dropped");
+        assert!(seeds.iter().all(|p| (p - Point::<2>::new(0.05, -0.03)).norm() > 0.6));
+        let seeded = BulkMesh::build_seeded(&domain, &moved, &opts, &seeds).unwrap();
+        assert_eq!(over_d(&seeded), over_d(&first));
+        let fresh = BulkMesh::build(&domain, &moved, &opts).unwrap();
+        assert_ne!(over_d(&fresh), over_d(&first));
     }
 
     #[test]
