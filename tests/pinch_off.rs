@@ -56,8 +56,9 @@ fn prism_surface_diffusion_reaches_pinch_off() {
     );
     assert_eq!(out.stop, StopReason::PinchOff);
     assert!(neck < 0.1, "a thin neck at the centre: {neck}");
-    // the acceptance asks for 10° up to the pinch; in the last 0.1 % of the time the
-    // neck's triangles dip to about 8° (an open item, see README)
+    // the acceptance asks for 10° up to the pinch; in the last 0.15 % of the time the
+    // neck's triangles dip below it (to 6.7° when sampled every step; this test
+    // samples every 25 steps) — an open item, see README
     assert!(min_angle > 5.0, "minimum angle {min_angle}");
     assert!(early > 25.0, "minimum angle before the final collapse {early}");
     assert!(w.vertices.0 >= 1000 && w.vertices.1 <= 2500, "vertex counts of the paper's order: {:?}", w.vertices);
