@@ -381,7 +381,8 @@ impl<'p, const D: usize> Flow<'p, D> {
                 continue;
             }
             let previous = self.energy;
-            self.mesh = candidate;
+            let before = std::mem::replace(&mut self.mesh, candidate);
+            let (time, last_tau) = (self.time, self.tau);
             self.time += tau;
             self.tau = tau;
             self.energy = energy;
@@ -392,6 +393,11 @@ impl<'p, const D: usize> Flow<'p, D> {
                 report.stop = Some(StopReason::Converged);
             }
             if self.manage_mesh()? {
+                // a neck collapsed during this step, which the mesh no longer
+                // resolves: the run ends on the last good state, before the step
+                (self.mesh, self.time, self.tau, self.energy) = (before, time, last_tau, previous);
+                self.iteration -= 1;
+                report.accepted = false;
                 report.stop = Some(StopReason::PinchOff);
             }
             return Ok(report);

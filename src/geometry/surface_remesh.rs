@@ -184,6 +184,20 @@ fn wide_vertices(p: &[Point<3>], tris: &[[usize; 3]], max_deg: f64) -> Vec<usize
         .collect()
 }
 
+/// Per triangle: has it an angle below `min_deg`?
+fn thin_triangles(p: &[Point<3>], tris: &[[usize; 3]], min_deg: f64) -> Vec<bool> {
+    let cos_min = min_deg.to_radians().cos();
+    tris.iter()
+        .map(|t| {
+            (0..3).any(|k| {
+                let (c, a, b) = (p[t[k]], p[t[(k + 1) % 3]], p[t[(k + 2) % 3]]);
+                let (u, w) = (a - c, b - c);
+                u.dot(&w) > cos_min * u.norm() * w.norm()
+            })
+        })
+        .collect()
+}
+
 /// Index of edge `{a, b}` in a sorted edge list.
 fn edge_index(edges: &[SurfaceEdge], a: usize, b: usize) -> Option<usize> {
     let key = (a.min(b), a.max(b));
@@ -404,6 +418,7 @@ fn flip_edges(p: &[Point<3>], tris: &mut [[usize; 3]], s: &SurfaceRemeshSettings
         valence[e.a] += 1;
         valence[e.b] += 1;
     }
+    let thin = thin_triangles(p, tris, 15.0);
     // edges created by earlier flips of this pass (removed ones need no record: a
     // flipped edge's triangles are touched and not considered again)
     let mut added: HashSet<(usize, usize)> = HashSet::new();
@@ -429,27 +444,38 @@ fn flip_edges(p: &[Point<3>], tris: &mut [[usize; 3]], s: &SurfaceRemeshSettings
             |va: i64, vb: i64, vc: i64, vd: i64| (va - 6).pow(2) + (vb - 6).pow(2) + (vc - 6).pow(2) + (vd - 6).pow(2);
         let before = dev(valence[a], valence[b], valence[c], valence[d]);
         let after = dev(valence[a] - 1, valence[b] - 1, valence[c] + 1, valence[d] + 1);
-        if after >= before {
+        // a pair with a sliver (an angle below 15°) may also flip across a sharper
+        // crease (up to 60°), if that widens its smallest angle
+        let sliver = thin[ts[0]] || thin[ts[1]];
+        if after >= before && !sliver {
             continue;
         }
         if c == d || edge_index(&edges, c, d).is_some() || added.contains(&(c.min(d), c.max(d))) {
             continue;
         }
         let (n0, n1) = (tri_normal(p, &t0), tri_normal(p, &t1));
-        if n0.dot(&n1) < (20f64).to_radians().cos() * n0.norm() * n1.norm() {
+        let crease = if after < before { 20f64 } else { 60f64 };
+        if n0.dot(&n1) < crease.to_radians().cos() * n0.norm() * n1.norm() {
             continue;
         }
         let new0 = [c, a, d];
         let new1 = [d, b, c];
+        let up = n0 / n0.norm() + n1 / n1.norm();
+        let angles = |t: &[usize; 3]| {
+            [angle_at(p, t[0], t[1], t[2]), angle_at(p, t[1], t[2], t[0]), angle_at(p, t[2], t[0], t[1])]
+        };
         let good = [new0, new1].iter().all(|t| {
             let nt = tri_normal(p, t);
-            nt.norm() > 1e-12 * n0.norm()
-                && nt.dot(&n0) > 0.0
-                && angle_at(p, t[0], t[1], t[2]).max(angle_at(p, t[1], t[2], t[0])).max(angle_at(p, t[2], t[0], t[1]))
-                    <= s.max_angle_deg
+            nt.norm() > 1e-12 * n0.norm() && nt.dot(&up) > 0.0 && angles(t).iter().all(|&x| x <= s.max_angle_deg)
         });
         if !good {
             continue;
+        }
+        if after >= before {
+            let smallest = |ts: [&[usize; 3]; 2]| ts.iter().flat_map(|t| angles(t)).fold(180.0, f64::min);
+            if smallest([&new0, &new1]) <= smallest([&t0, &t1]) + 1.0 {
+                continue;
+            }
         }
         let (i0, i1) = if tris[ts[0]] == t0 { (ts[0], ts[1]) } else { (ts[1], ts[0]) };
         tris[i0] = new0;
