@@ -142,12 +142,12 @@ fn edge_stats(m: &SurfaceMesh) -> (f64, (f64, f64)) {
 }
 
 /// Smallest angle the surface management keeps while a neck collapses: below it,
-/// once the neck is thinner than `2 h_min`, the neck counts as pinched.
+/// once the neck is thinner than `4 h_min`, the neck counts as pinched.
 pub const PINCH_MIN_ANGLE_DEG: f64 = 10.0;
 
 impl MeshManager<3> for SurfaceManager {
     /// Pinch-off is declared when a neck is thinner than `h_min / 2` (curvature above
-    /// `pinch_curvature`), or thinner than `2 h_min` while the managed mesh can no
+    /// `pinch_curvature`), or thinner than `4 h_min` while the managed mesh can no
     /// longer keep its angles above [`PINCH_MIN_ANGLE_DEG`] (elements of at least
     /// `h_min` around a ring that small).
     fn manage(&mut self, mesh: &SurfaceMesh) -> Result<Managed<3>, FlowError> {
@@ -161,7 +161,7 @@ impl MeshManager<3> for SurfaceManager {
         } else {
             None
         };
-        if curvature.is_some_and(|(k, c)| c > 0.25 * k) {
+        if curvature.is_some_and(|(k, c)| c > 0.125 * k) {
             let result = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
             if result.quality().min_angle_deg < PINCH_MIN_ANGLE_DEG {
                 return Ok(Managed::PinchOff);
