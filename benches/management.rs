@@ -38,6 +38,19 @@ fn l2_step_time<const D: usize>(mesh: &shapeflow::geometry::Mesh<D>) -> (f64, f6
     (whole, alone)
 }
 
+/// One table row: times in seconds, printed in ms, with the two ratios.
+fn print_row(n: usize, t_step: f64, t_solve: f64, t_manage: f64) {
+    let ms = |t: f64| t * 1e3;
+    println!(
+        "| {n} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} |",
+        ms(t_step),
+        ms(t_solve),
+        ms(t_manage),
+        t_manage / t_step,
+        t_manage / t_solve
+    );
+}
+
 fn main() {
     println!("| curve vertices | L2 step (ms) | of which solve (ms) | management (ms) | management / step | management / solve |");
     println!("|---:|---:|---:|---:|---:|---:|");
@@ -78,14 +91,7 @@ fn main() {
             t_adapt * 1e3,
             t_reg * 1e3
         );
-        println!(
-            "| {n} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} |",
-            t_step * 1e3,
-            t_solve * 1e3,
-            t_manage * 1e3,
-            t_manage / t_step,
-            t_manage / t_solve
-        );
+        print_row(n, t_step, t_solve, t_manage);
     }
     println!();
     println!("| surface vertices | L2 step (ms) | of which solve (ms) | management (ms) | management / step | management / solve |");
@@ -113,12 +119,5 @@ fn main() {
         t_adapt * 1e3,
         t_reg * 1e3
     );
-    println!(
-        "| {n} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} |",
-        t_step * 1e3,
-        t_solve * 1e3,
-        t_manage * 1e3,
-        t_manage / t_step,
-        t_manage / t_solve
-    );
+    print_row(n, t_step, t_solve, t_manage);
 }
