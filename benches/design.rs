@@ -18,6 +18,7 @@ mod common;
 use common::{peak_rss_mib, time_it};
 
 fn main() {
+    shapeflow::tune_allocator();
     println!("| curve vertices | bulk triangles | meshing | state + adjoint | flow step | step / (mesh + solve) | peak RSS |");
     println!("|---|---|---|---|---|---|---|");
     for n in [100usize, 400, 1600] {

@@ -13,6 +13,7 @@ mod common;
 use common::peak_rss_mib;
 
 fn main() {
+    shapeflow::tune_allocator();
     let sizes: Vec<usize> = std::env::args().skip(1).filter_map(|a| a.parse().ok()).collect();
     let sizes = if sizes.is_empty() { vec![64, 128, 256] } else { sizes };
     let example = std::fs::read_to_string("examples/stressed_film.json").unwrap();

@@ -74,6 +74,7 @@ fn dice(a: &[bool], b: &[bool]) -> f64 {
 }
 
 fn main() {
+    shapeflow::tune_allocator();
     let quick = std::env::args().any(|a| a == "quick");
     let mut cases: Vec<(String, Vec<u8>, Vec<bool>)> = Vec::new();
     for n in [128usize, 1024] {

@@ -43,6 +43,7 @@ fn percentile(v: &mut [f64], p: f64) -> f64 {
 }
 
 fn main() {
+    shapeflow::tune_allocator();
     let dir = tempfile::tempdir().unwrap();
     let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
     let service = rt.block_on(Service::start(&dir.path().join("bench.db"), 2, None)).unwrap();

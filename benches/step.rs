@@ -73,6 +73,7 @@ fn child(kind: &str, size: usize, product: &str) {
 }
 
 fn main() {
+    shapeflow::tune_allocator();
     let args: Vec<String> = std::env::args().collect();
     if let Some(pos) = args.iter().position(|a| a == "--case") {
         child(&args[pos + 1], args[pos + 2].parse().unwrap(), &args[pos + 3]);

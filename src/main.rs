@@ -57,6 +57,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    shapeflow::tune_allocator();
     tracing_subscriber::fmt()
         .with_writer(std::io::stderr)
         .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()))

@@ -4,8 +4,8 @@
 
 use super::FlowError;
 use crate::geometry::{
-    adapt_curve, adapt_surface, edge_statistics, regularize_curve, regularize_surface, resolve_intersections,
-    CurveMesh, CurveRemeshSettings, Mesh, SurfaceMesh, SurfaceRemeshSettings,
+    adapt_surface, edge_statistics, manage_curve, regularize_surface, resolve_intersections, CurveMesh,
+    CurveRemeshSettings, Mesh, SurfaceMesh, SurfaceRemeshSettings,
 };
 
 /// What mesh management did to the mesh after a step.
@@ -79,18 +79,10 @@ impl CurveManager {
 impl MeshManager<2> for CurveManager {
     fn manage(&mut self, mesh: &CurveMesh) -> Result<Managed<2>, FlowError> {
         let fail = |e: crate::geometry::MeshError| FlowError::Problem(format!("mesh management: {e}"));
-        let mut remeshed: Option<CurveMesh> = None;
-        if self.adapt {
-            if let Some(m) = adapt_curve(mesh, &self.params).map_err(fail)? {
-                remeshed = Some(m);
-            }
-        }
-        let mut moved = if self.regularize {
-            let cur = remeshed.as_ref().unwrap_or(mesh);
-            let sizes = self.adapt.then_some(&self.params);
-            Some(regularize_curve(cur, self.sweeps, sizes))
-        } else {
-            None
+        let sweeps = if self.regularize { self.sweeps } else { 0 };
+        let (mut remeshed, mut moved) = match manage_curve(mesh, &self.params, self.adapt, sweeps).map_err(fail)? {
+            (Some(m), true) => (Some(m), None),
+            (m, _) => (None, m),
         };
         // topology last: it resolves the crossings of the step and any fold the
         // regularization made at a sharp corner, so the result never crosses itself

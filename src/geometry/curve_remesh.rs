@@ -138,45 +138,57 @@ fn desired_sizes(len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> Vec<f64>
 /// exactly (up to round-off).
 pub fn regularize_curve(mesh: &CurveMesh, sweeps: usize, sizes: Option<&CurveRemeshSettings>) -> CurveMesh {
     let mut pos = mesh.positions().to_vec();
-    let cycles = mesh.cycles();
-    for cyc in &cycles {
+    for cyc in &mesh.cycles() {
         let mut l = lifted_loop(mesh, cyc);
-        let n = l.len();
-        if n < 3 {
-            continue;
-        }
+        let start = l.p.clone();
         let hd = match sizes {
             Some(s) => {
                 let len = segment_lengths(&l);
                 desired_sizes(&len, &turning_angles(&l, &len), s)
             }
-            None => vec![1.0; n],
+            None => vec![1.0; l.len()],
         };
-        let start = l.p.clone();
-        for _ in 0..sweeps {
-            for k in 0..n {
-                let (kp, kn) = (if k == 0 { n - 1 } else { k - 1 }, if k + 1 == n { 0 } else { k + 1 });
-                let prev = if k == 0 { l.p[kp] - l.shift } else { l.p[kp] };
-                let next = if k + 1 == n { l.p[kn] + l.shift } else { l.p[kn] };
-                let chord = next - prev;
-                let len = chord.norm();
-                if len <= 0.0 {
-                    continue;
-                }
-                let t = chord / len;
-                let (hp, hi, hn) = (hd[kp], hd[k], hd[kn]);
-                let lambda = (hp + hi) / (hp + 2.0 * hi + hn);
-                let target = prev + chord * lambda;
-                let alpha = (target - l.p[k]).dot(&t);
-                l.p[k] += t * alpha;
-            }
-        }
+        regularize_loop(&mut l, &hd, sweeps);
         // back to the mesh's own representatives (lifting shifted some by periods)
         for ((&v, p), p0) in cyc.iter().zip(&l.p).zip(&start) {
             pos[v] += p - p0;
         }
     }
     mesh.with_positions(pos)
+}
+
+/// The sweeps of [`regularize_curve`] on one loop with desired sizes `hd`: vertex
+/// `k` moves along the chord `c = X_{k+1} − X_{k−1}` to
+/// `X_{k−1} + λ_k c`, `λ_k = (h_{k−1} + h_k)/(h_{k−1} + 2h_k + h_{k+1})`, i.e. by
+/// `((X_{k−1} + λ_k c − X_k)·c / |c|²) c`.
+fn regularize_loop(l: &mut Loop, hd: &[f64], sweeps: usize) {
+    let n = l.len();
+    if n < 3 || sweeps == 0 {
+        return;
+    }
+    let before = |k: usize| if k == 0 { n - 1 } else { k - 1 };
+    let after = |k: usize| if k + 1 == n { 0 } else { k + 1 };
+    let lambda: Vec<f64> = (0..n)
+        .map(|k| {
+            let (hp, hi, hn) = (hd[before(k)], hd[k], hd[after(k)]);
+            (hp + hi) / (hp + 2.0 * hi + hn)
+        })
+        .collect();
+    let shift = l.shift;
+    let p = &mut l.p;
+    for _ in 0..sweeps {
+        for k in 0..n {
+            let prev = if k == 0 { p[n - 1] - shift } else { p[k - 1] };
+            let next = if k + 1 == n { p[0] + shift } else { p[k + 1] };
+            let chord = next - prev;
+            let cc = chord.dot(&chord);
+            if cc <= 0.0 {
+                continue;
+            }
+            let alpha = (prev + chord * lambda[k] - p[k]).dot(&chord) / cc;
+            p[k] += chord * alpha;
+        }
+    }
 }
 
 /// The cycle `cyc` of `mesh` as a loop lifted vertex by vertex.
@@ -208,63 +220,125 @@ pub fn adapt_curve(mesh: &CurveMesh, s: &CurveRemeshSettings) -> Result<Option<C
     let mut changed = false;
     let mut out = Vec::new();
     for l in loops_of(mesh) {
-        let n = l.len();
-        let area = if s.keep_area { signed_area(&l) } else { 0.0 };
         let len = segment_lengths(&l);
         let beta = turning_angles(&l, &len);
-        let before = |i: usize| if i == 0 { n - 1 } else { i - 1 };
-        // coarsening: never two neighbours in one pass, keep at least 8 vertices
-        let mut keep = vec![true; n];
-        let mut removed = 0;
-        for i in 0..n {
-            if n - removed <= 8 || !keep[before(i)] {
-                continue;
+        match adapt_loop(&l, &len, &beta, s) {
+            Some(new) => {
+                changed = true;
+                out.push(new.p);
             }
-            let (lp, li) = (len[before(i)], len[i]);
-            let short = li.min(lp) < s.h_min;
-            let flat = beta[i] * li.max(lp) < s.epsilon / 8.0;
-            if (short || flat) && li + lp <= s.h_max && (i + 1 < n || keep[0]) {
-                keep[i] = false;
-                removed += 1;
-            }
-        }
-        let (l2, len2, beta2) = if removed > 0 {
-            let l2 = Loop { p: (0..n).filter(|&i| keep[i]).map(|i| l.p[i]).collect(), shift: l.shift };
-            let len2 = segment_lengths(&l2);
-            let beta2 = turning_angles(&l2, &len2);
-            (l2, len2, beta2)
-        } else {
-            (l, len, beta)
-        };
-        // refinement
-        let m = l2.len();
-        let mut refined = Vec::with_capacity(m + m / 4);
-        let mut split = false;
-        for i in 0..m {
-            let h = len2[i];
-            refined.push(l2.p[i]);
-            let curved = beta2[i].max(beta2[if i + 1 == m { 0 } else { i + 1 }]) * h > s.epsilon && h > 2.0 * s.h_min;
-            if h > s.h_max || curved {
-                let k = i as isize;
-                refined.push((l2.at(k) * 9.0 + l2.at(k + 1) * 9.0 - l2.at(k - 1) - l2.at(k + 2)) / 16.0);
-                split = true;
-            }
-        }
-        if removed == 0 && !split {
-            out.push(refined);
-            continue;
-        }
-        changed = true;
-        if s.keep_area {
-            out.push(keep_area(Loop { p: refined, shift: l2.shift }, area));
-        } else {
-            out.push(refined);
+            None => out.push(l.p),
         }
     }
     if !changed {
         return Ok(None);
     }
     rebuild(mesh, out, false).map(Some)
+}
+
+/// [`adapt_curve`] on one loop, given its segment lengths and turning angles.
+fn adapt_loop(l: &Loop, len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> Option<Loop> {
+    let n = l.len();
+    let before = |i: usize| if i == 0 { n - 1 } else { i - 1 };
+    // coarsening: never two neighbours in one pass, keep at least 8 vertices
+    let mut keep = vec![true; n];
+    let mut removed = 0;
+    for i in 0..n {
+        if n - removed <= 8 || !keep[before(i)] {
+            continue;
+        }
+        let (lp, li) = (len[before(i)], len[i]);
+        let short = li.min(lp) < s.h_min;
+        let flat = beta[i] * li.max(lp) < s.epsilon / 8.0;
+        if (short || flat) && li + lp <= s.h_max && (i + 1 < n || keep[0]) {
+            keep[i] = false;
+            removed += 1;
+        }
+    }
+    let coarse;
+    let (l2, len2, beta2) = if removed > 0 {
+        let l2 = Loop { p: (0..n).filter(|&i| keep[i]).map(|i| l.p[i]).collect(), shift: l.shift };
+        let len2 = segment_lengths(&l2);
+        let beta2 = turning_angles(&l2, &len2);
+        coarse = (l2, len2, beta2);
+        (&coarse.0, &coarse.1[..], &coarse.2[..])
+    } else {
+        (l, len, beta)
+    };
+    // refinement
+    let m = l2.len();
+    let mut refined = Vec::with_capacity(m + m / 4);
+    let mut split = false;
+    for i in 0..m {
+        let h = len2[i];
+        refined.push(l2.p[i]);
+        let curved = beta2[i].max(beta2[if i + 1 == m { 0 } else { i + 1 }]) * h > s.epsilon && h > 2.0 * s.h_min;
+        if h > s.h_max || curved {
+            let k = i as isize;
+            refined.push((l2.at(k) * 9.0 + l2.at(k + 1) * 9.0 - l2.at(k - 1) - l2.at(k + 2)) / 16.0);
+            split = true;
+        }
+    }
+    if removed == 0 && !split {
+        return None;
+    }
+    let out = Loop { p: refined, shift: l2.shift };
+    Some(if s.keep_area { Loop { p: keep_area(out, signed_area(l)), shift: l.shift } } else { out })
+}
+
+/// One pass of curve management short of topology: refinement/coarsening (if
+/// `adapt`), then `sweeps` regularization sweeps towards the desired sizes (if
+/// `adapt`, else equal lengths), with the lengths and turning angles of each loop
+/// computed once. Returns the new mesh, `None` if nothing was to be done, and
+/// whether the connectivity changed.
+pub fn manage_curve(
+    mesh: &CurveMesh,
+    s: &CurveRemeshSettings,
+    adapt: bool,
+    sweeps: usize,
+) -> Result<(Option<CurveMesh>, bool), MeshError> {
+    if !adapt && sweeps == 0 {
+        return Ok((None, false));
+    }
+    let cycles = mesh.cycles();
+    let mut loops = Vec::with_capacity(cycles.len());
+    let mut changed = false;
+    for cyc in &cycles {
+        let mut l = lifted_loop(mesh, cyc);
+        let mut len = segment_lengths(&l);
+        let mut beta = turning_angles(&l, &len);
+        if adapt {
+            if let Some(new) = adapt_loop(&l, &len, &beta, s) {
+                changed = true;
+                l = new;
+                len = segment_lengths(&l);
+                beta = turning_angles(&l, &len);
+            }
+        }
+        if sweeps > 0 {
+            let hd = if adapt { desired_sizes(&len, &beta, s) } else { vec![1.0; l.len()] };
+            regularize_loop(&mut l, &hd, sweeps);
+        }
+        loops.push(l);
+    }
+    if changed {
+        return rebuild(mesh, loops.into_iter().map(|l| l.p).collect(), false).map(|m| (Some(m), true));
+    }
+    // same connectivity: back to the mesh's own representatives
+    let x = mesh.positions();
+    let mut pos = x.to_vec();
+    for (cyc, l) in cycles.iter().zip(&loops) {
+        if mesh.period().is_none() {
+            for (&v, p) in cyc.iter().zip(&l.p) {
+                pos[v] = *p;
+            }
+        } else {
+            for (&v, p) in cyc.iter().zip(&l.p) {
+                pos[v] = mesh.lift(*p, &x[v]);
+            }
+        }
+    }
+    Ok((Some(mesh.with_positions(pos)), false))
 }
 
 /// `−∮ y dx` of a loop: the shoelace area for closed loops, and for loops winding

@@ -70,92 +70,112 @@ pub fn find_periodic_intersections(points: &[Point<2>], segments: &[[usize; 2]],
     hits
 }
 
+/// A segment gathered for the pair tests: its endpoints and their vertex identities.
+#[derive(Debug, Clone, Copy)]
+struct Seg {
+    p: Point<2>,
+    q: Point<2>,
+    id: [usize; 2],
+}
+
+impl Seg {
+    fn lower(&self) -> (f64, f64) {
+        (self.p.x.min(self.q.x), self.p.y.min(self.q.y))
+    }
+
+    fn upper(&self) -> (f64, f64) {
+        (self.p.x.max(self.q.x), self.p.y.max(self.q.y))
+    }
+}
+
 /// The finder; `ids` (if given) maps point indices to vertex identities for the
-/// test whether two segments are neighbours.
+/// test whether two segments are neighbours. Every segment is entered, in order, in
+/// the cells its bounding box covers and tested against the segments entered there
+/// before it. Cells live in a table tiled modulo its side, so that a curve walking
+/// through neighbouring cells walks through neighbouring slots (cache-friendly);
+/// slots shared by distant cells are told apart by the cell key. A pair is tested
+/// in one cell only, the one holding the lower corner of the intersection of the
+/// two bounding boxes.
 fn find_with_ids(points: &[Point<2>], segments: &[[usize; 2]], ids: Option<&[usize]>) -> Vec<SegmentHit> {
     if segments.len() < 2 {
         return Vec::new();
     }
-    let total: f64 = segments.iter().map(|s| (points[s[1]] - points[s[0]]).norm()).sum();
-    let cell = (total / segments.len() as f64).max(1e-300);
+    let id = |v: usize| ids.map_or(v, |ids| ids[v]);
+    let segs: Vec<Seg> =
+        segments.iter().map(|s| Seg { p: points[s[0]], q: points[s[1]], id: [id(s[0]), id(s[1])] }).collect();
+    let total: f64 = segs.iter().map(|s| (s.q - s.p).norm()).sum();
+    let cell = (total / segs.len() as f64).max(1e-300);
     let inv = 1.0 / cell;
     let (mut x_lo, mut y_lo) = (f64::INFINITY, f64::INFINITY);
-    for s in segments {
-        for &v in s {
-            x_lo = x_lo.min(points[v].x);
-            y_lo = y_lo.min(points[v].y);
-        }
+    for s in &segs {
+        let (x, y) = s.lower();
+        x_lo = x_lo.min(x);
+        y_lo = y_lo.min(y);
     }
     // coordinates shifted to be nonnegative, so truncation is floor
-    let key = |x: f64, lo: f64| ((x - lo) * inv) as u64;
-    // (bucket, segment) pairs, bucket = hash of the cell; counting sort, O(n).
-    // Segments of different cells sharing a bucket are merely tested needlessly.
-    let hash =
-        |cx: u64, cy: u64| (cx.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ cy.wrapping_mul(0xC2B2_AE3D_27D4_EB4F)) >> 32;
-    let mut entries: Vec<(u32, u32)> = Vec::with_capacity(4 * segments.len());
+    let key = |x: f64, lo: f64| ((x - lo) * inv) as u32;
+    let pack = |cx: u32, cy: u32| (u64::from(cx) << 32) | u64::from(cy);
+    // a square table of side 2^bits, about four slots per segment
+    let bits = ((4 * segs.len()).next_power_of_two().trailing_zeros() + 1) / 2;
+    let side_mask = (1u32 << bits) - 1;
+    let slot_of = |cx: u32, cy: u32| (((cy & side_mask) << bits) | (cx & side_mask)) as usize;
+    const NONE: u32 = u32::MAX;
+    let mut head = vec![NONE; 1usize << (2 * bits)];
+    // entries: cell key, segment, next entry in the same slot
+    let mut entry_cell: Vec<u64> = Vec::with_capacity(3 * segs.len());
+    let mut entry_seg: Vec<u32> = Vec::with_capacity(3 * segs.len());
+    let mut entry_next: Vec<u32> = Vec::with_capacity(3 * segs.len());
     let mut long = Vec::new();
-    for (i, s) in segments.iter().enumerate() {
-        let (p, q) = (points[s[0]], points[s[1]]);
-        let (x0, x1) = (key(p.x.min(q.x), x_lo), key(p.x.max(q.x), x_lo));
-        let (y0, y1) = (key(p.y.min(q.y), y_lo), key(p.y.max(q.y), y_lo));
-        if (x1 - x0 + 1) * (y1 - y0 + 1) > 64 {
+    let mut hits = Vec::new();
+    for (i, sa) in segs.iter().enumerate() {
+        let ((axl, ayl), (axu, ayu)) = (sa.lower(), sa.upper());
+        let (x0, x1, y0, y1) = (key(axl, x_lo), key(axu, x_lo), key(ayl, y_lo), key(ayu, y_lo));
+        if (u64::from(x1 - x0) + 1) * (u64::from(y1 - y0) + 1) > 64 {
             long.push(i); // far longer than the mean: tested against every segment
             continue;
         }
         for cx in x0..=x1 {
             for cy in y0..=y1 {
-                entries.push((hash(cx, cy) as u32, i as u32));
-            }
-        }
-    }
-    let buckets = entries.len().next_power_of_two().max(2);
-    let mask = buckets as u32 - 1;
-    let mut start = vec![0u32; buckets + 1];
-    for e in &entries {
-        start[(e.0 & mask) as usize + 1] += 1;
-    }
-    for k in 0..buckets {
-        start[k + 1] += start[k];
-    }
-    let mut sorted = vec![0u32; entries.len()];
-    for e in entries.iter().rev() {
-        let b = (e.0 & mask) as usize + 1;
-        start[b] -= 1;
-        sorted[start[b] as usize] = e.1;
-    }
-    // now start[b + 1] is the beginning of bucket b; shift back
-    start.remove(0);
-    start.push(entries.len() as u32);
-    let mut hits = Vec::new();
-    for k in 0..buckets {
-        let (lo, hi) = (start[k] as usize, start[k + 1] as usize);
-        debug_assert!(lo <= hi);
-        if hi - lo < 2 {
-            continue;
-        }
-        let bucket = &sorted[lo..hi];
-        for (j, &sa) in bucket.iter().enumerate() {
-            for &sb in &bucket[j + 1..] {
-                let (a, b) = if sa < sb { (sa as usize, sb as usize) } else { (sb as usize, sa as usize) };
-                if a != b {
-                    if let Some(h) = intersect_pair(points, segments, ids, a, b) {
+                let c = pack(cx, cy);
+                let slot = slot_of(cx, cy);
+                let mut e = head[slot];
+                while e != NONE {
+                    let k = e as usize;
+                    e = entry_next[k];
+                    if entry_cell[k] != c {
+                        continue; // another cell sharing the slot
+                    }
+                    let j = entry_seg[k] as usize;
+                    let sb = &segs[j];
+                    let ((bxl, byl), (bxu, byu)) = (sb.lower(), sb.upper());
+                    if axu < bxl || bxu < axl || ayu < byl || byu < ayl {
+                        continue;
+                    }
+                    if pack(key(axl.max(bxl), x_lo), key(ayl.max(byl), y_lo)) != c {
+                        continue; // tested in the cell of the overlap's lower corner
+                    }
+                    // j < i: entered earlier
+                    if let Some(h) = intersect_pair(sb, sa, j, i) {
                         hits.push(h);
                     }
                 }
+                entry_next.push(head[slot]);
+                head[slot] = entry_cell.len() as u32;
+                entry_cell.push(c);
+                entry_seg.push(i as u32);
             }
         }
     }
     for &l in &long {
-        for other in 0..segments.len() {
+        for other in 0..segs.len() {
             if other != l && !(long.contains(&other) && other < l) {
                 let (a, b) = if l < other { (l, other) } else { (other, l) };
-                if let Some(h) = intersect_pair(points, segments, ids, a, b) {
+                if let Some(h) = intersect_pair(&segs[a], &segs[b], a, b) {
                     hits.push(h);
                 }
             }
         }
     }
-    // a pair sharing several cells is found once per cell
     hits.sort_by(|x, y| (x.a, x.b).cmp(&(y.a, y.b)));
     hits.dedup_by(|x, y| (x.a, x.b) == (y.a, y.b));
     hits
@@ -166,18 +186,12 @@ pub(super) fn cross(u: Point<2>, v: Point<2>) -> f64 {
     u.x * v.y - u.y * v.x
 }
 
-fn intersect_pair(
-    points: &[Point<2>],
-    segments: &[[usize; 2]],
-    ids: Option<&[usize]>,
-    a: usize,
-    b: usize,
-) -> Option<SegmentHit> {
-    let (sa, sb) = (segments[a], segments[b]);
-    let (p, p2) = (points[sa[0]], points[sa[1]]);
-    let (q, q2) = (points[sb[0]], points[sb[1]]);
-    let id = |v: usize| ids.map_or(v, |ids| ids[v]);
-    let (ia, ib) = (sa.map(id), sb.map(id));
+/// The intersection of segments `a < b`, if any. Neighbours (sharing a vertex)
+/// intersect only where they overlap collinearly (a fold).
+#[inline]
+fn intersect_pair(sa: &Seg, sb: &Seg, a: usize, b: usize) -> Option<SegmentHit> {
+    let (p, p2, q, q2) = (sa.p, sa.q, sb.p, sb.q);
+    let (ia, ib) = (sa.id, sb.id);
     let shares = ia[0] == ib[0] || ia[0] == ib[1] || ia[1] == ib[0] || ia[1] == ib[1];
     if !shares
         && (p.x.max(p2.x) < q.x.min(q2.x)
@@ -188,6 +202,9 @@ fn intersect_pair(
         return None;
     }
     let (r, w) = (p2 - p, q2 - q);
+    if shares && r.dot(&w) > 0.0 {
+        return None; // neighbours pointing the same way: no overlap
+    }
     let denom = cross(r, w);
     let (rr, ww) = (r.dot(&r), w.dot(&w));
     let qp = q - p;
@@ -196,9 +213,6 @@ fn intersect_pair(
         let c = cross(qp, r);
         if c * c > 1e-24 * rr * (qp.dot(&qp) + rr) {
             return None;
-        }
-        if shares && r.dot(&w) > 0.0 {
-            return None; // consecutive and pointing the same way: no overlap
         }
         let t0 = qp.dot(&r) / rr;
         let t1 = t0 + w.dot(&r) / rr;
@@ -214,8 +228,13 @@ fn intersect_pair(
     if shares {
         return None;
     }
-    let s = cross(qp, w) / denom;
-    let t = cross(qp, r) / denom;
+    let (cs, ct) = (cross(qp, w), cross(qp, r));
+    // s = cs / denom and t = ct / denom must lie in [0, 1]: signs first, no division
+    let inside = |c: f64| if denom > 0.0 { c >= 0.0 && c <= denom } else { c <= 0.0 && c >= denom };
+    if !(inside(cs) && inside(ct)) {
+        return None;
+    }
+    let (s, t) = (cs / denom, ct / denom);
     if (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t) {
         Some(SegmentHit { a, b, s, t, point: p + r * s })
     } else {

@@ -13,7 +13,8 @@ mod surfaces;
 mod validate;
 
 pub use curve_remesh::{
-    adapt_curve, mesh_winding_number, regularize_curve, resolve_intersections, winding_number, CurveRemeshSettings,
+    adapt_curve, manage_curve, mesh_winding_number, regularize_curve, resolve_intersections, winding_number,
+    CurveRemeshSettings,
 };
 pub use curves::{circle, ellipse, polygon, rectangle, union};
 pub use intersect::{find_periodic_intersections, find_segment_intersections, SegmentHit};
