@@ -58,7 +58,7 @@ fn print_row(n: usize, t_step: f64, t_solve: f64, t_manage: f64) {
 /// A manager that adds up the time spent in it.
 struct Timed<M> {
     inner: M,
-    spent: Arc<Mutex<(f64, usize)>>,
+    spent: Arc<Mutex<(f64, usize, usize)>>,
 }
 
 impl<const D: usize, M: MeshManager<D>> MeshManager<D> for Timed<M> {
@@ -68,6 +68,9 @@ impl<const D: usize, M: MeshManager<D>> MeshManager<D> for Timed<M> {
         let mut spent = self.spent.lock().unwrap();
         spent.0 += start.elapsed().as_secs_f64();
         spent.1 += 1;
+        if matches!(out, Ok(Managed::Remeshed(_))) {
+            spent.2 += 1;
+        }
         out
     }
 }
@@ -78,7 +81,7 @@ impl<const D: usize, M: MeshManager<D>> MeshManager<D> for Timed<M> {
 fn curve_flow_run(mesh: &CurveMesh, steps: usize) -> (f64, f64, CurveMesh) {
     let problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
     let settings = FlowSettings { tau: 1e-4, tolerance: 0.0, ..FlowSettings::default() };
-    let spent = Arc::new(Mutex::new((0.0, 0)));
+    let spent = Arc::new(Mutex::new((0.0, 0, 0)));
     let manager = CurveManager {
         regularize: true,
         sweeps: 1,
@@ -90,14 +93,15 @@ fn curve_flow_run(mesh: &CurveMesh, steps: usize) -> (f64, f64, CurveMesh) {
         .unwrap()
         .with_mesh_manager(Box::new(Timed { inner: manager, spent: spent.clone() }));
     flow.step().unwrap(); // warm-up: the first pass settles the sampling
-    *spent.lock().unwrap() = (0.0, 0);
+    *spent.lock().unwrap() = (0.0, 0, 0);
     let start = Instant::now();
     for _ in 0..steps {
         assert!(flow.step().unwrap().stop.is_none());
     }
     let per_step = start.elapsed().as_secs_f64() / steps as f64;
-    let (total, calls) = *spent.lock().unwrap();
+    let (total, calls, remeshed) = *spent.lock().unwrap();
     assert_eq!(calls, steps);
+    eprintln!("curvature-flow run: new connectivity after {remeshed} of {steps} steps");
     (total / steps as f64, per_step, flow.mesh().clone())
 }
 

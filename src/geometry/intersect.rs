@@ -78,101 +78,143 @@ struct Seg {
     id: [usize; 2],
 }
 
-impl Seg {
-    fn lower(&self) -> (f64, f64) {
-        (self.p.x.min(self.q.x), self.p.y.min(self.q.y))
-    }
-
-    fn upper(&self) -> (f64, f64) {
-        (self.p.x.max(self.q.x), self.p.y.max(self.q.y))
-    }
+/// A maximal run of consecutive segments `first..=last` (each starting where the
+/// one before ended) whose bounding boxes all meet one grid cell.
+#[derive(Debug, Clone, Copy)]
+struct Run {
+    cell: u64,
+    first: u32,
+    last: u32,
 }
 
 /// The finder; `ids` (if given) maps point indices to vertex identities for the
-/// test whether two segments are neighbours. Every segment is entered, in order, in
-/// the cells its bounding box covers and tested against the segments entered there
-/// before it. Cells live in a table tiled modulo its side, so that a curve walking
-/// through neighbouring cells walks through neighbouring slots (cache-friendly);
-/// slots shared by distant cells are told apart by the cell key. A pair is tested
-/// in one cell only, the one holding the lower corner of the intersection of the
-/// two bounding boxes.
+/// test whether two segments are neighbours.
+///
+/// Cells of side `4 h̄` (`h̄` the mean segment length); every segment belongs to the
+/// cells its bounding box meets, and a crossing point lies in a cell that both
+/// crossing segments meet. Walking the segments in order, the segments meeting a
+/// cell form runs of consecutive segments. Within a run nothing can cross when
+/// every segment points forward along the run's chord `u` (`(q − p)·u > 0`): the
+/// projection on `u` then increases strictly along the run, so non-neighbours have
+/// disjoint projections and neighbours cannot fold back; runs without this
+/// certificate are tested pair by pair. Pairs from different runs of one cell (the
+/// curve passing twice, or two components) are always tested. On a smooth curve a
+/// cell holds one certified run, and the work is one pass over the segments with a
+/// hash lookup per run rather than per segment.
 fn find_with_ids(points: &[Point<2>], segments: &[[usize; 2]], ids: Option<&[usize]>) -> Vec<SegmentHit> {
     if segments.len() < 2 {
         return Vec::new();
     }
     let id = |v: usize| ids.map_or(v, |ids| ids[v]);
-    let segs: Vec<Seg> =
-        segments.iter().map(|s| Seg { p: points[s[0]], q: points[s[1]], id: [id(s[0]), id(s[1])] }).collect();
-    let total: f64 = segs.iter().map(|s| (s.q - s.p).norm()).sum();
-    let cell = (total / segs.len() as f64).max(1e-300);
-    let inv = 1.0 / cell;
-    let (mut x_lo, mut y_lo) = (f64::INFINITY, f64::INFINITY);
-    for s in &segs {
-        let (x, y) = s.lower();
-        x_lo = x_lo.min(x);
-        y_lo = y_lo.min(y);
+    let seg = |e: usize| {
+        let s = segments[e];
+        Seg { p: points[s[0]], q: points[s[1]], id: [id(s[0]), id(s[1])] }
+    };
+    // cell side: 4× the mean max-norm length; the lower corner of all boxes
+    let (mut total, mut x_lo, mut y_lo) = (0.0, f64::INFINITY, f64::INFINITY);
+    for s in segments {
+        let (p, q) = (points[s[0]], points[s[1]]);
+        total += (q.x - p.x).abs().max((q.y - p.y).abs());
+        x_lo = x_lo.min(p.x.min(q.x));
+        y_lo = y_lo.min(p.y.min(q.y));
     }
+    let cell = (4.0 * total / segments.len() as f64).max(1e-300);
+    let inv = 1.0 / cell;
     // coordinates shifted to be nonnegative, so truncation is floor
     let key = |x: f64, lo: f64| ((x - lo) * inv) as u32;
     let pack = |cx: u32, cy: u32| (u64::from(cx) << 32) | u64::from(cy);
-    // a square table of side 2^bits, about four slots per segment
-    let bits = ((4 * segs.len()).next_power_of_two().trailing_zeros() + 1) / 2;
-    let side_mask = (1u32 << bits) - 1;
-    let slot_of = |cx: u32, cy: u32| (((cy & side_mask) << bits) | (cx & side_mask)) as usize;
-    const NONE: u32 = u32::MAX;
-    let mut head = vec![NONE; 1usize << (2 * bits)];
-    // entries: cell key, segment, next entry in the same slot
-    let mut entry_cell: Vec<u64> = Vec::with_capacity(3 * segs.len());
-    let mut entry_seg: Vec<u32> = Vec::with_capacity(3 * segs.len());
-    let mut entry_next: Vec<u32> = Vec::with_capacity(3 * segs.len());
+    let mut runs: Vec<Run> = Vec::with_capacity(segments.len() / 2 + 8);
     let mut long = Vec::new();
-    let mut hits = Vec::new();
-    for (i, sa) in segs.iter().enumerate() {
-        let ((axl, ayl), (axu, ayu)) = (sa.lower(), sa.upper());
-        let (x0, x1, y0, y1) = (key(axl, x_lo), key(axu, x_lo), key(ayl, y_lo), key(ayu, y_lo));
+    // (cell, run) of the segment before, at most 64 cells
+    let mut before: Vec<(u64, usize)> = Vec::with_capacity(64);
+    let mut now: Vec<(u64, usize)> = Vec::with_capacity(64);
+    for (i, s) in segments.iter().enumerate() {
+        let (p, q) = (points[s[0]], points[s[1]]);
+        let (x0, x1) = (key(p.x.min(q.x), x_lo), key(p.x.max(q.x), x_lo));
+        let (y0, y1) = (key(p.y.min(q.y), y_lo), key(p.y.max(q.y), y_lo));
         if (u64::from(x1 - x0) + 1) * (u64::from(y1 - y0) + 1) > 64 {
             long.push(i); // far longer than the mean: tested against every segment
+            before.clear();
             continue;
         }
+        let continues = i > 0 && {
+            let b = segments[i - 1][1];
+            id(b) == id(s[0]) && points[b] == p
+        };
+        now.clear();
         for cx in x0..=x1 {
             for cy in y0..=y1 {
                 let c = pack(cx, cy);
-                let slot = slot_of(cx, cy);
-                let mut e = head[slot];
-                while e != NONE {
-                    let k = e as usize;
-                    e = entry_next[k];
-                    if entry_cell[k] != c {
-                        continue; // another cell sharing the slot
+                let open = if continues { before.iter().find(|(b, _)| *b == c).map(|&(_, r)| r) } else { None };
+                let r = match open {
+                    Some(r) => {
+                        runs[r].last = i as u32;
+                        r
                     }
-                    let j = entry_seg[k] as usize;
-                    let sb = &segs[j];
-                    let ((bxl, byl), (bxu, byu)) = (sb.lower(), sb.upper());
-                    if axu < bxl || bxu < axl || ayu < byl || byu < ayl {
-                        continue;
+                    None => {
+                        runs.push(Run { cell: c, first: i as u32, last: i as u32 });
+                        runs.len() - 1
                     }
-                    if pack(key(axl.max(bxl), x_lo), key(ayl.max(byl), y_lo)) != c {
-                        continue; // tested in the cell of the overlap's lower corner
-                    }
-                    // j < i: entered earlier
-                    if let Some(h) = intersect_pair(sb, sa, j, i) {
-                        hits.push(h);
-                    }
-                }
-                entry_next.push(head[slot]);
-                head[slot] = entry_cell.len() as u32;
-                entry_cell.push(c);
-                entry_seg.push(i as u32);
+                };
+                now.push((c, r));
+            }
+        }
+        std::mem::swap(&mut before, &mut now);
+    }
+    let mut hits = Vec::new();
+    let test = |a: usize, b: usize, hits: &mut Vec<SegmentHit>| {
+        let (a, b) = if a < b { (a, b) } else { (b, a) };
+        if let Some(h) = intersect_pair(&seg(a), &seg(b), a, b) {
+            hits.push(h);
+        }
+    };
+    // within runs
+    for r in &runs {
+        let (first, last) = (r.first as usize, r.last as usize);
+        if last == first {
+            continue;
+        }
+        let u = points[segments[last][1]] - points[segments[first][0]];
+        if segments[first..=last].iter().all(|s| (points[s[1]] - points[s[0]]).dot(&u) > 0.0) {
+            continue;
+        }
+        for a in first..last {
+            for b in a + 1..=last {
+                test(a, b, &mut hits);
             }
         }
     }
-    for &l in &long {
-        for other in 0..segs.len() {
-            if other != l && !(long.contains(&other) && other < l) {
-                let (a, b) = if l < other { (l, other) } else { (other, l) };
-                if let Some(h) = intersect_pair(&segs[a], &segs[b], a, b) {
-                    hits.push(h);
+    // across runs of one cell: each run meets the runs entered before it in its
+    // cell, through a table of chained slots (cells tiled modulo the table's side)
+    let bits = ((4 * runs.len()).next_power_of_two().trailing_zeros() + 1) / 2;
+    let side = (1u64 << bits) - 1;
+    let slot_of = |c: u64| (((c & side) << bits) | ((c >> 32) & side)) as usize;
+    const NONE: u32 = u32::MAX;
+    let mut head = vec![NONE; 1usize << (2 * bits)];
+    let mut next = vec![NONE; runs.len()];
+    for (k, r) in runs.iter().enumerate() {
+        let slot = slot_of(r.cell);
+        let mut e = head[slot];
+        while e != NONE {
+            let o = runs[e as usize];
+            if o.cell == r.cell {
+                for a in o.first..=o.last {
+                    for b in r.first..=r.last {
+                        if a != b {
+                            test(a as usize, b as usize, &mut hits);
+                        }
+                    }
                 }
+            }
+            e = next[e as usize];
+        }
+        next[k] = head[slot];
+        head[slot] = k as u32;
+    }
+    for &l in &long {
+        for other in 0..segments.len() {
+            if other != l && !(long.contains(&other) && other < l) {
+                test(l, other, &mut hits);
             }
         }
     }
@@ -245,6 +287,69 @@ fn intersect_pair(sa: &Seg, sb: &Seg, a: usize, b: usize) -> Option<SegmentHit> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every pair, tested directly.
+    fn brute_force(points: &[Point<2>], segments: &[[usize; 2]]) -> Vec<(usize, usize)> {
+        let segs: Vec<Seg> = segments.iter().map(|s| Seg { p: points[s[0]], q: points[s[1]], id: *s }).collect();
+        let mut out = Vec::new();
+        for a in 0..segs.len() {
+            for b in a + 1..segs.len() {
+                if intersect_pair(&segs[a], &segs[b], a, b).is_some() {
+                    out.push((a, b));
+                }
+            }
+        }
+        out
+    }
+
+    /// A tiny deterministic generator (xorshift), uniform in [0, 1).
+    fn rng(state: &mut u64) -> f64 {
+        *state ^= *state << 13;
+        *state ^= *state >> 7;
+        *state ^= *state << 17;
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Closed polylines: wiggly circles with random radii, centres and sampling, some
+    /// crossing themselves (large wiggles) and each other, some with spikes that fold
+    /// back onto themselves, some with repeated points.
+    #[test]
+    fn runs_find_exactly_the_pairs_of_the_brute_force() {
+        let mut state = 0x2545_F491_4F6C_DD1D_u64;
+        let mut total_hits = 0;
+        for case in 0..60 {
+            let mut points = Vec::new();
+            let mut segments = Vec::new();
+            let components = 1 + (rng(&mut state) * 3.0) as usize;
+            for _ in 0..components {
+                let n = 8 + (rng(&mut state) * 300.0) as usize;
+                let (cx, cy) = (rng(&mut state) * 2.0, rng(&mut state) * 2.0);
+                let r = 0.3 + rng(&mut state);
+                let wiggle = if case % 3 == 0 { 0.0 } else { rng(&mut state) * 0.6 };
+                let k = 2.0 + (rng(&mut state) * 9.0).floor();
+                let base = points.len();
+                for j in 0..n {
+                    let t = 2.0 * std::f64::consts::PI * (j as f64 + 0.8 * rng(&mut state)) / n as f64;
+                    let rr = r * (1.0 + wiggle * (k * t).sin());
+                    let mut p = Point::<2>::new(cx + rr * t.cos(), cy + rr * t.sin());
+                    if case % 5 == 1 && j % 37 == 5 {
+                        p = points[base + j - 2]; // a spike folding back
+                    }
+                    if case % 7 == 2 && j % 41 == 3 {
+                        p = points[base + j - 1]; // a repeated point
+                    }
+                    points.push(p);
+                }
+                segments.extend((0..n).map(|j| [base + j, base + (j + 1) % n]));
+            }
+            let fast: Vec<(usize, usize)> =
+                find_segment_intersections(&points, &segments).iter().map(|h| (h.a, h.b)).collect();
+            let slow = brute_force(&points, &segments);
+            assert_eq!(fast, slow, "case {case}");
+            total_hits += slow.len();
+        }
+        assert!(total_hits > 100, "the cases cross: {total_hits}");
+    }
 
     #[test]
     fn crossing_and_touching_pairs() {
