@@ -7,7 +7,7 @@
 use shapeflow::fem::{Matrices, Pattern};
 use shapeflow::flow::{
     CurveManager, Flow, FlowError, FlowSettings, LinearSystem, Managed, MeshManager, ProductWeights, SemiImplicitStep,
-    SolverKind, SurfaceManager,
+    SolverKind, SurfaceManager, WatchedCurveManager,
 };
 use shapeflow::geometry::{icosphere, polygon, CurveMesh, Point};
 use shapeflow::problems::CurvatureFlow;
@@ -55,14 +55,17 @@ fn print_row(n: usize, t_step: f64, t_solve: f64, t_manage: f64) {
     );
 }
 
-/// A manager that adds up the time spent in it.
-struct Timed<M> {
-    inner: M,
-    spent: Arc<Mutex<(f64, usize, usize)>>,
+/// Seconds spent, calls, calls that re-meshed, full crossing checks, skipped ones.
+type Spent = (f64, usize, usize, usize, usize);
+
+/// A curve manager that adds up the time spent in it.
+struct Timed {
+    inner: WatchedCurveManager,
+    spent: Arc<Mutex<Spent>>,
 }
 
-impl<const D: usize, M: MeshManager<D>> MeshManager<D> for Timed<M> {
-    fn manage(&mut self, mesh: &shapeflow::geometry::Mesh<D>) -> Result<Managed<D>, FlowError> {
+impl MeshManager<2> for Timed {
+    fn manage(&mut self, mesh: &CurveMesh) -> Result<Managed<2>, FlowError> {
         let start = Instant::now();
         let out = self.inner.manage(mesh);
         let mut spent = self.spent.lock().unwrap();
@@ -71,6 +74,7 @@ impl<const D: usize, M: MeshManager<D>> MeshManager<D> for Timed<M> {
         if matches!(out, Ok(Managed::Remeshed(_))) {
             spent.2 += 1;
         }
+        (spent.3, spent.4) = (self.inner.watch.full_checks, self.inner.watch.skipped);
         out
     }
 }
@@ -81,7 +85,7 @@ impl<const D: usize, M: MeshManager<D>> MeshManager<D> for Timed<M> {
 fn curve_flow_run(mesh: &CurveMesh, steps: usize) -> (f64, f64, CurveMesh) {
     let problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
     let settings = FlowSettings { tau: 1e-4, tolerance: 0.0, ..FlowSettings::default() };
-    let spent = Arc::new(Mutex::new((0.0, 0, 0)));
+    let spent = Arc::new(Mutex::new((0.0, 0, 0, 0, 0)));
     let manager = CurveManager {
         regularize: true,
         sweeps: 1,
@@ -91,17 +95,22 @@ fn curve_flow_run(mesh: &CurveMesh, steps: usize) -> (f64, f64, CurveMesh) {
     };
     let mut flow = Flow::new(&problem, mesh.clone(), settings)
         .unwrap()
-        .with_mesh_manager(Box::new(Timed { inner: manager, spent: spent.clone() }));
+        .with_mesh_manager(Box::new(Timed { inner: manager.watched(), spent: spent.clone() }));
     flow.step().unwrap(); // warm-up: the first pass settles the sampling
-    *spent.lock().unwrap() = (0.0, 0, 0);
+    let first_checks = spent.lock().unwrap().3;
+    *spent.lock().unwrap() = (0.0, 0, 0, 0, 0);
     let start = Instant::now();
     for _ in 0..steps {
         assert!(flow.step().unwrap().stop.is_none());
     }
     let per_step = start.elapsed().as_secs_f64() / steps as f64;
-    let (total, calls, remeshed) = *spent.lock().unwrap();
+    let (total, calls, remeshed, full, skipped) = *spent.lock().unwrap();
     assert_eq!(calls, steps);
-    eprintln!("curvature-flow run: new connectivity after {remeshed} of {steps} steps");
+    eprintln!(
+        "curvature-flow run: new connectivity after {remeshed} of {steps} steps; crossing checks: {} full, {skipped} \
+         answered by the certificate",
+        full - first_checks
+    );
     (total / steps as f64, per_step, flow.mesh().clone())
 }
 

@@ -4,7 +4,7 @@
 
 use super::FlowError;
 use crate::geometry::{
-    adapt_surface, edge_statistics, manage_curve, regularize_surface, resolve_intersections, CurveMesh,
+    adapt_surface, edge_statistics, manage_curve, regularize_surface, resolve_crossings, CrossingWatch, CurveMesh,
     CurveRemeshSettings, Mesh, SurfaceMesh, SurfaceRemeshSettings,
 };
 
@@ -76,24 +76,58 @@ impl CurveManager {
     }
 }
 
+impl CurveManager {
+    /// This manager with a [`CrossingWatch`] kept between steps (what jobs run):
+    /// crossing checks are skipped while the last one's certificate holds.
+    pub fn watched(self) -> WatchedCurveManager {
+        WatchedCurveManager { settings: self, watch: CrossingWatch::default() }
+    }
+}
+
+/// A [`CurveManager`] with the [`CrossingWatch`] of its flow.
+#[derive(Debug, Clone)]
+pub struct WatchedCurveManager {
+    pub settings: CurveManager,
+    pub watch: CrossingWatch,
+}
+
 impl MeshManager<2> for CurveManager {
     fn manage(&mut self, mesh: &CurveMesh) -> Result<Managed<2>, FlowError> {
-        let fail = |e: crate::geometry::MeshError| FlowError::Problem(format!("mesh management: {e}"));
-        let sweeps = if self.regularize { self.sweeps } else { 0 };
-        let (mut remeshed, mut moved) = match manage_curve(mesh, &self.params, self.adapt, sweeps).map_err(fail)? {
-            (Some(m), true) => (Some(m), None),
-            (m, _) => (None, m),
-        };
-        // topology last: it resolves the crossings of the step and any fold the
-        // regularization made at a sharp corner, so the result never crosses itself
-        if self.topology_changes {
-            let cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
-            if let Some(m) = resolve_intersections(cur, self.params.min_area).map_err(fail)? {
-                (remeshed, moved) = (Some(m), None);
-            }
-        }
-        Ok(outcome(remeshed, moved))
+        manage_curves(self, None, mesh)
     }
+}
+
+impl MeshManager<2> for WatchedCurveManager {
+    fn manage(&mut self, mesh: &CurveMesh) -> Result<Managed<2>, FlowError> {
+        manage_curves(&self.settings, Some(&mut self.watch), mesh)
+    }
+}
+
+/// Adaptivity and regularization in one pass, then topology: it resolves the
+/// crossings of the step and any fold the regularization made at a sharp corner,
+/// so the result never crosses itself. The watch (if any) serves closed curves.
+fn manage_curves(
+    s: &CurveManager,
+    watch: Option<&mut CrossingWatch>,
+    mesh: &CurveMesh,
+) -> Result<Managed<2>, FlowError> {
+    let fail = |e: crate::geometry::MeshError| FlowError::Problem(format!("mesh management: {e}"));
+    let sweeps = if s.regularize { s.sweeps } else { 0 };
+    let (mut remeshed, mut moved) = match manage_curve(mesh, &s.params, s.adapt, sweeps).map_err(fail)? {
+        (Some(m), true) => (Some(m), None),
+        (m, _) => (None, m),
+    };
+    if s.topology_changes {
+        let cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
+        let hits = match watch {
+            Some(w) if cur.period().is_none() => w.crossings(cur.positions(), cur.elements()),
+            _ => cur.crossings(),
+        };
+        if let Some(m) = resolve_crossings(cur, &hits, s.params.min_area).map_err(fail)? {
+            (remeshed, moved) = (Some(m), None);
+        }
+    }
+    Ok(outcome(remeshed, moved))
 }
 
 /// Switches and resolved parameters of surface mesh management.

@@ -22,7 +22,7 @@ pub use driver::{Checkpoint, Flow, FlowSettings, MeshData, Progress, StepReport,
 pub use error::FlowError;
 pub use gmres::{gmres, GmresOutcome};
 pub use lumped::LumpedSolver;
-pub use mesh_management::{CurveManager, Managed, MeshManager, SurfaceManager};
+pub use mesh_management::{CurveManager, Managed, MeshManager, SurfaceManager, WatchedCurveManager};
 pub use problem::{shape_derivative, H1Weights, Problem, ProblemError, ShapeGradient, SurfaceState};
 pub use step::{SemiImplicitStep, SolverKind, Velocity};
 pub use system::{LinearSystem, ProductWeights, ScalarProduct};

@@ -4,9 +4,9 @@
 //! functions from a curve mesh to a curve mesh.
 
 use super::curves::{from_polylines, from_polylines_trusted};
-use super::intersect::{cross, find_periodic_intersections};
+use super::intersect::cross;
 use super::mesh::lift_near;
-use super::{find_segment_intersections, CurveMesh, Mesh, MeshError, Point};
+use super::{CurveMesh, Mesh, MeshError, Point};
 
 /// Parameters of curve mesh management.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -494,12 +494,18 @@ pub fn mesh_winding_number(mesh: &CurveMesh, p: Point<2>) -> i32 {
 /// touches itself or its periodic image encloses a closed component. Returns `None`
 /// if no segments cross.
 pub fn resolve_intersections(mesh: &CurveMesh, min_area: f64) -> Result<Option<CurveMesh>, MeshError> {
+    resolve_crossings(mesh, &mesh.crossings(), min_area)
+}
+
+/// [`resolve_intersections`] given the crossings of `mesh` (as
+/// [`CurveMesh::crossings`] finds them, or a [`super::CrossingWatch`]).
+pub fn resolve_crossings(
+    mesh: &CurveMesh,
+    hits: &[super::SegmentHit],
+    min_area: f64,
+) -> Result<Option<CurveMesh>, MeshError> {
     let pts = mesh.positions();
     let segs = mesh.elements();
-    let hits = match mesh.period() {
-        Some(l) => find_periodic_intersections(pts, segs, l),
-        None => find_segment_intersections(pts, segs),
-    };
     if hits.is_empty() {
         return Ok(None);
     }
@@ -513,7 +519,7 @@ pub fn resolve_intersections(mesh: &CurveMesh, min_area: f64) -> Result<Option<C
         let [a, b] = mesh.element_points(e);
         a + (b - a) * s
     };
-    for h in &hits {
+    for h in hits {
         let na = node_pos.len();
         node_pos.push(along(h.a, h.s));
         let nb = node_pos.len();

@@ -81,10 +81,127 @@ struct Seg {
 /// A maximal run of consecutive segments `first..=last` (each starting where the
 /// one before ended) whose bounding boxes all meet one grid cell.
 #[derive(Debug, Clone, Copy)]
-struct Run {
-    cell: u64,
-    first: u32,
-    last: u32,
+pub(super) struct Run {
+    pub(super) cell: u64,
+    pub(super) first: u32,
+    pub(super) last: u32,
+}
+
+/// The runs of a set of segments on a grid of square cells, and a table from cells
+/// to their runs (chained slots, cells tiled modulo the table's side so that a
+/// curve walking through neighbouring cells walks through neighbouring slots).
+pub(super) struct RunGrid {
+    /// Side of a cell: 4× the mean max-norm segment length.
+    pub(super) side: f64,
+    pub(super) runs: Vec<Run>,
+    /// Segments meeting more than 64 cells (far longer than the mean).
+    pub(super) long: Vec<usize>,
+    bits: u32,
+    head: Vec<u32>,
+    next: Vec<u32>,
+}
+
+const NONE: u32 = u32::MAX;
+
+/// `(cx, cy)` packed into one key.
+pub(super) fn pack(cx: u32, cy: u32) -> u64 {
+    (u64::from(cx) << 32) | u64::from(cy)
+}
+
+impl RunGrid {
+    /// Walks the segments in order; `ids` (if given) maps point indices to vertex
+    /// identities for the test whether a segment continues the one before.
+    pub(super) fn build(points: &[Point<2>], segments: &[[usize; 2]], ids: Option<&[usize]>) -> RunGrid {
+        let id = |v: usize| ids.map_or(v, |ids| ids[v]);
+        // the lower corner of all boxes, and the cell side
+        let (mut total, mut x_lo, mut y_lo) = (0.0, f64::INFINITY, f64::INFINITY);
+        for s in segments {
+            let (p, q) = (points[s[0]], points[s[1]]);
+            total += (q.x - p.x).abs().max((q.y - p.y).abs());
+            x_lo = x_lo.min(p.x.min(q.x));
+            y_lo = y_lo.min(p.y.min(q.y));
+        }
+        let side = (4.0 * total / segments.len().max(1) as f64).max(1e-300);
+        let inv = 1.0 / side;
+        // coordinates shifted to be nonnegative, so truncation is floor
+        let key = |x: f64, lo: f64| ((x - lo) * inv) as u32;
+        let mut runs: Vec<Run> = Vec::with_capacity(segments.len() / 2 + 8);
+        let mut long = Vec::new();
+        // (cell, run) of the segment before, at most 64 cells
+        let mut before: Vec<(u64, usize)> = Vec::with_capacity(64);
+        let mut now: Vec<(u64, usize)> = Vec::with_capacity(64);
+        for (i, s) in segments.iter().enumerate() {
+            let (p, q) = (points[s[0]], points[s[1]]);
+            let (x0, x1) = (key(p.x.min(q.x), x_lo), key(p.x.max(q.x), x_lo));
+            let (y0, y1) = (key(p.y.min(q.y), y_lo), key(p.y.max(q.y), y_lo));
+            if (u64::from(x1 - x0) + 1) * (u64::from(y1 - y0) + 1) > 64 {
+                long.push(i);
+                before.clear();
+                continue;
+            }
+            let continues = i > 0 && {
+                let b = segments[i - 1][1];
+                id(b) == id(s[0]) && points[b] == p
+            };
+            now.clear();
+            for cx in x0..=x1 {
+                for cy in y0..=y1 {
+                    let c = pack(cx, cy);
+                    let open = if continues { before.iter().find(|(b, _)| *b == c).map(|&(_, r)| r) } else { None };
+                    let r = match open {
+                        Some(r) => {
+                            runs[r].last = i as u32;
+                            r
+                        }
+                        None => {
+                            runs.push(Run { cell: c, first: i as u32, last: i as u32 });
+                            runs.len() - 1
+                        }
+                    };
+                    now.push((c, r));
+                }
+            }
+            std::mem::swap(&mut before, &mut now);
+        }
+        let bits = ((4 * runs.len()).next_power_of_two().trailing_zeros() + 1) / 2;
+        let mut grid = RunGrid { side, runs, long, bits, head: vec![NONE; 1usize << (2 * bits)], next: Vec::new() };
+        grid.next = vec![NONE; grid.runs.len()];
+        for k in 0..grid.runs.len() {
+            let slot = grid.slot(grid.runs[k].cell);
+            grid.next[k] = grid.head[slot];
+            grid.head[slot] = k as u32;
+        }
+        grid
+    }
+
+    fn slot(&self, c: u64) -> usize {
+        let side = (1u64 << self.bits) - 1;
+        (((c & side) << self.bits) | ((c >> 32) & side)) as usize
+    }
+
+    /// The runs in cell `c` (a packed key), latest first.
+    pub(super) fn cell_runs(&self, c: u64) -> impl Iterator<Item = usize> + '_ {
+        let mut e = self.head[self.slot(c)];
+        std::iter::from_fn(move || {
+            while e != NONE {
+                let k = e as usize;
+                e = self.next[k];
+                if self.runs[k].cell == c {
+                    return Some(k);
+                }
+            }
+            None
+        })
+    }
+}
+
+/// Whether all segments of `first..=last` point forward along the chord from the
+/// first point to the last: then their projections on it increase strictly, and
+/// no two of them cross (non-neighbours project to disjoint intervals, neighbours
+/// cannot fold back).
+pub(super) fn monotone(points: &[Point<2>], segments: &[[usize; 2]], first: usize, last: usize) -> bool {
+    let u = points[segments[last][1]] - points[segments[first][0]];
+    segments[first..=last].iter().all(|s| (points[s[1]] - points[s[0]]).dot(&u) > 0.0)
 }
 
 /// The finder; `ids` (if given) maps point indices to vertex identities for the
@@ -93,74 +210,36 @@ struct Run {
 /// Cells of side `4 h̄` (`h̄` the mean segment length); every segment belongs to the
 /// cells its bounding box meets, and a crossing point lies in a cell that both
 /// crossing segments meet. Walking the segments in order, the segments meeting a
-/// cell form runs of consecutive segments. Within a run nothing can cross when
-/// every segment points forward along the run's chord `u` (`(q − p)·u > 0`): the
-/// projection on `u` then increases strictly along the run, so non-neighbours have
-/// disjoint projections and neighbours cannot fold back; runs without this
-/// certificate are tested pair by pair. Pairs from different runs of one cell (the
-/// curve passing twice, or two components) are always tested. On a smooth curve a
-/// cell holds one certified run, and the work is one pass over the segments with a
-/// hash lookup per run rather than per segment.
+/// cell form runs of consecutive segments ([`RunGrid`]). A [`monotone`] run cannot
+/// cross itself; other runs are tested pair by pair. Pairs from different runs of
+/// one cell (the curve passing twice, or two components) are always tested. On a
+/// smooth curve a cell holds one monotone run, and the work is one pass over the
+/// segments with a table lookup per run rather than per segment.
 fn find_with_ids(points: &[Point<2>], segments: &[[usize; 2]], ids: Option<&[usize]>) -> Vec<SegmentHit> {
     if segments.len() < 2 {
         return Vec::new();
     }
+    find_on_grid(points, segments, ids, &RunGrid::build(points, segments, ids))
+}
+
+/// [`find_segment_intersections`] that also returns the grid it used.
+pub(super) fn find_with_grid(points: &[Point<2>], segments: &[[usize; 2]]) -> (Vec<SegmentHit>, RunGrid) {
+    let grid = RunGrid::build(points, segments, None);
+    let hits = if segments.len() < 2 { Vec::new() } else { find_on_grid(points, segments, None, &grid) };
+    (hits, grid)
+}
+
+fn find_on_grid(
+    points: &[Point<2>],
+    segments: &[[usize; 2]],
+    ids: Option<&[usize]>,
+    grid: &RunGrid,
+) -> Vec<SegmentHit> {
     let id = |v: usize| ids.map_or(v, |ids| ids[v]);
     let seg = |e: usize| {
         let s = segments[e];
         Seg { p: points[s[0]], q: points[s[1]], id: [id(s[0]), id(s[1])] }
     };
-    // cell side: 4× the mean max-norm length; the lower corner of all boxes
-    let (mut total, mut x_lo, mut y_lo) = (0.0, f64::INFINITY, f64::INFINITY);
-    for s in segments {
-        let (p, q) = (points[s[0]], points[s[1]]);
-        total += (q.x - p.x).abs().max((q.y - p.y).abs());
-        x_lo = x_lo.min(p.x.min(q.x));
-        y_lo = y_lo.min(p.y.min(q.y));
-    }
-    let cell = (4.0 * total / segments.len() as f64).max(1e-300);
-    let inv = 1.0 / cell;
-    // coordinates shifted to be nonnegative, so truncation is floor
-    let key = |x: f64, lo: f64| ((x - lo) * inv) as u32;
-    let pack = |cx: u32, cy: u32| (u64::from(cx) << 32) | u64::from(cy);
-    let mut runs: Vec<Run> = Vec::with_capacity(segments.len() / 2 + 8);
-    let mut long = Vec::new();
-    // (cell, run) of the segment before, at most 64 cells
-    let mut before: Vec<(u64, usize)> = Vec::with_capacity(64);
-    let mut now: Vec<(u64, usize)> = Vec::with_capacity(64);
-    for (i, s) in segments.iter().enumerate() {
-        let (p, q) = (points[s[0]], points[s[1]]);
-        let (x0, x1) = (key(p.x.min(q.x), x_lo), key(p.x.max(q.x), x_lo));
-        let (y0, y1) = (key(p.y.min(q.y), y_lo), key(p.y.max(q.y), y_lo));
-        if (u64::from(x1 - x0) + 1) * (u64::from(y1 - y0) + 1) > 64 {
-            long.push(i); // far longer than the mean: tested against every segment
-            before.clear();
-            continue;
-        }
-        let continues = i > 0 && {
-            let b = segments[i - 1][1];
-            id(b) == id(s[0]) && points[b] == p
-        };
-        now.clear();
-        for cx in x0..=x1 {
-            for cy in y0..=y1 {
-                let c = pack(cx, cy);
-                let open = if continues { before.iter().find(|(b, _)| *b == c).map(|&(_, r)| r) } else { None };
-                let r = match open {
-                    Some(r) => {
-                        runs[r].last = i as u32;
-                        r
-                    }
-                    None => {
-                        runs.push(Run { cell: c, first: i as u32, last: i as u32 });
-                        runs.len() - 1
-                    }
-                };
-                now.push((c, r));
-            }
-        }
-        std::mem::swap(&mut before, &mut now);
-    }
     let mut hits = Vec::new();
     let test = |a: usize, b: usize, hits: &mut Vec<SegmentHit>| {
         let (a, b) = if a < b { (a, b) } else { (b, a) };
@@ -168,52 +247,31 @@ fn find_with_ids(points: &[Point<2>], segments: &[[usize; 2]], ids: Option<&[usi
             hits.push(h);
         }
     };
-    // within runs
-    for r in &runs {
+    for (k, r) in grid.runs.iter().enumerate() {
         let (first, last) = (r.first as usize, r.last as usize);
-        if last == first {
-            continue;
-        }
-        let u = points[segments[last][1]] - points[segments[first][0]];
-        if segments[first..=last].iter().all(|s| (points[s[1]] - points[s[0]]).dot(&u) > 0.0) {
-            continue;
-        }
-        for a in first..last {
-            for b in a + 1..=last {
-                test(a, b, &mut hits);
+        // within the run
+        if last > first && !monotone(points, segments, first, last) {
+            for a in first..last {
+                for b in a + 1..=last {
+                    test(a, b, &mut hits);
+                }
             }
         }
-    }
-    // across runs of one cell: each run meets the runs entered before it in its
-    // cell, through a table of chained slots (cells tiled modulo the table's side)
-    let bits = ((4 * runs.len()).next_power_of_two().trailing_zeros() + 1) / 2;
-    let side = (1u64 << bits) - 1;
-    let slot_of = |c: u64| (((c & side) << bits) | ((c >> 32) & side)) as usize;
-    const NONE: u32 = u32::MAX;
-    let mut head = vec![NONE; 1usize << (2 * bits)];
-    let mut next = vec![NONE; runs.len()];
-    for (k, r) in runs.iter().enumerate() {
-        let slot = slot_of(r.cell);
-        let mut e = head[slot];
-        while e != NONE {
-            let o = runs[e as usize];
-            if o.cell == r.cell {
-                for a in o.first..=o.last {
-                    for b in r.first..=r.last {
-                        if a != b {
-                            test(a as usize, b as usize, &mut hits);
-                        }
+        // against the runs of its cell entered before it
+        for o in grid.cell_runs(r.cell).filter(|&o| o < k) {
+            let o = grid.runs[o];
+            for a in o.first..=o.last {
+                for b in first..=last {
+                    if a as usize != b {
+                        test(a as usize, b, &mut hits);
                     }
                 }
             }
-            e = next[e as usize];
         }
-        next[k] = head[slot];
-        head[slot] = k as u32;
     }
-    for &l in &long {
+    for &l in &grid.long {
         for other in 0..segments.len() {
-            if other != l && !(long.contains(&other) && other < l) {
+            if other != l && !(grid.long.contains(&other) && other < l) {
                 test(l, other, &mut hits);
             }
         }

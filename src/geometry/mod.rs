@@ -2,6 +2,7 @@
 //! validated constructors, built-in shapes and measures. Topology (the element list)
 //! is kept apart from positions; derived quantities are computed on request.
 
+mod crossing_watch;
 mod curve_remesh;
 mod curves;
 mod intersect;
@@ -12,9 +13,10 @@ mod surface_remesh;
 mod surfaces;
 mod validate;
 
+pub use crossing_watch::CrossingWatch;
 pub use curve_remesh::{
-    adapt_curve, manage_curve, mesh_winding_number, regularize_curve, resolve_intersections, winding_number,
-    CurveRemeshSettings,
+    adapt_curve, manage_curve, mesh_winding_number, regularize_curve, resolve_crossings, resolve_intersections,
+    winding_number, CurveRemeshSettings,
 };
 pub use curves::{circle, ellipse, polygon, rectangle, union};
 pub use intersect::{find_periodic_intersections, find_segment_intersections, SegmentHit};

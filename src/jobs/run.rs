@@ -42,7 +42,7 @@ pub fn run_prepared(
 ) -> Result<JobOutcome, Box<JobFailure>> {
     match &job.mesh {
         AnyMesh::Curve(m) => {
-            let manager = job.curve_manager.map(|c| Box::new(c) as Box<dyn MeshManager<2>>);
+            let manager = job.curve_manager.map(|c| Box::new(c.watched()) as Box<dyn MeshManager<2>>);
             run_dim::<2>(job, m, manager, resume, cancel, events)
         }
         AnyMesh::Surface(m) => {

@@ -1,0 +1,284 @@
+//! Crossing checks of an evolving curve, skipped while a certificate from the last
+//! full check proves that no two segments can have crossed since.
+//!
+//! At a full check without crossings ([`super::find_segment_intersections`]) the
+//! segments are laid on the cells of [`RunGrid`] (side `c`). If, for every cell,
+//! all runs in the 3×3 block around it lie on one closed chain within `w` segments
+//! of each other (counted along the chain, the short way round), then any two
+//! segments closer than `c` are within `w` of each other along the chain: a
+//! point `P` of one and `Q` of the other with `|P − Q| < c` lie in cells at most one
+//! apart. Later, with the same connectivity:
+//!
+//! - *near pairs* (within `w` along the chain) cannot cross while every turning
+//!   angle is below `π/w`: the directions of a chain of at most `w + 1` segments
+//!   then lie in an open half-plane, the chain is monotone along some direction,
+//!   and two of its segments can meet only at a shared vertex;
+//! - *far pairs* were at least `c` apart and cannot meet while no vertex has moved
+//!   by `c/2` or more since (every point of a segment moves at most as far as its
+//!   farther end).
+//!
+//! Checking both costs three passes over the vertices (connectivity, displacement,
+//! turning), against one pass of the finder with its table; the finder runs again
+//! (and a new certificate is drawn) as soon as either condition fails.
+
+use super::intersect::{find_with_grid, pack, RunGrid};
+use super::{Point, SegmentHit};
+
+/// What the last full check proved, if anything.
+#[derive(Debug, Clone)]
+struct Certificate {
+    elements: Vec<[usize; 2]>,
+    anchor: Vec<Point<2>>,
+    /// Largest displacement from `anchor` the certificate allows (exclusive): `c/2`.
+    reach: f64,
+    /// `tan²(π/w)`: every turning angle must stay below `π/w`.
+    tan2: f64,
+}
+
+/// Crossing checks between the steps of one flow (see the module documentation).
+#[derive(Debug, Clone, Default)]
+pub struct CrossingWatch {
+    certificate: Option<Certificate>,
+    /// Full checks run (for tests and benchmarks).
+    pub full_checks: usize,
+    /// Checks answered by the certificate.
+    pub skipped: usize,
+}
+
+impl CrossingWatch {
+    /// All crossings among `segments` (as [`find_segment_intersections`]): none if
+    /// the certificate of the last full check still holds, else a full check.
+    pub fn crossings(&mut self, points: &[Point<2>], segments: &[[usize; 2]]) -> Vec<SegmentHit> {
+        if let Some(cert) = &self.certificate {
+            if holds(cert, points, segments) {
+                self.skipped += 1;
+                return Vec::new();
+            }
+        }
+        self.full_checks += 1;
+        let (hits, grid) = find_with_grid(points, segments);
+        self.certificate = if hits.is_empty() { certify(points, segments, &grid) } else { None };
+        hits
+    }
+}
+
+/// Whether the certificate still covers the curve `(points, segments)`.
+fn holds(cert: &Certificate, points: &[Point<2>], segments: &[[usize; 2]]) -> bool {
+    if cert.elements.as_slice() != segments || cert.anchor.len() != points.len() {
+        return false;
+    }
+    let reach2 = cert.reach * cert.reach;
+    if points.iter().zip(&cert.anchor).any(|(p, a)| (p - a).norm_squared() >= reach2) {
+        return false;
+    }
+    // every vertex turns by less than π/w: with u, v the segments before and after,
+    // u·v > 0 and (u × v)² < tan²(π/w) (u·v)² (w ≥ 2, so π/w ≤ π/2)
+    let mut into = vec![usize::MAX; points.len()];
+    for (e, s) in segments.iter().enumerate() {
+        into[s[1]] = e;
+    }
+    segments.iter().all(|s| {
+        let before = segments[into[s[0]]];
+        let u = points[before[1]] - points[before[0]];
+        let v = points[s[1]] - points[s[0]];
+        let dot = u.dot(&v);
+        let cross = u.x * v.y - u.y * v.x;
+        dot > 0.0 && cross * cross < cert.tan2 * dot * dot
+    })
+}
+
+/// The certificate of a curve without crossings, if its segments are closed
+/// chains stored in order (each segment starting where the one before ended,
+/// every chain closing on itself) and every 3×3 block of cells holds one stretch
+/// of one chain.
+fn certify(points: &[Point<2>], segments: &[[usize; 2]], grid: &RunGrid) -> Option<Certificate> {
+    let n = segments.len();
+    if n < 8 {
+        return None;
+    }
+    // chains: chain[e] = (start, length) of the chain of segment e
+    let mut chain = vec![(0usize, 0usize); n];
+    let mut start = 0;
+    for e in 1..=n {
+        if e == n || segments[e][0] != segments[e - 1][1] {
+            let len = e - start;
+            if segments[e - 1][1] != segments[start][0] {
+                return None; // not closed, or not in order
+            }
+            chain[start..e].fill((start, len));
+            start = e;
+        }
+    }
+    if !grid.long.is_empty() {
+        return None;
+    }
+    // the largest distance along a chain between segments of runs in one block
+    let mut w = 1usize;
+    for r in &grid.runs {
+        let (cx, cy) = ((r.cell >> 32) as u32, r.cell as u32);
+        let (a1, a2) = (r.first as usize, r.last as usize);
+        let (base, len) = chain[a1];
+        for dx in [-1i64, 0, 1] {
+            for dy in [-1i64, 0, 1] {
+                let (x, y) = (i64::from(cx) + dx, i64::from(cy) + dy);
+                if x < 0 || y < 0 || x > i64::from(u32::MAX) || y > i64::from(u32::MAX) {
+                    continue;
+                }
+                for o in grid.cell_runs(pack(x as u32, y as u32)) {
+                    let o = grid.runs[o];
+                    let (b1, b2) = (o.first as usize, o.last as usize);
+                    if chain[b1].0 != base {
+                        return None; // two chains in one block
+                    }
+                    w = w.max(span(a1 - base, a2 - base, b1 - base, b2 - base, len));
+                }
+            }
+        }
+    }
+    // with w + 1 segments in a window the turning angles must stay below π/w,
+    // which even a smooth curve cannot promise for windows of a quarter turn
+    if 4 * w > n {
+        return None;
+    }
+    let angle = std::f64::consts::PI / w.max(2) as f64;
+    Some(Certificate {
+        elements: segments.to_vec(),
+        anchor: points.to_vec(),
+        reach: 0.5 * grid.side,
+        tan2: angle.tan().powi(2),
+    })
+}
+
+/// Vertices strictly inside the shortest stretch of a closed chain of `len`
+/// segments that holds the segments `a1..=a2` and `b1..=b2` (positions along the
+/// chain).
+fn span(a1: usize, a2: usize, b1: usize, b2: usize, len: usize) -> usize {
+    let straight = a2.max(b2) - a1.min(b1);
+    // the other way round, when the two ranges are disjoint
+    let around = if a2 < b1 {
+        len - b1 + a2
+    } else if b2 < a1 {
+        len - a1 + b2
+    } else {
+        usize::MAX
+    };
+    straight.min(around)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::find_segment_intersections;
+
+    fn rng(state: &mut u64) -> f64 {
+        *state ^= *state << 13;
+        *state ^= *state >> 7;
+        *state ^= *state << 17;
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    fn closed(n: usize, f: impl Fn(f64) -> Point<2>) -> (Vec<Point<2>>, Vec<[usize; 2]>) {
+        let pts = (0..n).map(|k| f(std::f64::consts::TAU * k as f64 / n as f64)).collect();
+        (pts, (0..n).map(|k| [k, (k + 1) % n]).collect())
+    }
+
+    #[test]
+    fn spans_go_the_short_way_round() {
+        assert_eq!(span(0, 2, 3, 5, 100), 5);
+        assert_eq!(span(0, 2, 95, 98, 100), 100 - 95 + 2);
+        assert_eq!(span(10, 20, 15, 30, 100), 20);
+    }
+
+    /// The neck of a dumbbell squeezed step by step: the watch reports exactly what
+    /// the finder reports at every step, including the step at which the neck's
+    /// sides first cross, and skips most checks while the neck is wide.
+    #[test]
+    fn the_watch_agrees_with_the_finder_at_every_step() {
+        let (mut pts, segs) = closed(2000, |t| Point::<2>::new(2.0 * t.cos(), t.sin() * (0.3 + t.cos().powi(2))));
+        let mut watch = CrossingWatch::default();
+        let mut state = 7u64;
+        let mut crossed_at = None;
+        for step in 0..400 {
+            if step == 150 {
+                // the neck still wider than a few cells: mostly skipped
+                assert!(watch.skipped > 3 * watch.full_checks, "{} skipped, {} full", watch.skipped, watch.full_checks);
+            }
+            let hits = watch.crossings(&pts, &segs);
+            let truth = find_segment_intersections(&pts, &segs);
+            assert_eq!(hits.len(), truth.len(), "step {step}");
+            if !truth.is_empty() {
+                crossed_at.get_or_insert(step);
+            }
+            // squeeze the neck (|x| < 1), with a little noise on every vertex
+            for p in &mut pts {
+                let squeeze = 1e-3 * (1.0 - p.x * p.x).max(0.0);
+                p.y -= squeeze * p.y.signum();
+                p.x += 2e-6 * (rng(&mut state) - 0.5);
+                p.y += 2e-6 * (rng(&mut state) - 0.5);
+            }
+        }
+        assert!(crossed_at.is_some_and(|s| s > 200), "{crossed_at:?}");
+    }
+
+    /// Two circles approaching each other rigidly (no angle changes): the far
+    /// pairs' clearance, spent by the displacement, forces the full check in time.
+    #[test]
+    fn rigid_approach_is_caught_by_the_displacement() {
+        let n = 200;
+        let ring = |cx: f64, k: usize| {
+            let t = std::f64::consts::TAU * k as f64 / n as f64;
+            Point::<2>::new(cx + t.cos(), t.sin())
+        };
+        let mut pts: Vec<Point<2>> = (0..n).map(|k| ring(0.0, k)).chain((0..n).map(|k| ring(3.0, k))).collect();
+        let segs: Vec<[usize; 2]> = (0..2 * n).map(|k| [k, if k % n == n - 1 { k + 1 - n } else { k + 1 }]).collect();
+        let mut watch = CrossingWatch::default();
+        for step in 0..200 {
+            let truth = find_segment_intersections(&pts, &segs);
+            assert_eq!(watch.crossings(&pts, &segs).len(), truth.len(), "step {step}");
+            for p in &mut pts[n..] {
+                p.x -= 0.01; // the second circle moves left: overlap from step 100 on
+            }
+        }
+        assert!(watch.skipped > 50, "{}", watch.skipped);
+    }
+
+    /// Two neighbouring vertices of a circle trade places along the tangent (a
+    /// local tangle, each moving less than a segment): the turning angles force the
+    /// full check.
+    #[test]
+    fn a_local_tangle_is_caught_by_the_turning_angles() {
+        let (mut pts, segs) = closed(400, |t| Point::<2>::new(t.cos(), t.sin()));
+        let mut watch = CrossingWatch::default();
+        assert!(watch.crossings(&pts, &segs).is_empty());
+        assert!(watch.crossings(&pts, &segs).is_empty());
+        assert_eq!(watch.skipped, 1);
+        let (a, b) = (pts[10], pts[11]);
+        pts[10] = a + (b - a) * 1.4;
+        pts[11] = b + (a - b) * 1.4 + Point::<2>::new(1e-4, 1e-4);
+        let truth = find_segment_intersections(&pts, &segs);
+        assert!(!truth.is_empty());
+        assert_eq!(watch.crossings(&pts, &segs).len(), truth.len());
+    }
+
+    /// A certificate is not drawn for a curve that comes back close to itself
+    /// (two passes through one block of cells), nor kept when the connectivity
+    /// changes.
+    #[test]
+    fn close_passes_and_new_connectivity_force_full_checks() {
+        // a thin hairpin: the two sides are closer than a cell
+        let (pts, segs) = closed(400, |t| Point::<2>::new(t.cos(), 0.01 * t.sin()));
+        let mut watch = CrossingWatch::default();
+        watch.crossings(&pts, &segs);
+        watch.crossings(&pts, &segs);
+        assert_eq!((watch.full_checks, watch.skipped), (2, 0));
+        let (pts, segs) = closed(400, |t| Point::<2>::new(t.cos(), t.sin()));
+        let mut watch = CrossingWatch::default();
+        watch.crossings(&pts, &segs);
+        watch.crossings(&pts, &segs);
+        assert_eq!((watch.full_checks, watch.skipped), (1, 1));
+        let mut reversed = segs.clone();
+        reversed.rotate_left(1);
+        watch.crossings(&pts, &reversed);
+        assert_eq!(watch.full_checks, 2);
+    }
+}
