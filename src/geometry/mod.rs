@@ -4,6 +4,7 @@
 
 mod crossing_watch;
 mod curve_remesh;
+mod curve_topology;
 mod curves;
 mod intersect;
 mod measures;
@@ -14,10 +15,8 @@ mod surfaces;
 mod validate;
 
 pub use crossing_watch::CrossingWatch;
-pub use curve_remesh::{
-    adapt_curve, manage_curve, mesh_winding_number, regularize_curve, resolve_crossings, resolve_intersections,
-    winding_number, CurveRemeshSettings,
-};
+pub use curve_remesh::{adapt_curve, manage_curve, regularize_curve, CurveRemeshSettings};
+pub use curve_topology::{mesh_winding_number, resolve_crossings, resolve_intersections, winding_number};
 pub use curves::{circle, ellipse, polygon, rectangle, union};
 pub use intersect::{find_periodic_intersections, find_segment_intersections, SegmentHit};
 pub use measures::MeshQuality;
