@@ -169,13 +169,7 @@ fn span(a1: usize, a2: usize, b1: usize, b2: usize, len: usize) -> usize {
 mod tests {
     use super::*;
     use crate::geometry::find_segment_intersections;
-
-    fn rng(state: &mut u64) -> f64 {
-        *state ^= *state << 13;
-        *state ^= *state >> 7;
-        *state ^= *state << 17;
-        (*state >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use crate::geometry::intersect::tests::rng;
 
     fn closed(n: usize, f: impl Fn(f64) -> Point<2>) -> (Vec<Point<2>>, Vec<[usize; 2]>) {
         let pts = (0..n).map(|k| f(std::f64::consts::TAU * k as f64 / n as f64)).collect();

@@ -65,7 +65,7 @@ pub fn find_periodic_intersections(points: &[Point<2>], segments: &[[usize; 2]],
             Some(SegmentHit { a, b, s, t, point: h.point })
         })
         .collect();
-    hits.sort_by(|x, y| (x.a, x.b).cmp(&(y.a, y.b)));
+    hits.sort_by_key(|h| (h.a, h.b));
     hits.dedup_by(|x, y| (x.a, x.b) == (y.a, y.b));
     hits
 }
@@ -163,7 +163,7 @@ impl RunGrid {
             }
             std::mem::swap(&mut before, &mut now);
         }
-        let bits = ((4 * runs.len()).next_power_of_two().trailing_zeros() + 1) / 2;
+        let bits = (4 * runs.len()).next_power_of_two().trailing_zeros().div_ceil(2);
         let mut grid = RunGrid { side, runs, long, bits, head: vec![NONE; 1usize << (2 * bits)], next: Vec::new() };
         grid.next = vec![NONE; grid.runs.len()];
         for k in 0..grid.runs.len() {
@@ -276,7 +276,7 @@ fn find_on_grid(
             }
         }
     }
-    hits.sort_by(|x, y| (x.a, x.b).cmp(&(y.a, y.b)));
+    hits.sort_by_key(|h| (h.a, h.b));
     hits.dedup_by(|x, y| (x.a, x.b) == (y.a, y.b));
     hits
 }
@@ -343,7 +343,7 @@ fn intersect_pair(sa: &Seg, sb: &Seg, a: usize, b: usize) -> Option<SegmentHit> 
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     /// Every pair, tested directly.
@@ -361,7 +361,7 @@ mod tests {
     }
 
     /// A tiny deterministic generator (xorshift), uniform in [0, 1).
-    fn rng(state: &mut u64) -> f64 {
+    pub(in crate::geometry) fn rng(state: &mut u64) -> f64 {
         *state ^= *state << 13;
         *state ^= *state >> 7;
         *state ^= *state << 17;
