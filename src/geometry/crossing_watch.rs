@@ -21,7 +21,7 @@
 //! turning), against one pass of the finder with its table; the finder runs again
 //! (and a new certificate is drawn) as soon as either condition fails.
 
-use super::intersect::{find_with_grid, pack, RunGrid};
+use super::intersect::{cross, find_with_grid, pack, RunGrid};
 use super::{Point, SegmentHit};
 
 /// What the last full check proved, if anything.
@@ -82,7 +82,7 @@ fn holds(cert: &Certificate, points: &[Point<2>], segments: &[[usize; 2]]) -> bo
         let u = points[before[1]] - points[before[0]];
         let v = points[s[1]] - points[s[0]];
         let dot = u.dot(&v);
-        let cross = u.x * v.y - u.y * v.x;
+        let cross = cross(u, v);
         dot > 0.0 && cross * cross < cert.tan2 * dot * dot
     })
 }
