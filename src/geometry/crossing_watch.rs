@@ -17,9 +17,10 @@
 //!   by `c/2` or more since (every point of a segment moves at most as far as its
 //!   farther end).
 //!
-//! Checking both costs three passes over the vertices (connectivity, displacement,
-//! turning), against one pass of the finder with its table; the finder runs again
-//! (and a new certificate is drawn) as soon as either condition fails.
+//! Checking both costs a comparison of the connectivity and one pass along the
+//! chains (displacement and turning at every vertex), against one pass of the
+//! finder with its table; the finder runs again (and a new certificate is drawn)
+//! as soon as either condition fails.
 
 use super::intersect::{cross, find_with_grid, pack, RunGrid};
 use super::{Point, SegmentHit};
@@ -28,6 +29,8 @@ use super::{Point, SegmentHit};
 #[derive(Debug, Clone)]
 struct Certificate {
     elements: Vec<[usize; 2]>,
+    /// The closed chains, as ranges of `elements`.
+    chains: Vec<std::ops::Range<usize>>,
     anchor: Vec<Point<2>>,
     /// Largest displacement from `anchor` the certificate allows (exclusive): `c/2`.
     reach: f64,
@@ -62,28 +65,25 @@ impl CrossingWatch {
     }
 }
 
-/// Whether the certificate still covers the curve `(points, segments)`.
+/// Whether the certificate still covers the curve `(points, segments)`: one pass
+/// along the chains checks the displacement of every segment's first vertex (each
+/// vertex of a closed chain is one) and the turning angle there.
 fn holds(cert: &Certificate, points: &[Point<2>], segments: &[[usize; 2]]) -> bool {
     if cert.elements.as_slice() != segments || cert.anchor.len() != points.len() {
         return false;
     }
     let reach2 = cert.reach * cert.reach;
-    if points.iter().zip(&cert.anchor).any(|(p, a)| (p - a).norm_squared() >= reach2) {
-        return false;
-    }
     // every vertex turns by less than π/w: with u, v the segments before and after,
     // u·v > 0 and (u × v)² < tan²(π/w) (u·v)² (w ≥ 2, so π/w ≤ π/2)
-    let mut into = vec![usize::MAX; points.len()];
-    for (e, s) in segments.iter().enumerate() {
-        into[s[1]] = e;
-    }
-    segments.iter().all(|s| {
-        let before = segments[into[s[0]]];
-        let u = points[before[1]] - points[before[0]];
-        let v = points[s[1]] - points[s[0]];
-        let dot = u.dot(&v);
-        let cross = cross(u, v);
-        dot > 0.0 && cross * cross < cert.tan2 * dot * dot
+    cert.chains.iter().all(|r| {
+        let last = segments[r.end - 1];
+        let mut u = points[last[1]] - points[last[0]];
+        segments[r.clone()].iter().all(|&[a, b]| {
+            let v = points[b] - points[a];
+            let (dot, cross) = (u.dot(&v), cross(u, v));
+            u = v;
+            (points[a] - cert.anchor[a]).norm_squared() < reach2 && dot > 0.0 && cross * cross < cert.tan2 * dot * dot
+        })
     })
 }
 
@@ -98,6 +98,7 @@ fn certify(points: &[Point<2>], segments: &[[usize; 2]], grid: &RunGrid) -> Opti
     }
     // chains: chain[e] = (start, length) of the chain of segment e
     let mut chain = vec![(0usize, 0usize); n];
+    let mut chains = Vec::new();
     let mut start = 0;
     for e in 1..=n {
         if e == n || segments[e][0] != segments[e - 1][1] {
@@ -106,6 +107,7 @@ fn certify(points: &[Point<2>], segments: &[[usize; 2]], grid: &RunGrid) -> Opti
                 return None; // not closed, or not in order
             }
             chain[start..e].fill((start, len));
+            chains.push(start..e);
             start = e;
         }
     }
@@ -143,6 +145,7 @@ fn certify(points: &[Point<2>], segments: &[[usize; 2]], grid: &RunGrid) -> Opti
     let angle = std::f64::consts::PI / w.max(2) as f64;
     Some(Certificate {
         elements: segments.to_vec(),
+        chains,
         anchor: points.to_vec(),
         reach: 0.5 * grid.side,
         tan2: angle.tan().powi(2),

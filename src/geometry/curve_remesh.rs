@@ -86,34 +86,32 @@ pub(super) fn loop_area(l: &[Point<2>]) -> f64 {
     (0..l.len()).map(|k| 0.5 * cross(l[k], l[(k + 1) % l.len()])).sum()
 }
 
-/// Lengths of the segments of a loop: `len[i] = |X_{i+1} − X_i|` (the last one the
-/// closing segment).
-fn segment_lengths(l: &Loop) -> Vec<f64> {
+/// Segment lengths and turning angles of a loop in one pass: `len[i] = |X_{i+1} − X_i|`
+/// (the last one the closing segment) and, at every vertex, the turning angle as the
+/// chord `|t_i − t_{i−1}|` of the two adjacent unit tangents (`2 sin(β/2)`: the angle
+/// itself for small angles, monotone in it, and free of trigonometric calls).
+fn metrics(l: &Loop) -> (Vec<f64>, Vec<f64>) {
     let n = l.len();
-    (0..n).map(|i| (if i + 1 == n { l.p[0] + l.shift } else { l.p[i + 1] } - l.p[i]).norm()).collect()
-}
-
-/// Turning angle at every vertex of a loop, measured as the chord `|t₁ − t₂|` of the
-/// two adjacent unit tangents (`2 sin(β/2)`: the angle itself for small angles,
-/// monotone in it, and free of trigonometric calls); `len` from [`segment_lengths`].
-fn turning_angles(l: &Loop, len: &[f64]) -> Vec<f64> {
-    let n = l.len();
-    let tangent = |i: usize| {
-        let d = if i + 1 == n { l.p[0] + l.shift } else { l.p[i + 1] } - l.p[i];
-        if len[i] > 0.0 {
-            d * len[i].recip()
-        } else {
-            d
-        }
-    };
-    let mut beta = Vec::with_capacity(n);
-    let mut before = tangent(n - 1);
-    for i in 0..n {
-        let t = tangent(i);
+    let (mut len, mut beta) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    if n == 0 {
+        return (len, beta);
+    }
+    let unit = |d: Point<2>, h: f64| if h > 0.0 { d * h.recip() } else { d };
+    let closing = l.p[0] + l.shift - l.p[n - 1];
+    let h_closing = closing.norm();
+    let t_closing = unit(closing, h_closing);
+    let mut before = t_closing;
+    for w in l.p.windows(2) {
+        let d = w[1] - w[0];
+        let h = d.norm();
+        let t = unit(d, h);
+        len.push(h);
         beta.push((t - before).norm());
         before = t;
     }
-    beta
+    len.push(h_closing);
+    beta.push((t_closing - before).norm());
+    (len, beta)
 }
 
 /// Desired segment length at every vertex: `ε / κ_S` (`κ_S = β_S / h_S`) clamped to
@@ -181,8 +179,8 @@ pub fn regularize_curve(mesh: &CurveMesh, sweeps: usize, sizes: Option<&CurveRem
         let start = l.p.clone();
         let hd = match sizes {
             Some(s) => {
-                let len = segment_lengths(&l);
-                desired_sizes(&len, &turning_angles(&l, &len), s)
+                let (len, beta) = metrics(&l);
+                desired_sizes(&len, &beta, s)
             }
             None => vec![1.0; l.len()],
         };
@@ -205,23 +203,16 @@ fn regularize_loop(l: &mut Loop, hd: &[f64], sweeps: usize) {
     if n < 3 || sweeps == 0 {
         return;
     }
-    let before = |k: usize| if k == 0 { n - 1 } else { k - 1 };
-    let after = |k: usize| if k + 1 == n { 0 } else { k + 1 };
-    let lambda: Vec<f64> = (0..n)
-        .map(|k| {
-            let (hp, hi, hn) = (hd[before(k)], hd[k], hd[after(k)]);
-            (hp + hi) / (hp + 2.0 * hi + hn)
-        })
-        .collect();
     let shift = l.shift;
     let p = &mut l.p;
     let mut relax = |k: usize| {
-        let prev = if k == 0 { p[n - 1] - shift } else { p[k - 1] };
-        let next = if k + 1 == n { p[0] + shift } else { p[k + 1] };
+        let (prev, hp) = if k == 0 { (p[n - 1] - shift, hd[n - 1]) } else { (p[k - 1], hd[k - 1]) };
+        let (next, hn) = if k + 1 == n { (p[0] + shift, hd[0]) } else { (p[k + 1], hd[k + 1]) };
+        let lambda = (hp + hd[k]) / (hp + 2.0 * hd[k] + hn);
         let chord = next - prev;
         let cc = chord.dot(&chord);
         if cc > 0.0 {
-            let alpha = (prev + chord * lambda[k] - p[k]).dot(&chord) / cc;
+            let alpha = (prev + chord * lambda - p[k]).dot(&chord) / cc;
             p[k] += chord * alpha;
         }
     };
@@ -271,8 +262,7 @@ pub fn adapt_curve(mesh: &CurveMesh, s: &CurveRemeshSettings) -> Result<Option<C
     let mut changed = false;
     let mut out = Vec::new();
     for l in loops_of(mesh) {
-        let len = segment_lengths(&l);
-        let beta = turning_angles(&l, &len);
+        let (len, beta) = metrics(&l);
         match adapt_loop(&l, &len, &beta, s) {
             Some(new) => {
                 changed = true;
@@ -317,8 +307,7 @@ fn adapt_loop(l: &Loop, len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> O
     let coarse;
     let (l2, len2, beta2) = if removed > 0 {
         let l2 = Loop { p: (0..n).filter(|&i| keep[i]).map(|i| l.p[i]).collect(), shift: l.shift };
-        let len2 = segment_lengths(&l2);
-        let beta2 = turning_angles(&l2, &len2);
+        let (len2, beta2) = metrics(&l2);
         coarse = (l2, len2, beta2);
         (&coarse.0, &coarse.1[..], &coarse.2[..])
     } else {
@@ -362,19 +351,25 @@ pub fn manage_curve(
     if !adapt && sweeps == 0 {
         return Ok((None, false));
     }
-    let cycles = mesh.cycles();
-    let mut loops = Vec::with_capacity(cycles.len());
+    let x = mesh.positions();
+    // meshes built from polylines store each loop as a run of vertices: no cycle
+    // search, no gather, no scatter
+    let runs = if mesh.period().is_none() { contiguous_loops(mesh) } else { None };
+    let cycles = if runs.is_none() { mesh.cycles() } else { Vec::new() };
+    let count = runs.as_ref().map_or(cycles.len(), Vec::len);
+    let mut loops = Vec::with_capacity(count);
     let mut changed = false;
-    for cyc in &cycles {
-        let mut l = lifted_loop(mesh, cyc);
-        let mut len = segment_lengths(&l);
-        let mut beta = turning_angles(&l, &len);
+    for c in 0..count {
+        let mut l = match &runs {
+            Some(r) => Loop { p: x[r[c].clone()].to_vec(), shift: Point::<2>::zeros() },
+            None => lifted_loop(mesh, &cycles[c]),
+        };
+        let (mut len, mut beta) = metrics(&l);
         if adapt {
             if let Some(new) = adapt_loop(&l, &len, &beta, s) {
                 changed = true;
                 l = new;
-                len = segment_lengths(&l);
-                beta = turning_angles(&l, &len);
+                (len, beta) = metrics(&l);
             }
         }
         if sweeps > 0 {
@@ -387,7 +382,14 @@ pub fn manage_curve(
         return rebuild(mesh, loops.into_iter().map(|l| l.p).collect(), false).map(|m| (Some(m), true));
     }
     // same connectivity: back to the mesh's own representatives
-    let x = mesh.positions();
+    if let Some(runs) = runs {
+        let mut pos = Vec::with_capacity(x.len());
+        for l in loops {
+            pos.extend_from_slice(&l.p);
+        }
+        debug_assert!(runs.last().is_some_and(|r| r.end == pos.len()));
+        return Ok((Some(mesh.with_positions(pos)), false));
+    }
     let mut pos = x.to_vec();
     for (cyc, l) in cycles.iter().zip(&loops) {
         if mesh.period().is_none() {
@@ -401,6 +403,30 @@ pub fn manage_curve(
         }
     }
     Ok((Some(mesh.with_positions(pos)), false))
+}
+
+/// The loops of a closed curve mesh as vertex ranges, if every element `e` is
+/// `[e, e + 1]` except the last of each loop, which closes it (the layout of meshes
+/// built from polylines); `None` otherwise.
+fn contiguous_loops(mesh: &CurveMesh) -> Option<Vec<std::ops::Range<usize>>> {
+    let elements = mesh.elements();
+    if elements.len() != mesh.num_vertices() || elements.is_empty() {
+        return None;
+    }
+    let mut runs = Vec::new();
+    let mut start = 0;
+    for (e, &[a, b]) in elements.iter().enumerate() {
+        if a != e {
+            return None;
+        }
+        if b == start {
+            runs.push(start..e + 1);
+            start = e + 1;
+        } else if b != e + 1 {
+            return None;
+        }
+    }
+    (start == elements.len()).then_some(runs)
 }
 
 /// `−∮ y dx` of a loop: the shoelace area for closed loops, and for loops winding
