@@ -20,10 +20,18 @@
 //! Checking both costs a comparison of the connectivity and one pass along the
 //! chains (displacement and turning at every vertex), against one pass of the
 //! finder with its table; the finder runs again (and a new certificate is drawn)
-//! as soon as either condition fails.
+//! as soon as either condition fails. Any grid will do for the certificate: a
+//! coarse one (cells of 32 mean segment lengths, 8× the finder's) has a larger `w`
+//! and so a tighter turning bound, but lets vertices move 8× farther, and it is
+//! tried first.
 
 use super::intersect::{cross, find_with_grid, pack, RunGrid};
 use super::{Point, SegmentHit};
+
+/// Cells of the coarse certificate, in mean segment lengths (the finder's are 4):
+/// a certificate then holds while no vertex has moved by 16 of them, as long as no
+/// vertex turns by more than about π/(100–150) on a smooth curve.
+const COARSE_CELLS: f64 = 32.0;
 
 /// What the last full check proved, if anything.
 #[derive(Debug, Clone)]
@@ -31,11 +39,16 @@ struct Certificate {
     elements: Vec<[usize; 2]>,
     /// The closed chains, as ranges of `elements`.
     chains: Vec<std::ops::Range<usize>>,
+    /// Whether segment `e` of every chain is `[e, e + 1]` (the last one closing it):
+    /// chains are then also ranges of vertices.
+    contiguous: bool,
     anchor: Vec<Point<2>>,
     /// Largest displacement from `anchor` the certificate allows (exclusive): `c/2`.
     reach: f64,
     /// `tan²(π/w)`: every turning angle must stay below `π/w`.
     tan2: f64,
+    /// `tan²(π/2w)`.
+    tan2_half: f64,
 }
 
 /// Crossing checks between the steps of one flow (see the module documentation).
@@ -60,7 +73,18 @@ impl CrossingWatch {
         }
         self.full_checks += 1;
         let (hits, grid) = find_with_grid(points, segments);
-        self.certificate = if hits.is_empty() { certify(points, segments, &grid) } else { None };
+        self.certificate = if hits.is_empty() {
+            // a coarse certificate reaches farther (a full check less often) where
+            // the curve turns slowly enough; else the finder's own cells
+            // (kept only if the curve turns by at most half its bound now, or it
+            // would fail at once)
+            let coarse = RunGrid::build_scaled(points, segments, None, COARSE_CELLS);
+            certify(points, segments, &coarse)
+                .filter(|c| holds_with(c, points, segments, c.tan2_half))
+                .or_else(|| certify(points, segments, &grid))
+        } else {
+            None
+        };
         hits
     }
 }
@@ -69,20 +93,44 @@ impl CrossingWatch {
 /// along the chains checks the displacement of every segment's first vertex (each
 /// vertex of a closed chain is one) and the turning angle there.
 fn holds(cert: &Certificate, points: &[Point<2>], segments: &[[usize; 2]]) -> bool {
+    holds_with(cert, points, segments, cert.tan2)
+}
+
+/// [`holds`] with the turning bound `tan2` in place of the certificate's.
+fn holds_with(cert: &Certificate, points: &[Point<2>], segments: &[[usize; 2]], tan2: f64) -> bool {
     if cert.elements.as_slice() != segments || cert.anchor.len() != points.len() {
         return false;
     }
     let reach2 = cert.reach * cert.reach;
     // every vertex turns by less than π/w: with u, v the segments before and after,
     // u·v > 0 and (u × v)² < tan²(π/w) (u·v)² (w ≥ 2, so π/w ≤ π/2)
+    let fine = |u: Point<2>, v: Point<2>, moved: Point<2>| {
+        let (dot, cross) = (u.dot(&v), cross(u, v));
+        (moved.norm_squared() < reach2) & (dot > 0.0) & (cross * cross < tan2 * dot * dot)
+    };
+    if cert.contiguous {
+        // chains stored as runs of vertices: slices, no gathers, and a count
+        // instead of an early exit, so that the pass runs two lanes at a time
+        return cert.chains.iter().all(|r| {
+            let (p, a) = (&points[r.clone()], &cert.anchor[r.clone()]);
+            let m = p.len();
+            let ends = [(p[m - 1], p[0], p[1], a[0]), (p[m - 2], p[m - 1], p[0], a[m - 1])];
+            let bad: usize = p
+                .windows(3)
+                .zip(&a[1..m - 1])
+                .map(|(w, &a)| usize::from(!fine(w[1] - w[0], w[2] - w[1], w[1] - a)))
+                .sum();
+            bad == 0 && ends.iter().all(|&(x0, x1, x2, a)| fine(x1 - x0, x2 - x1, x1 - a))
+        });
+    }
     cert.chains.iter().all(|r| {
         let last = segments[r.end - 1];
         let mut u = points[last[1]] - points[last[0]];
         segments[r.clone()].iter().all(|&[a, b]| {
             let v = points[b] - points[a];
-            let (dot, cross) = (u.dot(&v), cross(u, v));
+            let ok = fine(u, v, points[a] - cert.anchor[a]);
             u = v;
-            (points[a] - cert.anchor[a]).norm_squared() < reach2 && dot > 0.0 && cross * cross < cert.tan2 * dot * dot
+            ok
         })
     })
 }
@@ -145,10 +193,12 @@ fn certify(points: &[Point<2>], segments: &[[usize; 2]], grid: &RunGrid) -> Opti
     let angle = std::f64::consts::PI / w.max(2) as f64;
     Some(Certificate {
         elements: segments.to_vec(),
+        contiguous: segments.iter().enumerate().all(|(e, s)| s[0] == e),
         chains,
         anchor: points.to_vec(),
         reach: 0.5 * grid.side,
         tan2: angle.tan().powi(2),
+        tan2_half: (0.5 * angle).tan().powi(2),
     })
 }
 
@@ -215,6 +265,34 @@ mod tests {
             }
         }
         assert!(crossed_at.is_some_and(|s| s > 200), "{crossed_at:?}");
+    }
+
+    /// A large smooth circle shrinking slowly, with noise: the coarse certificate
+    /// (vertices may move 16 mean segment lengths) answers most checks, and the
+    /// watch still agrees with the finder when the circle is pinched at the end.
+    #[test]
+    fn a_slowly_moving_smooth_curve_is_watched_from_coarse_cells() {
+        let (mut pts, segs) = closed(4000, |t| Point::<2>::new(t.cos(), t.sin()));
+        let mut watch = CrossingWatch::default();
+        let mut state = 11u64;
+        for step in 0..100 {
+            let truth = find_segment_intersections(&pts, &segs);
+            assert_eq!(watch.crossings(&pts, &segs).len(), truth.len(), "step {step}");
+            for p in &mut pts {
+                *p *= 1.0 - 1e-3;
+                p.x += 1e-6 * (rng(&mut state) - 0.5);
+            }
+        }
+        // the fine cells (2 mean lengths of reach) would need a full check every
+        // third step
+        assert!(watch.full_checks <= 8, "{} full, {} skipped", watch.full_checks, watch.skipped);
+        // fold two vertices over: caught by the turning angles
+        let (a, b) = (pts[10], pts[11]);
+        pts[10] = a + (b - a) * 1.4;
+        pts[11] = b + (a - b) * 1.4 + Point::<2>::new(1e-5, 1e-5);
+        let truth = find_segment_intersections(&pts, &segs);
+        assert!(!truth.is_empty());
+        assert_eq!(watch.crossings(&pts, &segs).len(), truth.len());
     }
 
     /// Two circles approaching each other rigidly (no angle changes): the far

@@ -3,8 +3,8 @@
 //! turning angle at vertex `S`); topological changes are in `curve_topology`. Pure
 //! functions from a curve mesh to a curve mesh.
 
+use super::curve_loop::{desired_sizes, metrics, regularize_loop, size_bounds, Loop};
 use super::curves::{from_polylines, from_polylines_trusted};
-use super::intersect::cross;
 use super::{CurveMesh, Mesh, MeshError, Point};
 
 /// Parameters of curve mesh management.
@@ -20,34 +20,6 @@ pub struct CurveRemeshSettings {
     /// Area-conserving flows (`H^{-1}`): after refinement/coarsening each component
     /// is offset along its normals to keep its area (see `keep_area`).
     pub keep_area: bool,
-}
-
-/// One component as a polyline: its points and the shift of the closing segment
-/// (from the last point to `first + shift`; nonzero for a component winding around
-/// a periodic mesh).
-#[derive(Debug, Clone)]
-pub(super) struct Loop {
-    pub(super) p: Vec<Point<2>>,
-    pub(super) shift: Point<2>,
-}
-
-impl Loop {
-    pub(super) fn len(&self) -> usize {
-        self.p.len()
-    }
-
-    /// Point `k` for `−n ≤ k < 2n`, continued across the closing segment.
-    #[inline]
-    pub(super) fn at(&self, k: isize) -> Point<2> {
-        let n = self.p.len() as isize;
-        if k < 0 {
-            self.p[(k + n) as usize] - self.shift
-        } else if k >= n {
-            self.p[(k - n) as usize] + self.shift
-        } else {
-            self.p[k as usize]
-        }
-    }
 }
 
 fn loops_of(mesh: &CurveMesh) -> Vec<Loop> {
@@ -82,90 +54,6 @@ pub(super) fn rebuild(like: &CurveMesh, parts: Vec<Vec<Point<2>>>, validate: boo
     }
 }
 
-pub(super) fn loop_area(l: &[Point<2>]) -> f64 {
-    (0..l.len()).map(|k| 0.5 * cross(l[k], l[(k + 1) % l.len()])).sum()
-}
-
-/// Segment lengths and turning angles of a loop in one pass: `len[i] = |X_{i+1} − X_i|`
-/// (the last one the closing segment) and, at every vertex, the turning angle as the
-/// chord `|t_i − t_{i−1}|` of the two adjacent unit tangents (`2 sin(β/2)`: the angle
-/// itself for small angles, monotone in it, and free of trigonometric calls).
-fn metrics(l: &Loop) -> (Vec<f64>, Vec<f64>) {
-    let n = l.len();
-    let (mut len, mut beta) = (Vec::with_capacity(n), Vec::with_capacity(n));
-    if n == 0 {
-        return (len, beta);
-    }
-    let unit = |d: Point<2>, h: f64| if h > 0.0 { d * h.recip() } else { d };
-    let closing = l.p[0] + l.shift - l.p[n - 1];
-    let h_closing = closing.norm();
-    let t_closing = unit(closing, h_closing);
-    let mut before = t_closing;
-    for w in l.p.windows(2) {
-        let d = w[1] - w[0];
-        let h = d.norm();
-        let t = unit(d, h);
-        len.push(h);
-        beta.push((t - before).norm());
-        before = t;
-    }
-    len.push(h_closing);
-    beta.push((t_closing - before).norm());
-    (len, beta)
-}
-
-/// Desired segment length at every vertex: `ε / κ_S` (`κ_S = β_S / h_S`) clamped to
-/// `[h_min, h_max]` gives the shape (in curved parts mostly `h_min`, larger where the
-/// curve is nearly straight); the sizes are that shape times the scale `c` for which
-/// they add up to the loop's length, clamped to `[1.25 h_min, 0.8 h_max]`. The
-/// regularization only sees ratios of neighbouring sizes; scaled so, it aims at
-/// lengths the loop can have, and does not push segments past `h_max` (below
-/// `h_min`), where adaptivity would split (merge) them again at the next step — a
-/// 10k-vertex curve was re-meshed at 30 of 40 steps before.
-fn desired_sizes(len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> Vec<f64> {
-    let n = len.len();
-    let total: f64 = len.iter().sum();
-    // the shape of the sizes: ε/κ_S, clamped
-    let shape: Vec<f64> = (0..n)
-        .map(|i| {
-            let h = 0.5 * (len[if i == 0 { n - 1 } else { i - 1 }] + len[i]);
-            let kappa = beta[i] / h.max(f64::MIN_POSITIVE);
-            (s.epsilon / kappa.max(1e-300)).clamp(s.h_min, s.h_max)
-        })
-        .collect();
-    // a margin inside [h_min, h_max], so that motion does not trip adaptivity
-    let (lo, hi) = (1.25 * s.h_min, 0.8 * s.h_max);
-    if n as f64 * hi <= total {
-        return vec![hi; n];
-    }
-    if n as f64 * lo >= total {
-        return vec![lo; n];
-    }
-    // Newton on the piecewise linear, nondecreasing Σ clamp(c shape) − total
-    let finite: f64 = shape.iter().filter(|r| r.is_finite()).sum();
-    let mut c = if finite > 0.0 { total / finite } else { 1.0 };
-    for _ in 0..30 {
-        let (mut sum, mut slope) = (0.0, 0.0);
-        for &r in &shape {
-            let h = c * r;
-            if h <= lo {
-                sum += lo;
-            } else if h >= hi {
-                sum += hi;
-            } else {
-                sum += h;
-                slope += r;
-            }
-        }
-        let f = sum - total;
-        if f.abs() <= 1e-9 * total || slope == 0.0 {
-            break;
-        }
-        c = (c - f / slope).max(0.5 * c);
-    }
-    shape.iter().map(|&r| (c * r).clamp(lo, hi)).collect()
-}
-
 /// Tangential regularization: `sweeps` Gauss–Seidel sweeps moving every vertex
 /// parallel to the chord of its neighbours towards the point that splits the chord in
 /// the ratio of the desired sizes (equal lengths when `sizes` is `None`). The enclosed
@@ -184,53 +72,13 @@ pub fn regularize_curve(mesh: &CurveMesh, sweeps: usize, sizes: Option<&CurveRem
             }
             None => vec![1.0; l.len()],
         };
-        regularize_loop(&mut l, &hd, sweeps);
+        regularize_loop(&mut l, &hd, sweeps, sizes.map(size_bounds));
         // back to the mesh's own representatives (lifting shifted some by periods)
         for ((&v, p), p0) in cyc.iter().zip(&l.p).zip(&start) {
             pos[v] += p - p0;
         }
     }
     mesh.with_positions(pos)
-}
-
-/// The sweeps of [`regularize_curve`] on one loop with desired sizes `hd`, even
-/// vertices first, then odd ones: vertex `k` moves along the chord
-/// `c = X_{k+1} − X_{k−1}` to `X_{k−1} + λ_k c`,
-/// `λ_k = (h_{k−1} + h_k)/(h_{k−1} + 2h_k + h_{k+1})`, i.e. by
-/// `((X_{k−1} + λ_k c − X_k)·c / |c|²) c`.
-fn regularize_loop(l: &mut Loop, hd: &[f64], sweeps: usize) {
-    let n = l.len();
-    if n < 3 || sweeps == 0 {
-        return;
-    }
-    let shift = l.shift;
-    let p = &mut l.p;
-    let mut relax = |k: usize| {
-        let (prev, hp) = if k == 0 { (p[n - 1] - shift, hd[n - 1]) } else { (p[k - 1], hd[k - 1]) };
-        let (next, hn) = if k + 1 == n { (p[0] + shift, hd[0]) } else { (p[k + 1], hd[k + 1]) };
-        let lambda = (hp + hd[k]) / (hp + 2.0 * hd[k] + hn);
-        let chord = next - prev;
-        let cc = chord.dot(&chord);
-        if cc > 0.0 {
-            let alpha = (prev + chord * lambda - p[k]).dot(&chord) / cc;
-            p[k] += chord * alpha;
-        }
-    };
-    // red–black order: the moves of one colour do not depend on each other (nor
-    // interact in the area), so they pipeline; with n odd the last vertex, a
-    // neighbour of vertex 0, goes alone
-    let odd_tail = n % 2 == 1;
-    for _ in 0..sweeps {
-        for k in (0..n - usize::from(odd_tail)).step_by(2) {
-            relax(k);
-        }
-        for k in (1..n).step_by(2) {
-            relax(k);
-        }
-        if odd_tail {
-            relax(n - 1);
-        }
-    }
 }
 
 /// The cycle `cyc` of `mesh` as a loop lifted vertex by vertex.
@@ -252,11 +100,16 @@ fn lifted_loop(mesh: &CurveMesh, cyc: &[usize]) -> Loop {
     Loop { p, shift }
 }
 
+/// Flat vertices are removed only where the merged segment stays below this times
+/// `h_max`, the largest size the regularization aims at.
+const MERGED_MAX: f64 = 0.8;
+
 /// Refinement and coarsening. A segment is split (at the four-point subdivision
 /// point, which lies on a smooth curve through the neighbours) when it is longer
 /// than `h_max`, or when `h β > ε` at one of its ends and both halves stay above
-/// `h_min`; a vertex is removed when `h β < ε/8` (or a neighbouring segment is
-/// shorter than `h_min`) and the merged segment stays below `h_max`. Returns `None`
+/// `h_min`; a vertex is removed when a neighbouring segment is shorter than `h_min`
+/// and the merged segment stays below `h_max`, or when `h β < ε/8` and the merged
+/// segment stays below `0.8 h_max` (the margin of [`desired_sizes`]). Returns `None`
 /// if nothing changed.
 pub fn adapt_curve(mesh: &CurveMesh, s: &CurveRemeshSettings) -> Result<Option<CurveMesh>, MeshError> {
     let mut changed = false;
@@ -280,6 +133,9 @@ pub fn adapt_curve(mesh: &CurveMesh, s: &CurveRemeshSettings) -> Result<Option<C
 /// [`adapt_curve`] on one loop, given its segment lengths and turning angles.
 fn adapt_loop(l: &Loop, len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> Option<Loop> {
     let n = l.len();
+    if !may_adapt(len, beta, s) {
+        return None;
+    }
     let before = |i: usize| if i == 0 { n - 1 } else { i - 1 };
     // coarsening: never two neighbours in one pass, keep at least 8 vertices
     let mut keep = vec![true; n];
@@ -291,7 +147,10 @@ fn adapt_loop(l: &Loop, len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> O
         let (lp, li) = (len[before(i)], len[i]);
         let short = li.min(lp) < s.h_min;
         let flat = beta[i] * li.max(lp) < s.epsilon / 8.0;
-        if (short || flat) && li + lp <= s.h_max && (i + 1 < n || keep[0]) {
+        // a flat vertex goes only if the merged segment keeps the sizes' margin
+        // below h_max, or a little stretching splits it again at the next step
+        let room = if short { s.h_max } else { MERGED_MAX * s.h_max };
+        if (short || flat) && li + lp <= room && (i + 1 < n || keep[0]) {
             keep[i] = false;
             removed += 1;
             short_removed += usize::from(short);
@@ -337,6 +196,34 @@ fn adapt_loop(l: &Loop, len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> O
     Some(if s.keep_area { Loop { p: keep_area(out, signed_area(l)), shift: l.shift } } else { out })
 }
 
+/// Whether [`adapt_loop`] may change the loop, in one branch-free pass (the common
+/// answer is no): some segment is shorter than `h_min`, or one of them would be
+/// split, or at least the batch of flat vertices is there.
+fn may_adapt(len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> bool {
+    let n = len.len();
+    if n < 2 {
+        return false;
+    }
+    // per vertex: (a short neighbouring segment or a split, a flat vertex) as 0/1,
+    // counted without branches (plain comparisons: no NaN here)
+    let (h_min, h_max, eps) = (s.h_min, s.h_max, s.epsilon);
+    let vertex = |lp: f64, li: f64, bi: f64, bn: f64| {
+        let (lmin, lmax) = if li < lp { (li, lp) } else { (lp, li) };
+        let bmax = if bi < bn { bn } else { bi };
+        let work = (lmin < h_min) | (li > h_max) | ((bmax * li > eps) & (li > 2.0 * h_min));
+        (u64::from(work), u64::from(bi * lmax < eps / 8.0))
+    };
+    let (w0, f0) = vertex(len[n - 1], len[0], beta[0], beta[1]);
+    let (w1, f1) = vertex(len[n - 2], len[n - 1], beta[n - 1], beta[0]);
+    let (mut work, mut flat) = (w0 + w1, f0 + f1);
+    for (((&lp, &li), &bi), &bn) in len[..n - 2].iter().zip(&len[1..n - 1]).zip(&beta[1..n - 1]).zip(&beta[2..]) {
+        let (w, f) = vertex(lp, li, bi, bn);
+        work += w;
+        flat += f;
+    }
+    work > 0 || flat as usize >= n.div_ceil(32)
+}
+
 /// One pass of curve management short of topology: refinement/coarsening (if
 /// `adapt`), then `sweeps` regularization sweeps towards the desired sizes (if
 /// `adapt`, else equal lengths), with the lengths and turning angles of each loop
@@ -374,7 +261,7 @@ pub fn manage_curve(
         }
         if sweeps > 0 {
             let hd = if adapt { desired_sizes(&len, &beta, s) } else { vec![1.0; l.len()] };
-            regularize_loop(&mut l, &hd, sweeps);
+            regularize_loop(&mut l, &hd, sweeps, adapt.then(|| size_bounds(s)));
         }
         loops.push(l);
     }

@@ -2,7 +2,8 @@
 //! cut and reconnected, and the loops that bound the region of positive winding
 //! number are kept. Winding numbers of points for plain and periodic curve meshes.
 
-use super::curve_remesh::{loop_area, rebuild, Loop};
+use super::curve_loop::{loop_area, Loop};
+use super::curve_remesh::rebuild;
 use super::intersect::cross;
 use super::mesh::lift_near;
 use super::MeshError;

@@ -91,7 +91,8 @@ pub(super) struct Run {
 /// to their runs (chained slots, cells tiled modulo the table's side so that a
 /// curve walking through neighbouring cells walks through neighbouring slots).
 pub(super) struct RunGrid {
-    /// Side of a cell: 4× the mean max-norm segment length.
+    /// Side of a cell: 4× (or the `scale` of [`RunGrid::build_scaled`]) the mean
+    /// max-norm segment length.
     pub(super) side: f64,
     pub(super) runs: Vec<Run>,
     /// Segments meeting more than 64 cells (far longer than the mean).
@@ -112,6 +113,16 @@ impl RunGrid {
     /// Walks the segments in order; `ids` (if given) maps point indices to vertex
     /// identities for the test whether a segment continues the one before.
     pub(super) fn build(points: &[Point<2>], segments: &[[usize; 2]], ids: Option<&[usize]>) -> RunGrid {
+        Self::build_scaled(points, segments, ids, 4.0)
+    }
+
+    /// [`RunGrid::build`] with cells of `scale` times the mean max-norm segment length.
+    pub(super) fn build_scaled(
+        points: &[Point<2>],
+        segments: &[[usize; 2]],
+        ids: Option<&[usize]>,
+        scale: f64,
+    ) -> RunGrid {
         let id = |v: usize| ids.map_or(v, |ids| ids[v]);
         // the lower corner of all boxes, and the cell side
         let (mut total, mut x_lo, mut y_lo) = (0.0, f64::INFINITY, f64::INFINITY);
@@ -121,7 +132,7 @@ impl RunGrid {
             x_lo = x_lo.min(p.x.min(q.x));
             y_lo = y_lo.min(p.y.min(q.y));
         }
-        let side = (4.0 * total / segments.len().max(1) as f64).max(1e-300);
+        let side = (scale * total / segments.len().max(1) as f64).max(1e-300);
         let inv = 1.0 / side;
         // coordinates shifted to be nonnegative, so truncation is floor
         let key = |x: f64, lo: f64| ((x - lo) * inv) as u32;

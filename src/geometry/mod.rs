@@ -3,6 +3,7 @@
 //! is kept apart from positions; derived quantities are computed on request.
 
 mod crossing_watch;
+mod curve_loop;
 mod curve_remesh;
 mod curve_topology;
 mod curves;
