@@ -120,7 +120,7 @@ fn manage_curves(
     if s.topology_changes {
         let cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
         let hits = match watch {
-            Some(w) if cur.period().is_none() => w.crossings(cur.positions(), cur.elements()),
+            Some(w) if cur.period().is_none() => w.crossings_of(cur),
             _ => cur.crossings(),
         };
         if let Some(m) = resolve_crossings(cur, &hits, s.params.min_area).map_err(fail)? {

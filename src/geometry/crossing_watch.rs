@@ -26,7 +26,8 @@
 //! tried first.
 
 use super::intersect::{cross, find_with_grid, pack, RunGrid};
-use super::{Point, SegmentHit};
+use super::{CurveMesh, Point, SegmentHit};
+use std::sync::Arc;
 
 /// Cells of the coarse certificate, in mean segment lengths (the finder's are 4):
 /// a certificate then holds while no vertex has moved by 16 of them, as long as no
@@ -36,7 +37,7 @@ const COARSE_CELLS: f64 = 32.0;
 /// What the last full check proved, if anything.
 #[derive(Debug, Clone)]
 struct Certificate {
-    elements: Vec<[usize; 2]>,
+    elements: Arc<[[usize; 2]]>,
     /// The closed chains, as ranges of `elements`.
     chains: Vec<std::ops::Range<usize>>,
     /// Whether segment `e` of every chain is `[e, e + 1]` (the last one closing it):
@@ -65,6 +66,22 @@ impl CrossingWatch {
     /// All crossings among `segments` (as [`find_segment_intersections`]): none if
     /// the certificate of the last full check still holds, else a full check.
     pub fn crossings(&mut self, points: &[Point<2>], segments: &[[usize; 2]]) -> Vec<SegmentHit> {
+        self.check(points, segments, None)
+    }
+
+    /// [`CrossingWatch::crossings`] of a closed curve mesh. The certificate keeps
+    /// the mesh's shared element list, so that the meshes of one connectivity are
+    /// recognized by address instead of by comparing their elements.
+    pub fn crossings_of(&mut self, mesh: &CurveMesh) -> Vec<SegmentHit> {
+        self.check(mesh.positions(), mesh.elements(), Some(mesh.shared_elements()))
+    }
+
+    fn check(
+        &mut self,
+        points: &[Point<2>],
+        segments: &[[usize; 2]],
+        shared: Option<&Arc<[[usize; 2]]>>,
+    ) -> Vec<SegmentHit> {
         if let Some(cert) = &self.certificate {
             if holds(cert, points, segments) {
                 self.skipped += 1;
@@ -79,9 +96,10 @@ impl CrossingWatch {
             // (kept only if the curve turns by at most half its bound now, or it
             // would fail at once)
             let coarse = RunGrid::build_scaled(points, segments, None, COARSE_CELLS);
-            certify(points, segments, &coarse)
+            let elements = || shared.cloned().unwrap_or_else(|| segments.into());
+            certify(points, segments, &coarse, elements())
                 .filter(|c| holds_with(c, points, segments, c.tan2_half))
-                .or_else(|| certify(points, segments, &grid))
+                .or_else(|| certify(points, segments, &grid, elements()))
         } else {
             None
         };
@@ -98,7 +116,10 @@ fn holds(cert: &Certificate, points: &[Point<2>], segments: &[[usize; 2]]) -> bo
 
 /// [`holds`] with the turning bound `tan2` in place of the certificate's.
 fn holds_with(cert: &Certificate, points: &[Point<2>], segments: &[[usize; 2]], tan2: f64) -> bool {
-    if cert.elements.as_slice() != segments || cert.anchor.len() != points.len() {
+    // the certificate keeps its element list alive: at its address there can be no
+    // other list
+    let same = std::ptr::eq(cert.elements.as_ptr(), segments.as_ptr()) && cert.elements.len() == segments.len();
+    if !(same || *cert.elements == *segments) || cert.anchor.len() != points.len() {
         return false;
     }
     let reach2 = cert.reach * cert.reach;
@@ -139,7 +160,12 @@ fn holds_with(cert: &Certificate, points: &[Point<2>], segments: &[[usize; 2]], 
 /// chains stored in order (each segment starting where the one before ended,
 /// every chain closing on itself) and every 3×3 block of cells holds one stretch
 /// of one chain.
-fn certify(points: &[Point<2>], segments: &[[usize; 2]], grid: &RunGrid) -> Option<Certificate> {
+fn certify(
+    points: &[Point<2>],
+    segments: &[[usize; 2]],
+    grid: &RunGrid,
+    elements: Arc<[[usize; 2]]>,
+) -> Option<Certificate> {
     let n = segments.len();
     if n < 8 {
         return None;
@@ -192,7 +218,7 @@ fn certify(points: &[Point<2>], segments: &[[usize; 2]], grid: &RunGrid) -> Opti
     }
     let angle = std::f64::consts::PI / w.max(2) as f64;
     Some(Certificate {
-        elements: segments.to_vec(),
+        elements,
         contiguous: segments.iter().enumerate().all(|(e, s)| s[0] == e),
         chains,
         anchor: points.to_vec(),

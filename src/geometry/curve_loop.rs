@@ -52,13 +52,12 @@ pub(super) fn metrics(l: &Loop) -> (Vec<f64>, Vec<f64>) {
     if n == 0 {
         return (Vec::new(), Vec::new());
     }
-    let (mut dx, mut dy) = (vec![0.0; n], vec![0.0; n]);
-    for (i, w) in l.p.windows(2).enumerate() {
-        dx[i] = w[1].x - w[0].x;
-        dy[i] = w[1].y - w[0].y;
-    }
     let closing = l.p[0] + l.shift - l.p[n - 1];
-    (dx[n - 1], dy[n - 1]) = (closing.x, closing.y);
+    let (mut dx, mut dy) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    dx.extend(l.p.windows(2).map(|w| w[1].x - w[0].x));
+    dy.extend(l.p.windows(2).map(|w| w[1].y - w[0].y));
+    dx.push(closing.x);
+    dy.push(closing.y);
     let len: Vec<f64> = dx.iter().zip(&dy).map(|(x, y)| (x * x + y * y).sqrt()).collect();
     let turn = |(x0, y0, l0): (f64, f64, f64), (x1, y1, l1): (f64, f64, f64)| {
         let (u, v) = (l0 * x1 - l1 * x0, l0 * y1 - l1 * y0);
@@ -72,13 +71,11 @@ pub(super) fn metrics(l: &Loop) -> (Vec<f64>, Vec<f64>) {
             0.0
         }
     };
-    let mut beta = vec![0.0; n];
-    beta[0] = turn((dx[n - 1], dy[n - 1], len[n - 1]), (dx[0], dy[0], len[0]));
+    let mut beta = Vec::with_capacity(n);
+    beta.push(turn((dx[n - 1], dy[n - 1], len[n - 1]), (dx[0], dy[0], len[0])));
     let before = dx[..n - 1].iter().zip(&dy[..n - 1]).zip(&len[..n - 1]);
     let after = dx[1..].iter().zip(&dy[1..]).zip(&len[1..]);
-    for ((b, ((&x0, &y0), &l0)), ((&x1, &y1), &l1)) in beta[1..].iter_mut().zip(before).zip(after) {
-        *b = turn((x0, y0, l0), (x1, y1, l1));
-    }
+    beta.extend(before.zip(after).map(|(((&x0, &y0), &l0), ((&x1, &y1), &l1))| turn((x0, y0, l0), (x1, y1, l1))));
     (len, beta)
 }
 
@@ -109,19 +106,31 @@ pub(super) fn desired_sizes(len: &[f64], beta: &[f64], s: &super::CurveRemeshSet
     let (lo, hi) = size_bounds(s);
     let (h_min, h_max, eps) = (s.h_min, s.h_max, s.epsilon);
     // plain comparisons instead of min/max (which handle NaN, and do not vectorize)
-    let size = |l0: f64, l1: f64, b: f64| {
-        let a = if b > 0.0 { eps * 0.5 * (l0 + l1) / b } else { f64::INFINITY };
+    let inverse_curvature = |l0: f64, l1: f64, b: f64| if b > 0.0 { eps * 0.5 * (l0 + l1) / b } else { f64::INFINITY };
+    let cap_of = |a: f64| {
         let cap = 0.8 * a.sqrt();
         let cap = if cap < hi { cap } else { hi };
-        let shape = if a < h_max { a } else { h_max };
-        (if cap > lo { cap } else { lo }, if shape > h_min { shape } else { h_min })
+        if cap > lo {
+            cap
+        } else {
+            lo
+        }
     };
-    let (mut cap, mut shape) = (vec![0.0; n], vec![0.0; n]);
-    (cap[0], shape[0]) = size(len[n - 1], len[0], beta[0]);
-    let sizes = cap[1..].iter_mut().zip(&mut shape[1..]);
-    for (((c, r), (&l0, &l1)), &b) in sizes.zip(len[..n - 1].iter().zip(&len[1..])).zip(&beta[1..]) {
-        (*c, *r) = size(l0, l1, b);
+    let shape_of = |a: f64| {
+        let shape = if a < h_max { a } else { h_max };
+        if shape > h_min {
+            shape
+        } else {
+            h_min
+        }
+    };
+    let mut a = vec![0.0; n];
+    a[0] = inverse_curvature(len[n - 1], len[0], beta[0]);
+    for (((a, &l0), &l1), &b) in a[1..].iter_mut().zip(&len[..n - 1]).zip(&len[1..]).zip(&beta[1..]) {
+        *a = inverse_curvature(l0, l1, b);
     }
+    let cap: Vec<f64> = a.iter().map(|&a| cap_of(a)).collect();
+    let shape: Vec<f64> = a.iter().map(|&a| shape_of(a)).collect();
     if sum(&cap) <= total {
         return cap;
     }
@@ -200,11 +209,12 @@ pub(super) fn regularize_loop(l: &mut Loop, hd: &[f64], sweeps: usize, bounds: O
     if n < 3 || sweeps == 0 {
         return;
     }
+    let ratio = |hp: f64, hi: f64, hn: f64| (hp + hi) / (hp + 2.0 * hi + hn);
     let mut lambda = vec![0.0; n];
-    lambda[0] = (hd[n - 1] + hd[0]) / (hd[n - 1] + 2.0 * hd[0] + hd[1]);
-    lambda[n - 1] = (hd[n - 2] + hd[n - 1]) / (hd[n - 2] + 2.0 * hd[n - 1] + hd[0]);
+    lambda[0] = ratio(hd[n - 1], hd[0], hd[1]);
+    lambda[n - 1] = ratio(hd[n - 2], hd[n - 1], hd[0]);
     for (((lam, &hp), &hi), &hn) in lambda[1..n - 1].iter_mut().zip(&hd[..n - 2]).zip(&hd[1..n - 1]).zip(&hd[2..]) {
-        *lam = (hp + hi) / (hp + 2.0 * hi + hn);
+        *lam = ratio(hp, hi, hn);
     }
     let shift = l.shift;
     let p = &mut l.p;
@@ -213,26 +223,7 @@ pub(super) fn regularize_loop(l: &mut Loop, hd: &[f64], sweeps: usize, bounds: O
     // neighbour of vertex 0, goes alone
     let odd_tail = n % 2 == 1;
     for _ in 0..sweeps {
-        let mut relax = |k: usize| {
-            let prev = if k == 0 { p[n - 1] - shift } else { p[k - 1] };
-            let next = if k + 1 == n { p[0] + shift } else { p[k + 1] };
-            let chord = next - prev;
-            let cc = chord.dot(&chord);
-            let mut lam = lambda[k];
-            if let Some((lo, hi)) = bounds {
-                // λ|c| and (1 − λ)|c| in [lo, hi], tested without a square root
-                let (t, u) = (lam * lam * cc, (1.0 - lam) * (1.0 - lam) * cc);
-                if t > hi * hi || u > hi * hi || t < lo * lo || u < lo * lo {
-                    let cl = cc.sqrt();
-                    let (a, b) = (lo.max(cl - hi) / cl, hi.min(cl - lo) / cl);
-                    lam = if a <= b { lam.clamp(a, b) } else { 0.5 };
-                }
-            }
-            if cc > 0.0 {
-                let alpha = (prev + chord * lam - p[k]).dot(&chord) / cc;
-                p[k] += chord * alpha;
-            }
-        };
+        let mut relax = |k: usize| relax_vertex(p, k, shift, lambda[k], bounds);
         for k in (0..n - usize::from(odd_tail)).step_by(2) {
             relax(k);
         }
@@ -242,6 +233,31 @@ pub(super) fn regularize_loop(l: &mut Loop, hd: &[f64], sweeps: usize, bounds: O
         if odd_tail {
             relax(n - 1);
         }
+    }
+}
+
+/// One move of [`regularize_loop`]: vertex `k` of the loop `p` (closing shift
+/// `shift`) along its chord, towards the point `λ` of the way along it.
+#[inline(always)]
+fn relax_vertex(p: &mut [Point<2>], k: usize, shift: Point<2>, lambda: f64, bounds: Option<(f64, f64)>) {
+    let n = p.len();
+    let prev = if k == 0 { p[n - 1] - shift } else { p[k - 1] };
+    let next = if k + 1 == n { p[0] + shift } else { p[k + 1] };
+    let chord = next - prev;
+    let cc = chord.dot(&chord);
+    let mut lam = lambda;
+    if let Some((lo, hi)) = bounds {
+        // λ|c| and (1 − λ)|c| in [lo, hi], tested without a square root
+        let (t, u) = (lam * lam * cc, (1.0 - lam) * (1.0 - lam) * cc);
+        if t > hi * hi || u > hi * hi || t < lo * lo || u < lo * lo {
+            let cl = cc.sqrt();
+            let (a, b) = (lo.max(cl - hi) / cl, hi.min(cl - lo) / cl);
+            lam = if a <= b { lam.clamp(a, b) } else { 0.5 };
+        }
+    }
+    if cc > 0.0 {
+        let alpha = (prev + chord * lam - p[k]).dot(&chord) / cc;
+        p[k] += chord * alpha;
     }
 }
 

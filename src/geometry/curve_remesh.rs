@@ -198,7 +198,7 @@ fn adapt_loop(l: &Loop, len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> O
 
 /// Whether [`adapt_loop`] may change the loop, in one branch-free pass (the common
 /// answer is no): some segment is shorter than `h_min`, or one of them would be
-/// split, or at least the batch of flat vertices is there.
+/// split, or at least the batch of flat vertices that could go is there.
 fn may_adapt(len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> bool {
     let n = len.len();
     if n < 2 {
@@ -206,12 +206,12 @@ fn may_adapt(len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> bool {
     }
     // per vertex: (a short neighbouring segment or a split, a flat vertex) as 0/1,
     // counted without branches (plain comparisons: no NaN here)
-    let (h_min, h_max, eps) = (s.h_min, s.h_max, s.epsilon);
+    let (h_min, h_max, eps, room) = (s.h_min, s.h_max, s.epsilon, MERGED_MAX * s.h_max);
     let vertex = |lp: f64, li: f64, bi: f64, bn: f64| {
         let (lmin, lmax) = if li < lp { (li, lp) } else { (lp, li) };
         let bmax = if bi < bn { bn } else { bi };
         let work = (lmin < h_min) | (li > h_max) | ((bmax * li > eps) & (li > 2.0 * h_min));
-        (u64::from(work), u64::from(bi * lmax < eps / 8.0))
+        (u64::from(work), u64::from((bi * lmax < eps / 8.0) & (li + lp <= room)))
     };
     let (w0, f0) = vertex(len[n - 1], len[0], beta[0], beta[1]);
     let (w1, f1) = vertex(len[n - 2], len[n - 1], beta[n - 1], beta[0]);

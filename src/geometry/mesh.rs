@@ -1,6 +1,7 @@
 //! The mesh type: vertex positions plus an element list.
 
 use super::{simplex, validate, Point};
+use std::sync::Arc;
 
 /// Errors of the validated mesh constructors. Every variant names the offending
 /// vertex, element or edge by its index.
@@ -51,7 +52,9 @@ pub enum MeshError {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mesh<const D: usize> {
     positions: Vec<Point<D>>,
-    elements: Vec<[usize; D]>,
+    /// Shared between meshes of one connectivity ([`Mesh::with_positions`] is what
+    /// a flow does at every trial step and every managed step).
+    elements: Arc<[[usize; D]]>,
     /// Curves only: the period `L` in `x` of a curve on the cylinder `R/LZ × R`.
     /// Positions are then representatives modulo `L`, and a segment `[a, b]` runs
     /// from `X_a` to the image of `X_b` nearest to it, `X_b + L·round((x_a − x_b)/L) e_x`
@@ -73,14 +76,14 @@ impl<const D: usize> Mesh<D> {
     /// area/volume must be positive (outward orientation).
     pub fn new(positions: Vec<Point<D>>, elements: Vec<[usize; D]>) -> Result<Self, MeshError> {
         validate::validate(&positions, &elements)?;
-        Ok(Mesh { positions, elements, period: None })
+        Ok(Mesh { positions, elements: elements.into(), period: None })
     }
 
     /// A mesh produced by the remeshing kernels, whose connectivity is valid by
     /// construction; only debug builds re-check it.
     pub(crate) fn from_trusted_parts(positions: Vec<Point<D>>, elements: Vec<[usize; D]>) -> Self {
         debug_assert!(elements.iter().all(|e| e.iter().all(|&v| v < positions.len())));
-        Mesh { positions, elements, period: None }
+        Mesh { positions, elements: elements.into(), period: None }
     }
 
     /// The period `L` in `x` of a periodic curve mesh, `None` for ordinary meshes.
@@ -120,6 +123,11 @@ impl<const D: usize> Mesh<D> {
         self.positions.len()
     }
 
+    /// The element list, shared by the meshes of one connectivity.
+    pub(crate) fn shared_elements(&self) -> &Arc<[[usize; D]]> {
+        &self.elements
+    }
+
     pub fn num_elements(&self) -> usize {
         self.elements.len()
     }
@@ -155,7 +163,7 @@ impl<const D: usize> Mesh<D> {
             }
             x
         }
-        for el in &self.elements {
+        for el in self.elements.iter() {
             let r0 = find(&mut parent, el[0]);
             for &v in &el[1..] {
                 let r = find(&mut parent, v);
@@ -199,7 +207,7 @@ impl Mesh<2> {
         if !(period.is_finite() && period > 0.0) {
             return Err(MeshError::BadPeriod { period });
         }
-        let mesh = Mesh { positions, elements, period: Some(period) };
+        let mesh = Mesh { positions, elements: elements.into(), period: Some(period) };
         validate::validate_periodic(&mesh)?;
         Ok(mesh)
     }
@@ -207,7 +215,7 @@ impl Mesh<2> {
     /// A periodic curve from the remeshing kernels (valid by construction).
     pub(crate) fn periodic_trusted(positions: Vec<Point<2>>, elements: Vec<[usize; 2]>, period: f64) -> Self {
         debug_assert!(elements.iter().all(|e| e.iter().all(|&v| v < positions.len())));
-        Mesh { positions, elements, period: Some(period) }
+        Mesh { positions, elements: elements.into(), period: Some(period) }
     }
 
     /// Components as lifted polylines: each cycle of [`Mesh::cycles`] with every
