@@ -130,7 +130,10 @@ pub(super) fn desired_sizes(len: &[f64], beta: &[f64], s: &super::CurveRemeshSet
         *a = inverse_curvature(l0, l1, b);
     }
     let cap: Vec<f64> = a.iter().map(|&a| cap_of(a)).collect();
-    let shape: Vec<f64> = a.iter().map(|&a| shape_of(a)).collect();
+    let mut shape = a;
+    for r in &mut shape {
+        *r = shape_of(*r);
+    }
     if sum(&cap) <= total {
         return cap;
     }
@@ -175,7 +178,10 @@ pub(super) fn desired_sizes(len: &[f64], beta: &[f64], s: &super::CurveRemeshSet
             break;
         }
     }
-    shape.iter().zip(&cap).map(|(&r, &k)| clamp(c * r, k)).collect()
+    for (r, &k) in shape.iter_mut().zip(&cap) {
+        *r = clamp(c * *r, k);
+    }
+    shape
 }
 
 /// `Σ x`, four lanes at a time.

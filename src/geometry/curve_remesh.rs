@@ -270,10 +270,7 @@ pub fn manage_curve(
     }
     // same connectivity: back to the mesh's own representatives
     if let Some(runs) = runs {
-        let mut pos = Vec::with_capacity(x.len());
-        for l in loops {
-            pos.extend_from_slice(&l.p);
-        }
+        let pos = if loops.len() == 1 { loops.pop().unwrap().p } else { loops.into_iter().flat_map(|l| l.p).collect() };
         debug_assert!(runs.last().is_some_and(|r| r.end == pos.len()));
         return Ok((Some(mesh.with_positions(pos)), false));
     }
