@@ -3,8 +3,9 @@
 //! regularization aims at, and the area-preserving regularization sweep.
 //!
 //! Every pass here costs a few square roots or divisions per vertex, the units of a
-//! CPU that do not pipeline; the passes are written over plain `f64` slices without
-//! branches so that they run two lanes at a time, which halves that cost.
+//! CPU that do not pipeline. The lengths, angles, sizes and the sweep's ratios are
+//! computed over plain `f64` slices without branches, so that they run two lanes at
+//! a time, which halves that cost; the sweep itself goes vertex by vertex.
 
 use super::intersect::cross;
 use super::Point;
