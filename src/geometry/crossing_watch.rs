@@ -313,12 +313,18 @@ mod tests {
         // third step
         assert!(watch.full_checks <= 8, "{} full, {} skipped", watch.full_checks, watch.skipped);
         // fold two vertices over: caught by the turning angles
+        fold_is_caught(&mut watch, &mut pts, &segs, 1e-5);
+    }
+
+    /// Vertices 10 and 11 trade places along their segment (each moving less than
+    /// the segment, off the line by `off`): the watch reports the crossings.
+    fn fold_is_caught(watch: &mut CrossingWatch, pts: &mut [Point<2>], segs: &[[usize; 2]], off: f64) {
         let (a, b) = (pts[10], pts[11]);
         pts[10] = a + (b - a) * 1.4;
-        pts[11] = b + (a - b) * 1.4 + Point::<2>::new(1e-5, 1e-5);
-        let truth = find_segment_intersections(&pts, &segs);
+        pts[11] = b + (a - b) * 1.4 + Point::<2>::new(off, off);
+        let truth = find_segment_intersections(pts, segs);
         assert!(!truth.is_empty());
-        assert_eq!(watch.crossings(&pts, &segs).len(), truth.len());
+        assert_eq!(watch.crossings(pts, segs).len(), truth.len());
     }
 
     /// Two circles approaching each other rigidly (no angle changes): the far
@@ -353,12 +359,7 @@ mod tests {
         assert!(watch.crossings(&pts, &segs).is_empty());
         assert!(watch.crossings(&pts, &segs).is_empty());
         assert_eq!(watch.skipped, 1);
-        let (a, b) = (pts[10], pts[11]);
-        pts[10] = a + (b - a) * 1.4;
-        pts[11] = b + (a - b) * 1.4 + Point::<2>::new(1e-4, 1e-4);
-        let truth = find_segment_intersections(&pts, &segs);
-        assert!(!truth.is_empty());
-        assert_eq!(watch.crossings(&pts, &segs).len(), truth.len());
+        fold_is_caught(&mut watch, &mut pts, &segs, 1e-4);
     }
 
     /// A certificate is not drawn for a curve that comes back close to itself
