@@ -5,7 +5,7 @@
 use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageEncoder};
 use shapeflow::export::{mask, to_pixel};
-use shapeflow::flow::Progress;
+use shapeflow::flow::{Checkpoint, Progress, StopReason};
 use shapeflow::jobs::{parse_spec, prepare, run_prepared, JobOutcome, PreparedJob, RunEvents};
 use std::collections::HashMap;
 use std::f64::consts::TAU;
@@ -170,15 +170,77 @@ fn star_shaped_object_newton_h1() {
     assert!(hd <= 2.0, "hausdorff {hd} px");
 }
 
+/// The default second stage of 2D segmentation (`lambda_final` 0) moves the contour
+/// out to the edges the balloon force held it inside of; the iterations count on,
+/// the later checkpoints say `stage: 1`, and a run resumed from one of them
+/// continues the second stage.
+#[test]
+fn a_second_stage_without_balloon_force_sharpens_the_contour() {
+    let p = picture(128, 128, 12.0, 7, star(64.0, 64.0, 34.0, 0.3, 5.0));
+    let img = png_gray8(&p);
+    let (job, out, history) =
+        run_with_history(r#"{"problem": {"type": "segmentation", "image": "input:image"}}"#, &[("image", img.clone())]);
+    let one = r#"{"problem": {"type": "segmentation", "image": "input:image", "lambda_final": 38.4}}"#;
+    let (job1, out1) = run(one, &[("image", img.clone())]);
+    assert!(job1.refine.is_none(), "lambda_final = lambda: one stage");
+    let (d2, d1) = (dice(&job, &out, &p.truth, 128, 128), dice(&job1, &out1, &p.truth, 128, 128));
+    eprintln!(
+        "one stage: {} iterations, dice {d1:.4}; two: {} iterations, dice {d2:.4}",
+        out1.last.iteration, out.last.iteration
+    );
+    assert_eq!((out.stop, out1.stop), (StopReason::Converged, StopReason::Converged));
+    assert!(d2 >= 0.993 && d2 > d1 + 0.004, "dice {d2} with the second stage, {d1} without");
+    // the first stage is the one-stage run; the second is short and continues it
+    assert_eq!(out.last.stage, 1);
+    assert_eq!(history.len(), out.last.iteration + 1, "one progress report per iteration");
+    let switch = out1.last.iteration;
+    assert!(out.last.iteration > switch && out.last.iteration <= switch + 20, "{} after {switch}", out.last.iteration);
+    assert!(
+        history[switch + 1] < 0.01 * history[switch],
+        "the region term is gone: {:?}",
+        &history[switch..switch + 2]
+    );
+    // a checkpoint of the second stage resumes in it
+    let mut cps = Checkpoints::default();
+    let job = prepare(
+        parse_spec(
+            r#"{"problem": {"type": "segmentation", "image": "input:image"}, "output": {"checkpoint_every": 1}}"#,
+        )
+        .unwrap(),
+        &[("image".to_string(), img)].into(),
+    )
+    .unwrap();
+    run_prepared(&job, None, &AtomicBool::new(false), &mut cps).unwrap();
+    let mid =
+        cps.0.iter().find(|c| c.stage == 1 && c.iteration > switch + 1).expect("a checkpoint in the second stage");
+    let resumed = run_prepared(&job, Some(mid), &AtomicBool::new(false), &mut ()).unwrap();
+    assert_eq!(resumed.last.stage, 1);
+    assert!(
+        (resumed.last.energy - out.last.energy).abs() < 1e-3 * out.last.energy,
+        "{} {}",
+        resumed.last.energy,
+        out.last.energy
+    );
+}
+
+#[derive(Default)]
+struct Checkpoints(Vec<Checkpoint>);
+impl RunEvents for Checkpoints {
+    fn checkpoint(&mut self, c: &Checkpoint) {
+        self.0.push(c.clone());
+    }
+}
+
 /// Paper Figure 1: on a C-shaped object both flows find the object; the Newton-type
-/// H1 flow gets within 1e-5 of the best energy in fewer iterations than L2.
+/// H1 flow gets within 1e-5 of the best energy in fewer iterations than L2 (one
+/// stage, `lambda_final` = `lambda`, the default 0.3 L).
 #[test]
 fn newton_h1_and_l2_on_a_c_shape() {
     let p = picture(128, 128, 12.0, 7, c_shape(64.0, 64.0, 40.0, 22.0, 10.0));
     let img = png_gray8(&p);
     let spec = |prod: &str| {
         format!(
-            r#"{{"problem": {{"type": "segmentation", "image": "input:image"}}, "flow": {{"scalar_product": "{prod}", "max_iterations": 1500, "tolerance": 1e-10}}}}"#
+            r#"{{"problem": {{"type": "segmentation", "image": "input:image", "lambda_final": 38.4}}, "flow": {{"scalar_product": "{prod}", "max_iterations": 1500, "tolerance": 1e-10}}}}"#
         )
     };
     let (ja, a, ha) = run_with_history(&spec("h1_newton"), &[("image", img.clone())]);

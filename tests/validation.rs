@@ -140,6 +140,11 @@ fn bad_images_give_errors_naming_the_input() {
         &[("picture", good.clone())],
     );
     assert!(e.starts_with("problem.sigma:"), "{e}");
+    let e = image_error(
+        r#"{"problem": {"type": "segmentation", "image": "input:picture", "lambda_final": -2}}"#,
+        &[("picture", good.clone())],
+    );
+    assert!(e.starts_with("problem.lambda_final:") && e.contains("-2"), "{e}");
     // slice stacks: sizes must agree, and the failing slice is named
     let e = image_error(
         r#"{"problem": {"type": "segmentation", "image": ["input:a", "input:b", "input:c", "input:d"]}}"#,

@@ -68,4 +68,12 @@ pub struct Checkpoint {
     pub tau: f64,
     pub energy: f64,
     pub mesh: MeshData,
+    /// The stage of a job with several (segmentation: 1 once the run continues with
+    /// `lambda_final`); 0 for the first, and left out of the JSON then.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub stage: usize,
+}
+
+fn is_zero(s: &usize) -> bool {
+    *s == 0
 }

@@ -231,6 +231,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             tau: self.tau,
             energy: self.energy,
             mesh: MeshData::from(&self.mesh),
+            stage: 0,
         }
     }
 

@@ -102,6 +102,7 @@ impl EdgeField {
         self.dims
     }
 
+    #[inline(always)]
     fn axis(&self, x: f64, a: usize) -> Axis {
         let n = self.dims[a] as f64;
         let u = x * self.scale - 0.5;
@@ -112,7 +113,7 @@ impl EdgeField {
 
     /// Taps along axis `a`: clamped sample indices, weights `[w, w', w'']` and the
     /// number of taps (`1` with weight 1 for the unused third axis of a 2D field).
-    #[inline]
+    #[inline(always)]
     fn taps(&self, x: &[f64; 3], a: usize, derivatives: bool) -> Taps {
         if a >= self.dimension {
             return Taps { index: [0; 4], w: [[1.0, 0.0, 0.0, 0.0], [0.0; 4], [0.0; 4]], count: 1, axis: None };
@@ -183,6 +184,7 @@ impl EdgeField {
 
     /// `H(p)` and `Φ(p) = ∫^{p₁} H(s, p₂, p₃) ds` (an antiderivative in the first
     /// coordinate, up to a constant that does not matter for closed boundaries).
+    #[inline(always)]
     pub fn value_and_antiderivative<const D: usize>(&self, p: &SVector<f64, D>) -> (f64, f64) {
         let x: [f64; 3] = std::array::from_fn(|a| if a < D { p[a] } else { 0.0 });
         let (tx, ty, tz) = (self.taps(&x, 0, false), self.taps(&x, 1, false), self.taps(&x, 2, false));

@@ -39,6 +39,16 @@ pub enum ProblemKind {
     StressedFilm(StressedFilm),
 }
 
+impl PreparedJob {
+    /// The problem of stage `stage` (see [`Checkpoint::stage`](crate::flow::Checkpoint)).
+    pub fn stage_problem(&self, stage: usize) -> &ProblemKind {
+        match (stage, &self.refine) {
+            (1.., Some(p)) => p,
+            _ => &self.problem,
+        }
+    }
+}
+
 impl ProblemKind {
     pub fn as_dyn<const D: usize>(&self) -> &dyn Problem<D> {
         match self {
@@ -60,6 +70,9 @@ pub struct PreparedJob {
     pub spec: JobSpec,
     pub mesh: AnyMesh,
     pub problem: ProblemKind,
+    /// (Addition) the problem of a second stage, run from where the first one
+    /// converged (segmentation with `lambda_final`).
+    pub refine: Option<ProblemKind>,
     pub settings: FlowSettings,
     pub checkpoint_every: usize,
     /// Mesh management of curves, resolved from the spec and the initial mesh
@@ -102,6 +115,7 @@ fn mesh_err(field: &str, e: MeshError) -> SpecError {
 /// file's bytes.
 pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<PreparedJob, SpecError> {
     let mut image = None;
+    let mut refine = None;
     let early = match &spec.problem {
         ProblemSpec::CurvatureFlow { gamma, lambda } => {
             positive("problem.gamma", *gamma)?;
@@ -113,7 +127,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             positive("problem.gamma", *gamma)?;
             ProblemKind::SurfaceDiffusion(SurfaceDiffusion { gamma: *gamma })
         }
-        ProblemSpec::Segmentation { image: source, sigma, lambda, epsilon } => {
+        ProblemSpec::Segmentation { image: source, sigma, lambda, lambda_final, epsilon } => {
             let grid = load_image(source, inputs)?;
             let epsilon = &epsilon.unwrap_or(super::spec::default_beta_epsilon(grid.scale()));
             positive("problem.epsilon", *epsilon)?;
@@ -127,8 +141,19 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             }
             let field = EdgeField::new(&grid, *sigma)
                 .ok_or_else(|| SpecError::new("problem.image", "the image is constant: there is nothing to segment"))?;
+            let lambda_final = lambda_final.unwrap_or(super::spec::default_lambda_final(grid.dimension, *lambda));
+            if !(lambda_final.is_finite() && lambda_final >= 0.0) {
+                return Err(SpecError::new(
+                    "problem.lambda_final",
+                    format!("must be a nonnegative number, got {lambda_final}"),
+                ));
+            }
             image = Some(Arc::new(grid));
-            ProblemKind::Segmentation(Segmentation { field: Arc::new(field), lambda: *lambda, epsilon: *epsilon })
+            let problem = Segmentation { field: Arc::new(field), lambda: *lambda, epsilon: *epsilon };
+            if lambda_final != *lambda {
+                refine = Some(ProblemKind::Segmentation(Segmentation { lambda: lambda_final, ..problem.clone() }));
+            }
+            ProblemKind::Segmentation(problem)
         }
         // needs the initial curve: built below
         ProblemSpec::ShapeDesign(_) | ProblemSpec::StressedFilm(_) => {
@@ -258,7 +283,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         tolerance_per_time: problem.physical(),
     };
     let checkpoint_every = in_range("output.checkpoint_every", spec.output.checkpoint_every, 1, usize::MAX)?;
-    Ok(PreparedJob { spec, mesh, problem, settings, checkpoint_every, curve_manager, surface_manager, image })
+    Ok(PreparedJob { spec, mesh, problem, refine, settings, checkpoint_every, curve_manager, surface_manager, image })
 }
 
 /// Default `flow.tau` of the stressed film (its rates are `γk⁴` for wavenumbers `k`).

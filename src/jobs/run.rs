@@ -33,7 +33,9 @@ pub struct JobFailure {
     pub last: Checkpoint,
 }
 
-/// Run `job` (from its start, or from `resume`), reporting to `events`.
+/// Run `job` (from its start, or from `resume`), reporting to `events`. A job with a
+/// second stage ([`PreparedJob::refine`]) continues with it from where the first one
+/// converged; the iterations count on, and its checkpoints carry `stage: 1`.
 pub fn run_prepared(
     job: &PreparedJob,
     resume: Option<&Checkpoint>,
@@ -42,37 +44,81 @@ pub fn run_prepared(
 ) -> Result<JobOutcome, Box<JobFailure>> {
     match &job.mesh {
         AnyMesh::Curve(m) => {
-            let manager = job.curve_manager.map(|c| Box::new(c.watched()) as Box<dyn MeshManager<2>>);
-            run_dim::<2>(job, m, manager, resume, cancel, events)
+            let manager = || job.curve_manager.map(|c| Box::new(c.watched()) as Box<dyn MeshManager<2>>);
+            run_stages::<2>(job, m, &manager, resume, cancel, events)
         }
         AnyMesh::Surface(m) => {
-            let manager = job.surface_manager.map(|c| Box::new(c) as Box<dyn MeshManager<3>>);
-            run_dim::<3>(job, m, manager, resume, cancel, events)
+            let manager = || job.surface_manager.map(|c| Box::new(c) as Box<dyn MeshManager<3>>);
+            run_stages::<3>(job, m, &manager, resume, cancel, events)
         }
     }
 }
 
-fn run_dim<const D: usize>(
+fn run_stages<const D: usize>(
     job: &PreparedJob,
     mesh: &Mesh<D>,
-    manager: Option<Box<dyn MeshManager<D>>>,
+    manager: &dyn Fn() -> Option<Box<dyn MeshManager<D>>>,
     resume: Option<&Checkpoint>,
     cancel: &AtomicBool,
     events: &mut dyn RunEvents,
 ) -> Result<JobOutcome, Box<JobFailure>> {
-    let problem = job.problem.as_dyn::<D>();
+    let mut start = resume.cloned();
+    let mut stage = resume.map_or(0, |c| c.stage.min(usize::from(job.refine.is_some())));
+    // the state a later stage starts from was reported as the end of the one before
+    let mut reported = false;
+    loop {
+        let out = run_stage::<D>(job, stage, mesh, manager(), start.as_ref(), reported, cancel, events)?;
+        if stage == 0 && job.refine.is_some() && out.stop == StopReason::Converged {
+            (start, stage, reported) = (Some(Checkpoint { stage: 1, ..out.last }), 1, true);
+            continue;
+        }
+        return Ok(out);
+    }
+}
+
+/// One stage of [`run_prepared`]: the flow of the stage's problem from `start`
+/// (the job's initial mesh if `None`); `reported`: `start` was already reported.
+#[allow(clippy::too_many_arguments)]
+fn run_stage<const D: usize>(
+    job: &PreparedJob,
+    stage: usize,
+    mesh: &Mesh<D>,
+    manager: Option<Box<dyn MeshManager<D>>>,
+    start: Option<&Checkpoint>,
+    reported: bool,
+    cancel: &AtomicBool,
+    events: &mut dyn RunEvents,
+) -> Result<JobOutcome, Box<JobFailure>> {
+    let problem = job.stage_problem(stage).as_dyn::<D>();
     let fail = |error: FlowError, last: Checkpoint| Box::new(JobFailure { error, last });
-    let mut flow = match resume {
-        Some(cp) => Flow::resume(problem, cp, job.settings.clone()),
-        None => Flow::new(problem, mesh.clone(), job.settings.clone()),
+    let tagged = |c: Checkpoint| Checkpoint { stage, ..c };
+    let mut settings = job.settings.clone();
+    if let (1.., Some(cp)) = (stage, start) {
+        // a later stage converges on the scale of the first stage's energy at the
+        // same shape: without the balloon term the energy of a segmentation is a few
+        // hundred times smaller, and re-meshing noise would keep it from converging
+        if let Ok(m) = cp.mesh.to_mesh::<D>() {
+            let (first, here) = (job.problem.as_dyn::<D>().energy(&m), problem.energy(&m));
+            if let (Ok(first), Ok(here)) = (first, here) {
+                let scale = (first / here).abs();
+                if scale.is_finite() && scale > 1.0 {
+                    settings.tolerance *= scale;
+                }
+            }
+        }
+    }
+    let mut flow = match start {
+        Some(cp) => Flow::resume(problem, cp, settings),
+        None => Flow::new(problem, mesh.clone(), settings),
     }
     .map_err(|e| {
-        let start = resume.cloned().unwrap_or_else(|| Checkpoint {
+        let start = start.cloned().unwrap_or_else(|| Checkpoint {
             iteration: 0,
             time: 0.0,
             tau: job.settings.tau,
             energy: f64::NAN,
             mesh: mesh.into(),
+            stage,
         });
         fail(e, start)
     })?;
@@ -80,29 +126,27 @@ fn run_dim<const D: usize>(
         flow = flow.with_mesh_manager(m);
     }
     let every = job.checkpoint_every.max(1);
-    let mut last_saved = resume.map(|c| c.iteration);
+    let first = start.map(|c| c.iteration);
+    let mut last_saved = first;
     let result = flow.run(cancel, |f| {
-        events.progress(&f.progress());
         let it = f.iteration();
+        // a resumed run reports its starting state again (the service replaces the
+        // row); a later stage does not repeat the end of the one before
+        if !(reported && Some(it) == first) {
+            events.progress(&f.progress());
+        }
         if (it % every == 0 || it == 0) && last_saved != Some(it) {
-            events.checkpoint(&f.checkpoint());
+            events.checkpoint(&tagged(f.checkpoint()));
             last_saved = Some(it);
         }
     });
-    let last = flow.checkpoint();
+    let last = tagged(flow.checkpoint());
+    if last_saved != Some(last.iteration) {
+        events.checkpoint(&last);
+    }
     match result {
-        Ok(stop) => {
-            if last_saved != Some(last.iteration) {
-                events.checkpoint(&last);
-            }
-            Ok(JobOutcome { stop, last })
-        }
-        Err(e) => {
-            if last_saved != Some(last.iteration) {
-                events.checkpoint(&last);
-            }
-            Err(fail(e, last))
-        }
+        Ok(stop) => Ok(JobOutcome { stop, last }),
+        Err(e) => Err(fail(e, last)),
     }
 }
 
@@ -110,7 +154,7 @@ fn run_dim<const D: usize>(
 /// normal velocity of the next step (see [`Flow::vertex_fields`]).
 pub fn vertex_fields(job: &PreparedJob, state: &Checkpoint) -> Result<(Vec<f64>, Vec<f64>), FlowError> {
     fn in_dim<const D: usize>(job: &PreparedJob, state: &Checkpoint) -> Result<(Vec<f64>, Vec<f64>), FlowError> {
-        Flow::resume(job.problem.as_dyn::<D>(), state, job.settings.clone())?.vertex_fields()
+        Flow::resume(job.stage_problem(state.stage).as_dyn::<D>(), state, job.settings.clone())?.vertex_fields()
     }
     match state.mesh.dimension {
         2 => in_dim::<2>(job, state),

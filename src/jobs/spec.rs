@@ -75,6 +75,10 @@ pub enum ProblemSpec {
         /// image size (see [`default_lambda`]).
         #[serde(default)]
         lambda: Option<f64>,
+        /// (Addition) once the flow has converged with `lambda`, it continues with
+        /// this weight until it converges again (see [`default_lambda_final`]).
+        #[serde(default)]
+        lambda_final: Option<f64>,
         /// Threshold ε of the Newton weight β (paper §4.2.1); default `0.1 L²`.
         #[serde(default)]
         epsilon: Option<f64>,
@@ -242,6 +246,20 @@ pub fn default_lambda(d: usize, l: f64) -> f64 {
         0.3 * l
     } else {
         0.15 * l
+    }
+}
+/// Default `problem.lambda_final` of segmentation: 0 for 2D images, `lambda` (no
+/// second stage) for volumes. The balloon force that carries the contour to the
+/// object's edges also holds it about `λ s²/2L` pixels inside them (see
+/// [`default_lambda`]): half a pixel with the 2D defaults, which costs 1 % of Dice
+/// on a 128² image. Started at the edges, the flow without it moves out to where
+/// `κH + ∂_ν H = 0` in a few iterations. In 3D the shift is a quarter as large
+/// and the second stage measured to gain 0.1 % of Dice for 60 % more time.
+pub fn default_lambda_final(d: usize, lambda: f64) -> f64 {
+    if d == 2 {
+        0.0
+    } else {
+        lambda
     }
 }
 /// Default `problem.epsilon` of segmentation: `0.1 L²`, the paper's ε = 0.1 per
