@@ -232,8 +232,9 @@ impl RunEvents for Checkpoints {
 }
 
 /// Paper Figure 1: on a C-shaped object both flows find the object; the Newton-type
-/// H1 flow gets within 1e-5 of the best energy in fewer iterations than L2 (one
-/// stage, `lambda_final` = `lambda`, the default 0.3 L).
+/// H1 flow gets within 1e-5 of the best energy in fewer iterations than L2, and
+/// within 1e-6 in less than 0.6 of them (one stage, `lambda_final` = `lambda`, the
+/// default 0.3 L).
 #[test]
 fn newton_h1_and_l2_on_a_c_shape() {
     let p = picture(128, 128, 12.0, 7, c_shape(64.0, 64.0, 40.0, 22.0, 10.0));
@@ -246,11 +247,20 @@ fn newton_h1_and_l2_on_a_c_shape() {
     let (ja, a, ha) = run_with_history(&spec("h1_newton"), &[("image", img.clone())]);
     let (jb, b, hb) = run_with_history(&spec("l2"), &[("image", img)]);
     let best = a.last.energy.min(b.last.energy);
-    let reach = |h: &[f64]| h.iter().position(|&e| e <= best * (1.0 + 1e-5)).unwrap_or(usize::MAX);
+    let reach_to = |h: &[f64], t: f64| h.iter().position(|&e| e <= best * (1.0 + t)).unwrap_or(usize::MAX);
+    let reach = |h: &[f64]| reach_to(h, 1e-5);
     let (da, db) = (dice(&ja, &a, &p.truth, 128, 128), dice(&jb, &b, &p.truth, 128, 128));
-    eprintln!("newton: {} iterations to 1e-5, dice {da:.4}; l2: {} iterations, dice {db:.4}", reach(&ha), reach(&hb));
+    let (na, nb) = (reach_to(&ha, 1e-6), reach_to(&hb, 1e-6));
+    eprintln!(
+        "newton: {} iterations to 1e-5, {na} to 1e-6, dice {da:.4}; l2: {} and {nb}, dice {db:.4}",
+        reach(&ha),
+        reach(&hb)
+    );
     assert!(da >= 0.98 && db >= 0.98);
     assert!(reach(&ha) < reach(&hb), "newton {} l2 {}", reach(&ha), reach(&hb));
+    // the approach is limited by the step control in both flows; the last digits
+    // are where the Newton-type product pays
+    assert!((na as f64) < 0.6 * nb as f64, "to 1e-6: newton {na} l2 {nb}");
 }
 
 fn nearest(centres: &[[f64; 2]], x: f64, y: f64) -> usize {
