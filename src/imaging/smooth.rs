@@ -25,22 +25,23 @@ pub fn gaussian_smooth(grid: &Grid, sigma: f64) -> Grid {
     for axis in 0..grid.dimension {
         let n = dims[axis] as isize;
         let stride: usize = dims[..axis].iter().product();
-        let mut line = vec![0.0; n as usize];
+        // one line at a time, padded by `r` replicated samples on each side, so that
+        // each output is a plain dot product with the kernel
+        let mut line = vec![0.0; (n + 2 * r) as usize];
         // every line along `axis`: start index over the other axes
         for start in 0..cur.len() {
             if (start / stride) % dims[axis] != 0 {
                 continue;
             }
-            for (t, l) in line.iter_mut().enumerate() {
-                *l = cur[start + t * stride];
+            for (u, l) in line.iter_mut().enumerate() {
+                *l = cur[start + (u as isize - r).clamp(0, n - 1) as usize * stride];
             }
-            for t in 0..n {
+            for (t, window) in line.windows(k.len()).enumerate() {
                 let mut s = 0.0;
-                for (q, w) in k.iter().enumerate() {
-                    let u = (t + q as isize - r).clamp(0, n - 1);
-                    s += w * line[u as usize];
+                for (w, v) in k.iter().zip(window) {
+                    s += w * v;
                 }
-                next[start + t as usize * stride] = s;
+                next[start + t * stride] = s;
             }
         }
         std::mem::swap(&mut cur, &mut next);
