@@ -246,9 +246,9 @@ impl EdgeField {
                 s0 += v[a] * wx[a];
                 si += v[a] * iwx[a];
             }
-            let wyz = wy[b] * 1.0;
-            h += wyz * s0;
-            phi += wyz * (si + ax.excess * s0);
+            // (the general path's weight is `wy[b]·1` for the unused third axis)
+            h += wy[b] * s0;
+            phi += wy[b] * (si + ax.excess * s0);
         }
         (h, phi / self.scale)
     }
