@@ -140,6 +140,12 @@ impl EdgeField {
     #[inline(always)]
     pub fn sample<const D: usize>(&self, p: &SVector<f64, D>) -> EdgeSample<D> {
         debug_assert_eq!(D, self.dimension);
+        if D == 2 {
+            let (h, g, k) = self.sample_2d(p[0], p[1]);
+            let grad = SVector::<f64, D>::from_fn(|a, _| g[a]);
+            let hess = SMatrix::<f64, D, D>::from_fn(|a, b| k[a][b]);
+            return EdgeSample { h, grad, hess };
+        }
         let x: [f64; 3] = std::array::from_fn(|a| if a < D { p[a] } else { 0.0 });
         let (tx, ty, tz) = (self.taps(&x, 0, true), self.taps(&x, 1, true), self.taps(&x, 2, true));
         let (sy, sz) = self.strides();
@@ -216,18 +222,53 @@ impl EdgeField {
         (h, phi / self.scale)
     }
 
+    /// [`Self::sample`] of a 2D field: the same sums in the same order (the
+    /// general path's factors of the unused third axis are 1 and 0), written out.
+    #[inline(always)]
+    fn sample_2d(&self, x: f64, y: f64) -> (f64, [f64; 2], [[f64; 2]; 2]) {
+        let xs = [x, y, 0.0];
+        let (tx, ty) = (self.taps(&xs, 0, true), self.taps(&xs, 1, true));
+        let sy = self.dims[0];
+        let (mut h, mut hx, mut hy, mut hxx, mut hyy, mut hxy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        for b in 0..4 {
+            let base = sy * ty.index[b];
+            let (y0, y1, y2) = (ty.w[0][b], ty.w[1][b], ty.w[2][b]);
+            let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
+            for a in 0..4 {
+                let v = self.coef[base + tx.index[a]];
+                s0 += v * tx.w[0][a];
+                s1 += v * tx.w[1][a];
+                s2 += v * tx.w[2][a];
+            }
+            h += s0 * y0;
+            hx += s1 * y0;
+            hy += s0 * y1;
+            hxx += s2 * y0;
+            hyy += s0 * y2;
+            hxy += s1 * y1;
+        }
+        let l = self.scale;
+        (h, [l * hx, l * hy], [[l * l * hxx, l * l * hxy], [l * l * hxy, l * l * hyy]])
+    }
+
     /// [`Self::value_and_antiderivative`] of a 2D field, the same sums in the same
     /// order, written out for the quadrature of the energy (most of a 2D run):
     /// fixed 4×4 taps, and one slice per row where the taps lie inside the grid.
     #[inline(always)]
     fn value_and_antiderivative_2d(&self, x: f64, y: f64) -> (f64, f64) {
         let (ax, ay) = (self.axis(x, 0), self.axis(y, 1));
+        let (wx, iwx, wy) = (bspline::w(ax.t), bspline::iw(ax.t), bspline::w(ay.t));
+        self.sum_2d(&ax, &ay, &wx, &iwx, &wy)
+    }
+
+    /// The sums of [`Self::value_and_antiderivative_2d`] with the axes and weights given.
+    #[inline(always)]
+    fn sum_2d(&self, ax: &Axis, ay: &Axis, wx: &[f64; 4], iwx: &[f64; 4], wy: &[f64; 4]) -> (f64, f64) {
         let (nx, ny) = (self.dims[0] as isize, self.dims[1] as isize);
         let clamp_x = |q: isize| (ax.i0 - 1 + q).clamp(0, nx - 1) as usize;
         let clamp_y = |q: isize| (ay.i0 - 1 + q).clamp(0, ny - 1) as usize;
         let ix: [usize; 4] = [clamp_x(0), clamp_x(1), clamp_x(2), clamp_x(3)];
         let iy: [usize; 4] = [clamp_y(0), clamp_y(1), clamp_y(2), clamp_y(3)];
-        let (wx, iwx, wy) = (bspline::w(ax.t), bspline::iw(ax.t), bspline::w(ay.t));
         let width = self.dims[0] + 2 * PAD as usize;
         let m = (ax.i0 - 2 + PAD) as usize;
         let inside = ax.i0 >= 1 && ax.i0 + 2 < nx;
@@ -251,6 +292,43 @@ impl EdgeField {
             phi += wy[b] * (si + ax.excess * s0);
         }
         (h, phi / self.scale)
+    }
+
+    /// [`Self::value_and_antiderivative_2d`] at four points, with the grid
+    /// coordinates and the B-spline weights computed lane by lane (as vectors).
+    #[inline(always)]
+    pub fn values_and_antiderivatives_2d(&self, xs: [f64; 4], ys: [f64; 4]) -> ([f64; 4], [f64; 4]) {
+        let (nx, ny) = (self.dims[0] as f64, self.dims[1] as f64);
+        let lanes = |v: [f64; 4], n: f64| {
+            let (mut i0, mut t, mut excess) = ([0.0; 4], [0.0; 4], [0.0; 4]);
+            for j in 0..4 {
+                let u = v[j] * self.scale - 0.5;
+                let uc = if u < -2.0 {
+                    -2.0
+                } else if u > n + 1.0 {
+                    n + 1.0
+                } else {
+                    u
+                };
+                i0[j] = uc.floor();
+                t[j] = uc - i0[j];
+                excess[j] = u - uc;
+            }
+            (i0, t, excess)
+        };
+        let (ix0, tx, ex) = lanes(xs, nx);
+        let (iy0, ty, _) = lanes(ys, ny);
+        let (mut wx, mut iwx, mut wy) = ([[0.0; 4]; 4], [[0.0; 4]; 4], [[0.0; 4]; 4]);
+        for j in 0..4 {
+            (wx[j], iwx[j], wy[j]) = (bspline::w(tx[j]), bspline::iw(tx[j]), bspline::w(ty[j]));
+        }
+        let (mut h, mut phi) = ([0.0; 4], [0.0; 4]);
+        for j in 0..4 {
+            let ax = Axis { i0: ix0[j] as isize, t: tx[j], excess: ex[j] };
+            let ay = Axis { i0: iy0[j] as isize, t: ty[j], excess: 0.0 };
+            (h[j], phi[j]) = self.sum_2d(&ax, &ay, &wx[j], &iwx[j], &wy[j]);
+        }
+        (h, phi)
     }
 
     /// `H(p)` only.

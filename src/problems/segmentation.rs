@@ -59,13 +59,28 @@ impl Segmentation {
             let len = e.norm();
             let m = (len * l).ceil().clamp(1.0, 4096.0) as usize;
             let (mut sh, mut sphi) = (0.0, 0.0);
+            // the Gauss points four at a time (their grid coordinates and weights as
+            // vectors), summed in order
+            let (mut xs, mut ys, mut filled) = ([0.0; 4], [0.0; 4], 0);
             for s in 0..m {
                 for g in GAUSS2 {
                     let x = p[0] + e * ((s as f64 + g) / m as f64);
-                    let (h, phi) = f.value_and_antiderivative(&x);
-                    sh += h;
-                    sphi += phi;
+                    (xs[filled], ys[filled]) = (x[0], x[1]);
+                    filled += 1;
+                    if filled == 4 {
+                        let (h, phi) = f.values_and_antiderivatives_2d(xs, ys);
+                        for j in 0..4 {
+                            sh += h[j];
+                            sphi += phi[j];
+                        }
+                        filled = 0;
+                    }
                 }
+            }
+            for j in 0..filled {
+                let (h, phi) = f.value_and_antiderivative(&Point::<D>::from_fn(|a, _| [xs[j], ys[j]][a]));
+                sh += h;
+                sphi += phi;
             }
             let n = (2 * m) as f64;
             (len * sh / n, e[1] * sphi / n)
@@ -126,7 +141,12 @@ fn integrals<const D: usize>(s: &Segmentation, mesh: &Mesh<D>) -> (f64, f64) {
 /// `H`, `∇H`, `D²H` at every vertex (AVX2 version as for [`integrals`]).
 #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
 fn samples<const D: usize>(field: &EdgeField, x: &[Point<D>]) -> Vec<EdgeSample<D>> {
-    x.iter().map(|x| field.sample(x)).collect()
+    // a plain loop: an iterator adapter would be compiled outside this version
+    let mut out = Vec::with_capacity(x.len());
+    for x in x {
+        out.push(field.sample(x));
+    }
+    out
 }
 
 impl<const D: usize> Problem<D> for Segmentation {
