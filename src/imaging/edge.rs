@@ -156,14 +156,7 @@ impl EdgeField {
                 let base = sy * ty.index[b] + sz * tz.index[c];
                 let (y0, y1, y2) = (ty.w[0][b], ty.w[1][b], ty.w[2][b]);
                 let (z0, z1, z2) = (tz.w[0][c], tz.w[1][c], tz.w[2][c]);
-                // sums over x of v w, v w', v w''
-                let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
-                for a in 0..4 {
-                    let v = self.coef[base + tx.index[a]];
-                    s0 += v * tx.w[0][a];
-                    s1 += v * tx.w[1][a];
-                    s2 += v * tx.w[2][a];
-                }
+                let (s0, s1, s2) = self.row_sums(base, &tx);
                 acc[0] += s0 * y0 * z0;
                 acc[1] += s1 * y0 * z0;
                 acc[2] += s0 * y1 * z0;
@@ -222,6 +215,19 @@ impl EdgeField {
         (h, phi / self.scale)
     }
 
+    /// Sums over the x taps of one row (from `base`) of `v w`, `v w'`, `v w''`.
+    #[inline(always)]
+    fn row_sums(&self, base: usize, tx: &Taps) -> (f64, f64, f64) {
+        let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
+        for a in 0..4 {
+            let v = self.coef[base + tx.index[a]];
+            s0 += v * tx.w[0][a];
+            s1 += v * tx.w[1][a];
+            s2 += v * tx.w[2][a];
+        }
+        (s0, s1, s2)
+    }
+
     /// [`Self::sample`] of a 2D field: the same sums in the same order (the
     /// general path's factors of the unused third axis are 1 and 0), written out.
     #[inline(always)]
@@ -233,13 +239,7 @@ impl EdgeField {
         for b in 0..4 {
             let base = sy * ty.index[b];
             let (y0, y1, y2) = (ty.w[0][b], ty.w[1][b], ty.w[2][b]);
-            let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
-            for a in 0..4 {
-                let v = self.coef[base + tx.index[a]];
-                s0 += v * tx.w[0][a];
-                s1 += v * tx.w[1][a];
-                s2 += v * tx.w[2][a];
-            }
+            let (s0, s1, s2) = self.row_sums(base, &tx);
             h += s0 * y0;
             hx += s1 * y0;
             hy += s0 * y1;
