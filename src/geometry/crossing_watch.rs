@@ -23,7 +23,8 @@
 //! as soon as either condition fails. Any grid will do for the certificate: a
 //! coarse one (cells of 32 mean segment lengths, 8× the finder's) has a larger `w`
 //! and so a tighter turning bound, but lets vertices move 8× farther, and it is
-//! tried first.
+//! tried first. Curves of fewer than [`SMALL`] segments get no certificate: the full
+//! check costs them less.
 
 use super::intersect::{cross, find_with_grid, pack, RunGrid};
 use super::{CurveMesh, Point, SegmentHit};
@@ -33,6 +34,11 @@ use std::sync::Arc;
 /// a certificate then holds while no vertex has moved by 16 of them, as long as no
 /// vertex turns by more than about π/(100–150) on a smooth curve.
 const COARSE_CELLS: f64 = 32.0;
+
+/// Curves of fewer segments are checked in full at every step: the finder costs
+/// them a few microseconds, less than drawing certificates that a fast-moving small
+/// curve (a segmentation contour) soon outruns.
+const SMALL: usize = 256;
 
 /// What the last full check proved, if anything.
 #[derive(Debug, Clone)]
@@ -90,7 +96,7 @@ impl CrossingWatch {
         }
         self.full_checks += 1;
         let (hits, grid) = find_with_grid(points, segments);
-        self.certificate = if hits.is_empty() {
+        self.certificate = if hits.is_empty() && segments.len() >= SMALL {
             // a coarse certificate reaches farther (a full check less often) where
             // the curve turns slowly enough; else the finder's own cells
             // (kept only if the curve turns by at most half its bound now, or it
