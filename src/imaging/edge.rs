@@ -297,7 +297,7 @@ impl EdgeField {
     /// [`Self::value_and_antiderivative_2d`] at four points, with the grid
     /// coordinates and the B-spline weights computed lane by lane (as vectors).
     #[inline(always)]
-    pub fn values_and_antiderivatives_2d(&self, xs: [f64; 4], ys: [f64; 4]) -> ([f64; 4], [f64; 4]) {
+    pub(crate) fn values_and_antiderivatives_2d(&self, xs: [f64; 4], ys: [f64; 4]) -> ([f64; 4], [f64; 4]) {
         let (nx, ny) = (self.dims[0] as f64, self.dims[1] as f64);
         let lanes = |v: [f64; 4], n: f64| {
             let (mut i0, mut t, mut excess) = ([0.0; 4], [0.0; 4], [0.0; 4]);

@@ -76,7 +76,7 @@ pub enum ProblemSpec {
         #[serde(default)]
         lambda: Option<f64>,
         /// (Addition) once the flow has converged with `lambda`, it continues with
-        /// this weight until it converges again (see [`default_lambda_final`]).
+        /// this weight until it converges again (default 0 in 2D, `lambda` in 3D).
         #[serde(default)]
         lambda_final: Option<f64>,
         /// Threshold ε of the Newton weight β (paper §4.2.1); default `0.1 L²`.
