@@ -104,11 +104,26 @@ impl EdgeField {
 
     #[inline(always)]
     fn axis(&self, x: f64, a: usize) -> Axis {
+        let (i0, t, excess) = self.grid_coordinate(x, a);
+        Axis { i0: i0 as isize, t, excess }
+    }
+
+    /// `u = xL − ½` along axis `a`, clamped to `[−2, n + 1]`: its integer part (as a
+    /// float), the fraction, and what the clamp cut off. Plain comparisons, so that
+    /// several points at once run as vectors.
+    #[inline(always)]
+    fn grid_coordinate(&self, x: f64, a: usize) -> (f64, f64, f64) {
         let n = self.dims[a] as f64;
         let u = x * self.scale - 0.5;
-        let uc = u.clamp(-2.0, n + 1.0);
+        let uc = if u < -2.0 {
+            -2.0
+        } else if u > n + 1.0 {
+            n + 1.0
+        } else {
+            u
+        };
         let i0 = uc.floor();
-        Axis { i0: i0 as isize, t: uc - i0, excess: u - uc }
+        (i0, uc - i0, u - uc)
     }
 
     /// Taps along axis `a`: clamped sample indices, weights `[w, w', w'']` and the
@@ -298,26 +313,15 @@ impl EdgeField {
     /// coordinates and the B-spline weights computed lane by lane (as vectors).
     #[inline(always)]
     pub(crate) fn values_and_antiderivatives_2d(&self, xs: [f64; 4], ys: [f64; 4]) -> ([f64; 4], [f64; 4]) {
-        let (nx, ny) = (self.dims[0] as f64, self.dims[1] as f64);
-        let lanes = |v: [f64; 4], n: f64| {
+        let lanes = |v: [f64; 4], a: usize| {
             let (mut i0, mut t, mut excess) = ([0.0; 4], [0.0; 4], [0.0; 4]);
             for j in 0..4 {
-                let u = v[j] * self.scale - 0.5;
-                let uc = if u < -2.0 {
-                    -2.0
-                } else if u > n + 1.0 {
-                    n + 1.0
-                } else {
-                    u
-                };
-                i0[j] = uc.floor();
-                t[j] = uc - i0[j];
-                excess[j] = u - uc;
+                (i0[j], t[j], excess[j]) = self.grid_coordinate(v[j], a);
             }
             (i0, t, excess)
         };
-        let (ix0, tx, ex) = lanes(xs, nx);
-        let (iy0, ty, _) = lanes(ys, ny);
+        let (ix0, tx, ex) = lanes(xs, 0);
+        let (iy0, ty, _) = lanes(ys, 1);
         let (mut wx, mut iwx, mut wy) = ([[0.0; 4]; 4], [[0.0; 4]; 4], [[0.0; 4]; 4]);
         for j in 0..4 {
             (wx[j], iwx[j], wy[j]) = (bspline::w(tx[j]), bspline::iw(tx[j]), bspline::w(ty[j]));
