@@ -34,6 +34,8 @@ pub struct EdgeField {
     dimension: usize,
     dims: [usize; 3],
     scale: f64,
+    /// The Gaussian smoothing `σ` (samples) behind the field; 0 if built from coefficients.
+    sigma: f64,
     coef: Vec<f64>,
     /// Per row `(j, k)`: `R(m) = Σ_{i=-PAD}^{m} c_(clamp i) j k`, `m = -PAD … n_x+PAD-1`.
     prefix: Vec<f64>,
@@ -68,7 +70,7 @@ impl EdgeField {
                 }
             }
         }
-        Some(Self::from_coefficients(grid.dimension, d, coef))
+        Some(EdgeField { sigma, ..Self::from_coefficients(grid.dimension, d, coef) })
     }
 
     /// A field with the given spline coefficients (`H` at the samples).
@@ -86,7 +88,12 @@ impl EdgeField {
             }
         }
         let scale = dims.iter().copied().max().unwrap_or(1) as f64;
-        EdgeField { dimension, dims, scale, coef, prefix }
+        EdgeField { dimension, dims, scale, sigma: 0.0, coef, prefix }
+    }
+
+    /// The Gaussian smoothing `σ` of the image, in samples.
+    pub fn sigma(&self) -> f64 {
+        self.sigma
     }
 
     pub fn dimension(&self) -> usize {

@@ -82,6 +82,9 @@ pub struct PreparedJob {
     pub surface_manager: Option<SurfaceManager>,
     /// The decoded input image of a segmentation job (for masks and overlays).
     pub image: Option<Arc<Grid>>,
+    /// (Addition) the edge field the results are refined onto: segmentation with
+    /// `problem.edge_refinement` (default on); see [`PreparedJob::result_state`].
+    pub edges: Option<Arc<EdgeField>>,
 }
 
 pub(super) fn positive(field: &str, v: f64) -> Result<f64, SpecError> {
@@ -116,6 +119,7 @@ fn mesh_err(field: &str, e: MeshError) -> SpecError {
 pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<PreparedJob, SpecError> {
     let mut image = None;
     let mut refine = None;
+    let mut edges = None;
     let early = match &spec.problem {
         ProblemSpec::CurvatureFlow { gamma, lambda } => {
             positive("problem.gamma", *gamma)?;
@@ -127,7 +131,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             positive("problem.gamma", *gamma)?;
             ProblemKind::SurfaceDiffusion(SurfaceDiffusion { gamma: *gamma })
         }
-        ProblemSpec::Segmentation { image: source, sigma, lambda, lambda_final, epsilon } => {
+        ProblemSpec::Segmentation { image: source, sigma, lambda, lambda_final, epsilon, edge_refinement } => {
             let grid = load_image(source, inputs)?;
             let epsilon = &epsilon.unwrap_or(super::spec::default_beta_epsilon(grid.scale()));
             positive("problem.epsilon", *epsilon)?;
@@ -150,6 +154,9 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             }
             image = Some(Arc::new(grid));
             let problem = Segmentation { field: Arc::new(field), lambda: *lambda, epsilon: *epsilon };
+            if edge_refinement.unwrap_or(true) {
+                edges = Some(problem.field.clone());
+            }
             if lambda_final != *lambda {
                 refine = Some(ProblemKind::Segmentation(Segmentation { lambda: lambda_final, ..problem.clone() }));
             }
@@ -283,7 +290,18 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         tolerance_per_time: problem.physical(),
     };
     let checkpoint_every = in_range("output.checkpoint_every", spec.output.checkpoint_every, 1, usize::MAX)?;
-    Ok(PreparedJob { spec, mesh, problem, refine, settings, checkpoint_every, curve_manager, surface_manager, image })
+    Ok(PreparedJob {
+        spec,
+        mesh,
+        problem,
+        refine,
+        settings,
+        checkpoint_every,
+        curve_manager,
+        surface_manager,
+        image,
+        edges,
+    })
 }
 
 /// Default `flow.tau` of the stressed film (its rates are `γk⁴` for wavenumbers `k`).

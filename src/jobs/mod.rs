@@ -13,7 +13,7 @@ mod spec;
 
 pub use build::{prepare, AnyMesh, PreparedJob, ProblemKind};
 pub use mesh_io::{read_mesh_file, MeshFileError};
-pub use results::{job_extras, state_glb, states_glb, MAX_FRAMES};
+pub use results::{job_extras, result_state, state_glb, states_glb, MAX_FRAMES};
 pub use run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
 pub use spec::{
     parse_spec, BoundarySpec, ControlSpec, FlowSpec, InitialSpec, JobSpec, MeshSpec, OutputSpec, ProblemSpec,

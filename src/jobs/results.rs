@@ -4,12 +4,35 @@
 use super::build::PreparedJob;
 use super::run::vertex_fields;
 use crate::export::{evolution_glb, shape_glb, GltfFrame};
-use crate::flow::Checkpoint;
+use crate::flow::{Checkpoint, MeshData};
+use crate::problems::refine_to_edges;
 use serde_json::{json, Value};
 
 /// Largest number of frames in evolution.glb; longer runs are subsampled evenly
 /// (first and last checkpoint always kept).
 pub const MAX_FRAMES: usize = 500;
+
+/// The state a job's results show (shape.json, shape.glb, the mask and the overlay):
+/// for a segmentation with `problem.edge_refinement` (default on), `state` with its
+/// contour moved onto the image's edges to sub-pixel accuracy
+/// ([`refine_to_edges`]); otherwise `state` itself. Checkpoints and evolution.glb
+/// keep the flow's own states, and a run resumes from those.
+pub fn result_state(job: &PreparedJob, state: &Checkpoint) -> Checkpoint {
+    let Some(field) = job.edges.as_deref() else { return state.clone() };
+    let mesh = match (state.mesh.dimension, field.dimension()) {
+        (2, 2) => state.mesh.to_mesh::<2>().ok().and_then(|m| {
+            let refined = refine_to_edges(field, &m).0;
+            // a move that would make the curve cross itself is not taken
+            (refined.crossings().len() <= m.crossings().len()).then(|| MeshData::from(&refined))
+        }),
+        (3, 3) => state.mesh.to_mesh::<3>().ok().map(|m| MeshData::from(&refine_to_edges(field, &m).0)),
+        _ => None,
+    };
+    match mesh {
+        Some(mesh) => Checkpoint { mesh, ..state.clone() },
+        None => state.clone(),
+    }
+}
 
 /// The job's metadata for the glTF `extras`.
 pub fn job_extras(job: &PreparedJob) -> Value {

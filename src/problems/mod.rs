@@ -1,12 +1,14 @@
 //! The applications, one module each, behind the [`crate::flow::Problem`] trait.
 
 mod curvature_flow;
+mod edge_refinement;
 mod segmentation;
 mod shape_design;
 mod stressed_film;
 mod surface_diffusion;
 
 pub use curvature_flow::CurvatureFlow;
+pub use edge_refinement::{blur_variance, refine_to_edges, EdgeRefinement};
 pub use segmentation::Segmentation;
 pub use shape_design::{alpha_84, DesignSolution, GradientKind, ShapeDesign, Target};
 pub use stressed_film::StressedFilm;

@@ -287,14 +287,27 @@ async fn energy_plot(State(state): State<AppState>, Path(id): Path<String>) -> R
     Ok(([(header::CONTENT_TYPE, "image/svg+xml")], energy_svg(&rows, &format!("job {id}"))).into_response())
 }
 
+/// `GET /v1/jobs/{id}/results/shape.json`: the latest state as its results show it
+/// (a segmentation's contour refined onto the edges, with pixel coordinates).
 async fn shape(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Value>, ApiError> {
-    find(&state, &id).await?;
+    let row = find(&state, &id).await?;
     let cp = state
         .store
         .last_checkpoint(&id)
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("job {id} has no result yet")))?;
-    Ok(Json(shape_json(&cp.mesh, cp.energy, cp.iteration, None)))
+    let spec: Value = serde_json::from_str(&row.spec).unwrap_or(Value::Null);
+    if spec["problem"]["type"] != "segmentation" {
+        return Ok(Json(shape_json(&cp.mesh, cp.energy, cp.iteration, None)));
+    }
+    let job = results::rebuild(&state, &id).await?;
+    let doc = tokio::task::spawn_blocking(move || {
+        let shown = crate::jobs::result_state(&job, &cp);
+        shape_json(&shown.mesh, shown.energy, shown.iteration, job.image.as_deref())
+    })
+    .await
+    .map_err(|e| ApiError::Internal(e.to_string()))?;
+    Ok(Json(doc))
 }
 
 /// A running service: the HTTP state and the worker threads.

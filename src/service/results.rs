@@ -5,7 +5,7 @@
 use super::{find, ApiError, AppState};
 use crate::export::{mask_nrrd, mask_png, overlay_png};
 use crate::flow::Checkpoint;
-use crate::jobs::{parse_spec, prepare, state_glb, states_glb, PreparedJob};
+use crate::jobs::{parse_spec, prepare, result_state, state_glb, states_glb, PreparedJob};
 use axum::extract::{Path, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
@@ -15,7 +15,7 @@ use serde_json::{json, Value};
 const GLB: &str = "model/gltf-binary";
 
 /// The job rebuilt from its stored spec (for the problem behind the fields).
-async fn rebuild(state: &AppState, id: &str) -> Result<PreparedJob, ApiError> {
+pub(super) async fn rebuild(state: &AppState, id: &str) -> Result<PreparedJob, ApiError> {
     let row = find(state, id).await?;
     let spec = parse_spec(&row.spec).map_err(|e| ApiError::Internal(format!("stored spec of {id}: {e}")))?;
     let inputs = state.store.inputs(id).await?;
@@ -81,7 +81,8 @@ async fn is_volume(state: &AppState, id: &str) -> Result<bool, ApiError> {
     Ok(state.store.input_magics(id).await?.iter().any(|b| b.starts_with(b"NRRD")))
 }
 
-/// The job, its image and its latest state, for image results.
+/// The job, its image and what its latest state shows ([`result_state`]), for
+/// image results.
 async fn image_job(state: &AppState, id: &str) -> Result<(PreparedJob, Checkpoint), ApiError> {
     let job = rebuild(state, id).await?;
     if job.image.is_none() {
@@ -92,7 +93,11 @@ async fn image_job(state: &AppState, id: &str) -> Result<(PreparedJob, Checkpoin
         .last_checkpoint(id)
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("job {id} has no result yet")))?;
-    Ok((job, cp))
+    blocking(move || {
+        let shown = result_state(&job, &cp);
+        (job, shown)
+    })
+    .await
 }
 
 /// `GET /v1/jobs/{id}/results/mask.png` (2D), `.../mask.nrrd` (3D),
@@ -116,7 +121,8 @@ pub(super) async fn image_result(
     Ok(([(header::CONTENT_TYPE, media)], bytes).into_response())
 }
 
-/// `GET /v1/jobs/{id}/results/shape.glb`: the final (or latest) state.
+/// `GET /v1/jobs/{id}/results/shape.glb`: the final (or latest) state, as its
+/// results show it ([`result_state`]).
 pub(super) async fn shape_glb(State(state): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
     let job = rebuild(&state, &id).await?;
     let cp = state
@@ -124,7 +130,7 @@ pub(super) async fn shape_glb(State(state): State<AppState>, Path(id): Path<Stri
         .last_checkpoint(&id)
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("job {id} has no result yet")))?;
-    let bytes = blocking(move || state_glb(&job, &cp)).await?;
+    let bytes = blocking(move || state_glb(&job, &result_state(&job, &cp))).await?;
     Ok(glb_response(bytes, "shape.glb"))
 }
 
