@@ -595,6 +595,12 @@ fn multipart_segmentation_and_bad_uploads() {
             let exact = std::f64::consts::PI * 34.0 * 34.0 * 1.045;
             assert!((area / exact - 1.0).abs() < 0.03, "{area}");
         }
+        if name == "shape.json" {
+            // the refined contour the mask shows, with pixel coordinates
+            let shape: Value = serde_json::from_slice(&bytes).unwrap();
+            assert_eq!(shape["image"]["width"], 128, "{shape}");
+            assert!(shape["components"][0]["pixels"].as_array().is_some_and(|p| !p.is_empty()), "{shape}");
+        }
         if name.ends_with(".glb") {
             let p = dir.path().join(name);
             std::fs::write(&p, &bytes).unwrap();

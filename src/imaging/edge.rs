@@ -138,7 +138,7 @@ impl EdgeField {
     #[inline(always)]
     fn taps(&self, x: &[f64; 3], a: usize, derivatives: bool) -> Taps {
         if a >= self.dimension {
-            return Taps { index: [0; 4], w: [[1.0, 0.0, 0.0, 0.0], [0.0; 4], [0.0; 4]], count: 1, axis: None };
+            return Taps { index: [0; 4], w: [[1.0, 0.0, 0.0, 0.0], [0.0; 4], [0.0; 4]], count: 1 };
         }
         let ax = self.axis(x[a], a);
         let n = self.dims[a] as isize;
@@ -150,7 +150,7 @@ impl EdgeField {
         } else {
             [bspline::w(ax.t), bspline::dw(ax.t), bspline::ddw(ax.t)]
         };
-        Taps { index, w, count: 4, axis: Some(ax) }
+        Taps { index, w, count: 4 }
     }
 
     #[inline]
@@ -209,32 +209,90 @@ impl EdgeField {
     #[inline(always)]
     pub fn value_and_antiderivative<const D: usize>(&self, p: &SVector<f64, D>) -> (f64, f64) {
         if D == 2 {
-            return self.value_and_antiderivative_2d(p[0], p[1]);
+            self.value_and_antiderivative_2d(p[0], p[1])
+        } else {
+            self.value_and_antiderivative_3d(p[0], p[1], p[2])
         }
-        let x: [f64; 3] = std::array::from_fn(|a| if a < D { p[a] } else { 0.0 });
-        let (tx, ty, tz) = (self.taps(&x, 0, false), self.taps(&x, 1, false), self.taps(&x, 2, false));
-        let ax = tx.axis.expect("x is always an axis");
-        let iw = bspline::iw(ax.t);
+    }
+
+    /// [`Self::value_and_antiderivative`] of a 3D field: `Σ_c Σ_b w_b w_c (Σ_a c_abc w_a,
+    /// R_bc + Σ_a c_abc iw_a)` over the 4×4×4 taps, one slice per row where the taps
+    /// lie inside the grid.
+    #[inline(always)]
+    fn value_and_antiderivative_3d(&self, x: f64, y: f64, z: f64) -> (f64, f64) {
+        let (ax, ay, az) = (self.axis(x, 0), self.axis(y, 1), self.axis(z, 2));
+        let (wx, iwx) = (bspline::w(ax.t), bspline::iw(ax.t));
+        self.sum_3d(&ax, &ay, &az, &wx, &iwx, &bspline::w(ay.t), &bspline::w(az.t))
+    }
+
+    /// The sums of [`Self::value_and_antiderivative_3d`] with the axes and weights given.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn sum_3d(
+        &self,
+        ax: &Axis,
+        ay: &Axis,
+        az: &Axis,
+        wx: &[f64; 4],
+        iwx: &[f64; 4],
+        wy: &[f64; 4],
+        wz: &[f64; 4],
+    ) -> (f64, f64) {
+        let [nx, ny, nz] = self.dims.map(|n| n as isize);
+        let taps = |a: &Axis, n: isize| -> [usize; 4] { std::array::from_fn(|q| (a.i0 - 1 + q as isize).clamp(0, n - 1) as usize) };
+        let (ix, iy, iz) = (taps(ax, nx), taps(ay, ny), taps(az, nz));
         let (sy, sz) = self.strides();
         let width = self.dims[0] + 2 * PAD as usize;
         let m = (ax.i0 - 2 + PAD) as usize;
+        let inside = ax.i0 >= 1 && ax.i0 + 2 < nx;
         let (mut h, mut phi) = (0.0, 0.0);
-        for c in 0..tz.count {
-            for b in 0..ty.count {
-                let row = ty.index[b] + self.dims[1] * tz.index[c];
-                let base = sy * ty.index[b] + sz * tz.index[c];
+        for c in 0..4 {
+            for b in 0..4 {
+                let row = iy[b] + self.dims[1] * iz[c];
+                let base = sy * iy[b] + sz * iz[c];
+                let v: [f64; 4] = if inside {
+                    let r = &self.coef[base + ix[0]..base + ix[0] + 4];
+                    [r[0], r[1], r[2], r[3]]
+                } else {
+                    [self.coef[base + ix[0]], self.coef[base + ix[1]], self.coef[base + ix[2]], self.coef[base + ix[3]]]
+                };
                 let (mut s0, mut si) = (0.0, self.prefix[row * width + m]);
                 for a in 0..4 {
-                    let v = self.coef[base + tx.index[a]];
-                    s0 += v * tx.w[0][a];
-                    si += v * iw[a];
+                    s0 += v[a] * wx[a];
+                    si += v[a] * iwx[a];
                 }
-                let wyz = ty.w[0][b] * tz.w[0][c];
+                let wyz = wy[b] * wz[c];
                 h += wyz * s0;
                 phi += wyz * (si + ax.excess * s0);
             }
         }
         (h, phi / self.scale)
+    }
+
+    /// [`Self::value_and_antiderivative_3d`] at four points, with the grid
+    /// coordinates and the B-spline weights computed lane by lane (as vectors).
+    #[inline(always)]
+    pub(crate) fn values_and_antiderivatives_3d(&self, p: [[f64; 4]; 3]) -> ([f64; 4], [f64; 4]) {
+        let mut axes: [[(f64, f64, f64); 4]; 3] = [[(0.0, 0.0, 0.0); 4]; 3];
+        for a in 0..3 {
+            for j in 0..4 {
+                axes[a][j] = self.grid_coordinate(p[a][j], a);
+            }
+        }
+        let mut w = [[[0.0; 4]; 4]; 3];
+        let mut iwx = [[0.0; 4]; 4];
+        for j in 0..4 {
+            for a in 0..3 {
+                w[a][j] = bspline::w(axes[a][j].1);
+            }
+            iwx[j] = bspline::iw(axes[0][j].1);
+        }
+        let (mut h, mut phi) = ([0.0; 4], [0.0; 4]);
+        for j in 0..4 {
+            let axis = |a: usize| Axis { i0: axes[a][j].0 as isize, t: axes[a][j].1, excess: axes[a][j].2 };
+            (h[j], phi[j]) = self.sum_3d(&axis(0), &axis(1), &axis(2), &w[0][j], &iwx[j], &w[1][j], &w[2][j]);
+        }
+        (h, phi)
     }
 
     /// Sums over the x taps of one row (from `base`) of `v w`, `v w'`, `v w''`.
@@ -358,7 +416,6 @@ struct Taps {
     index: [usize; 4],
     w: [[f64; 4]; 3],
     count: usize,
-    axis: Option<Axis>,
 }
 
 #[cfg(test)]

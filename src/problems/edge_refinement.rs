@@ -9,7 +9,7 @@
 //! 1. At a stationary point `(κ + λ)H + ∂_ν H = 0`: the curve sits where the slope of
 //!    `H` balances its curvature, a distance `(κ + λ)H/∂²_ν H ≈ (κ + λ)s²/2` inside
 //!    the minimum of `H` across the edge. The refinement samples
-//!    `h(t) = H(x_i + t ν_i)` on `|t| ≤ 1.5 s` every 0.1 px and takes the smallest
+//!    `h(t) = H(x_i + t ν_i)` on `|t| ≤ 1.5 s` every 0.2 px and takes the smallest
 //!    sample, refined by the parabola through it and its neighbours.
 //! 2. The blurred edge itself: across a step edge of curvature `κ` the smoothed
 //!    gradient is, to first order in `s/R`, `|∇(1_Ω ∗ G_s)|(r) ∝ φ_s(r − R) (R/r)^{(d−1)/2}`
@@ -34,7 +34,7 @@ use crate::geometry::{Mesh, Point};
 use crate::imaging::EdgeField;
 
 /// Spacing of the samples along the normal, in pixels.
-const STEP_PX: f64 = 0.1;
+const STEP_PX: f64 = 0.2;
 /// Half-width of the search in units of `s`.
 const REACH: f64 = 1.5;
 
