@@ -172,7 +172,7 @@ impl<const D: usize> Problem<D> for AreaTarget {
     fn shape_gradient(&self, s: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
         let n = s.mesh.num_vertices();
         let f = 2.0 * (s.mesh.enclosed_measure() - self.target);
-        Ok(ShapeGradient { g: vec![self.eps; n], f: vec![f; n] })
+        Ok(ShapeGradient { g: vec![self.eps; n], f: vec![f; n], aux: Vec::new() })
     }
 }
 

@@ -22,20 +22,49 @@ pub struct Pattern<const D: usize> {
 impl<const D: usize> Pattern<D> {
     /// Pattern of `n × n` matrices assembled over `elements`.
     pub fn new(n: usize, elements: &[[usize; D]]) -> Self {
-        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n];
-        for (i, c) in cols.iter_mut().enumerate() {
-            c.push(i);
+        // every column in one flat array: its diagonal and the other vertices of its
+        // elements (with repeats), then sorted and deduplicated column by column
+        let mut start = vec![1usize; n + 1];
+        start[n] = 0;
+        for el in elements {
+            for &v in el {
+                start[v] += D - 1;
+            }
+        }
+        let mut total = 0;
+        for s in start.iter_mut() {
+            (*s, total) = (total, total + *s);
+        }
+        let mut raw = vec![0usize; total];
+        let mut fill = start[..n].to_vec();
+        for (i, f) in fill.iter_mut().enumerate() {
+            raw[*f] = i;
+            *f += 1;
         }
         for el in elements {
-            for a in 0..D {
-                for b in 0..D {
+            for b in 0..D {
+                for a in 0..D {
                     if a != b {
-                        cols[el[b]].push(el[a]);
+                        raw[fill[el[b]]] = el[a];
+                        fill[el[b]] += 1;
                     }
                 }
             }
         }
-        let (col_ptr, row_idx) = compress(cols);
+        let (mut col_ptr, mut row_idx) = (Vec::with_capacity(n + 1), Vec::with_capacity(total));
+        col_ptr.push(0);
+        for j in 0..n {
+            let c = &mut raw[start[j]..start[j + 1]];
+            c.sort_unstable();
+            let mut last = usize::MAX;
+            for &r in c.iter() {
+                if r != last {
+                    row_idx.push(r);
+                    last = r;
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
         let find = |row: usize, col: usize| -> usize {
             let range = &row_idx[col_ptr[col]..col_ptr[col + 1]];
             col_ptr[col] + range.binary_search(&row).expect("entry in pattern")

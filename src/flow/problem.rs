@@ -10,6 +10,9 @@ use super::ScalarProduct;
 pub struct ShapeGradient {
     pub g: Vec<f64>,
     pub f: Vec<f64>,
+    /// Per-vertex values a problem computes along with `g` and `f` for its own
+    /// [`Problem::h1_weights`] (segmentation: `∂_ν H` and `ν·D²H·ν`); empty if unused.
+    pub aux: Vec<f64>,
 }
 
 /// Weights of the weighted H1 product `b(V, W) = ∫ α ∇V·∇W + β V W`.

@@ -239,7 +239,9 @@ impl EdgeField {
         wz: &[f64; 4],
     ) -> (f64, f64) {
         let [nx, ny, nz] = self.dims.map(|n| n as isize);
-        let taps = |a: &Axis, n: isize| -> [usize; 4] { std::array::from_fn(|q| (a.i0 - 1 + q as isize).clamp(0, n - 1) as usize) };
+        let taps = |a: &Axis, n: isize| -> [usize; 4] {
+            std::array::from_fn(|q| (a.i0 - 1 + q as isize).clamp(0, n - 1) as usize)
+        };
         let (ix, iy, iz) = (taps(ax, nx), taps(ay, ny), taps(az, nz));
         let (sy, sz) = self.strides();
         let width = self.dims[0] + 2 * PAD as usize;

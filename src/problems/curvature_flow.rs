@@ -26,7 +26,7 @@ impl<const D: usize> Problem<D> for CurvatureFlow {
 
     fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
         let n = state.mesh.num_vertices();
-        Ok(ShapeGradient { g: vec![self.gamma; n], f: vec![self.lambda; n] })
+        Ok(ShapeGradient { g: vec![self.gamma; n], f: vec![self.lambda; n], aux: Vec::new() })
     }
 
     fn default_scalar_product(&self) -> ScalarProduct {

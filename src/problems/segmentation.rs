@@ -133,11 +133,9 @@ impl Batch<'_> {
     /// the sub-triangle with lattice corners `a, b, c` of `x₀ + s u + t v`.
     #[inline(always)]
     fn sub_triangle(&mut self, x0: &[f64; 3], u: &[f64; 3], v: &[f64; 3], a: (f64, f64), b: (f64, f64), c: (f64, f64)) {
-        for (wa, wb, wc) in [
-            (2.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0),
-            (1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0),
-            (1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0),
-        ] {
+        for (wa, wb, wc) in
+            [(2.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0), (1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0), (1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0)]
+        {
             let s = wa * a.0 + wb * b.0 + wc * c.0;
             let t = wa * a.1 + wb * b.1 + wc * c.1;
             for k in 0..3 {
@@ -208,25 +206,30 @@ impl<const D: usize> Problem<D> for Segmentation {
     fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
         self.check_dimension::<D>()?;
         let n = state.mesh.num_vertices();
-        let (mut g, mut f) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        let (mut g, mut f, mut aux) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(2 * n));
         for (s, nu) in samples(&self.field, state.mesh.positions()).iter().zip(state.normals) {
+            let dn = s.grad.dot(nu);
             g.push(s.h);
-            f.push(self.lambda * s.h + s.grad.dot(nu));
+            f.push(self.lambda * s.h + dn);
+            aux.extend([dn, nu.dot(&(s.hess * nu))]);
         }
-        Ok(ShapeGradient { g, f })
+        Ok(ShapeGradient { g, f, aux })
     }
 
-    fn h1_weights(&self, state: &SurfaceState<'_, D>, _grad: &ShapeGradient) -> Option<H1Weights> {
-        let mut alpha = Vec::with_capacity(state.mesh.num_vertices());
-        let mut beta = Vec::with_capacity(state.mesh.num_vertices());
-        let samples = samples(&self.field, state.mesh.positions());
-        for ((s, nu), &k) in samples.iter().zip(state.normals).zip(state.curvature) {
-            let dn = s.grad.dot(nu);
-            let b = nu.dot(&(s.hess * nu)) + (2.0 * k + self.lambda) * dn + self.lambda * k * s.h;
-            alpha.push(s.h);
+    /// From the samples taken for the gradient: `H = g`, and `aux` holds `∂_ν H` and
+    /// `ν·D²H·ν` per vertex.
+    fn h1_weights(&self, state: &SurfaceState<'_, D>, grad: &ShapeGradient) -> Option<H1Weights> {
+        let n = state.mesh.num_vertices();
+        if grad.g.len() != n || grad.aux.len() != 2 * n {
+            return None;
+        }
+        let mut beta = Vec::with_capacity(n);
+        for i in 0..n {
+            let (h, k, dn) = (grad.g[i], state.curvature[i], grad.aux[2 * i]);
+            let b = grad.aux[2 * i + 1] + (2.0 * k + self.lambda) * dn + self.lambda * k * h;
             beta.push(if b > self.epsilon { b } else { self.epsilon });
         }
-        Some(H1Weights { alpha: Weight::Vertex(alpha), beta: Weight::Vertex(beta) })
+        Some(H1Weights { alpha: Weight::Vertex(grad.g.clone()), beta: Weight::Vertex(beta) })
     }
 
     fn default_scalar_product(&self) -> ScalarProduct {

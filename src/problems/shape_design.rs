@@ -320,7 +320,7 @@ impl<const D: usize> Problem<D> for ShapeDesign {
                 })
                 .collect(),
         };
-        Ok(ShapeGradient { g, f })
+        Ok(ShapeGradient { g, f, aux: Vec::new() })
     }
 
     /// Paper eq. (84) with `g = p + γ`, `β = 1`.

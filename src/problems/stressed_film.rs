@@ -159,7 +159,7 @@ impl<const D: usize> Problem<D> for StressedFilm {
                 dw.iter().zip(&t).map(|(d, t)| -(d + b * t.x).powi(2)).collect()
             }
         };
-        Ok(ShapeGradient { g: vec![self.gamma; n], f })
+        Ok(ShapeGradient { g: vec![self.gamma; n], f, aux: Vec::new() })
     }
 
     fn default_scalar_product(&self) -> ScalarProduct {

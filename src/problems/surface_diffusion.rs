@@ -22,7 +22,7 @@ impl<const D: usize> Problem<D> for SurfaceDiffusion {
 
     fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
         let n = state.mesh.num_vertices();
-        Ok(ShapeGradient { g: vec![self.gamma; n], f: vec![0.0; n] })
+        Ok(ShapeGradient { g: vec![self.gamma; n], f: vec![0.0; n], aux: Vec::new() })
     }
 
     fn default_scalar_product(&self) -> ScalarProduct {
