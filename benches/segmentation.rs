@@ -78,7 +78,7 @@ fn main() {
     shapeflow::tune_allocator();
     let quick = std::env::args().any(|a| a == "quick");
     let mut cases: Vec<(String, Vec<u8>, Vec<bool>)> = Vec::new();
-    for n in [128usize, 1024] {
+    for n in [100usize, 128, 1024] {
         if quick && n > 128 {
             continue;
         }
@@ -102,7 +102,7 @@ fn main() {
         let inputs: HashMap<String, Vec<u8>> = [("image".to_string(), bytes)].into();
         // the small sizes: the run with the median total of five (after one not
         // counted); the large ones once
-        let small = name.starts_with("128²") || name.starts_with("64³");
+        let small = name.starts_with("100²") || name.starts_with("128²") || name.starts_with("64³");
         let runs: Vec<_> = (0..if small { 6 } else { 1 })
             .map(|_| {
                 let t0 = Instant::now();
