@@ -145,6 +145,16 @@ fn bad_images_give_errors_naming_the_input() {
         &[("picture", good.clone())],
     );
     assert!(e.starts_with("problem.lambda_final:") && e.contains("-2"), "{e}");
+    // wrong types and unknown fields of the segmentation body are named too
+    for (body, field) in [
+        (r#""edge_refinement": "yes""#, "problem.edge_refinement:"),
+        (r#""lambda": "large""#, "problem.lambda:"),
+        (r#""sigmaa": 1"#, "problem.sigmaa:"),
+    ] {
+        let spec = format!(r#"{{"problem": {{"type": "segmentation", "image": "input:picture", {body}}}}}"#);
+        let e = parse_spec(&spec).expect_err("should be rejected").to_string();
+        assert!(e.starts_with(field), "{e}");
+    }
     // slice stacks: sizes must agree, and the failing slice is named
     let e = image_error(
         r#"{"problem": {"type": "segmentation", "image": ["input:a", "input:b", "input:c", "input:d"]}}"#,

@@ -2,7 +2,7 @@
 //! initial mesh, the problem and the flow settings.
 
 use super::mesh_io::read_mesh_file;
-use super::spec::{ImageSource, InitialSpec, JobSpec, ProblemSpec, SpecError};
+use super::spec::{ImageSource, InitialSpec, JobSpec, ProblemSpec, SegmentationSpec, SpecError};
 use crate::flow::{CurveManager, FlowSettings, Problem, ScalarProduct, SurfaceManager};
 use crate::geometry::{self, CurveMesh, Mesh, MeshError, Point, SurfaceMesh};
 use crate::imaging::{decode_image, decode_slices, decode_volume, EdgeField, Grid, ImageLimits};
@@ -131,7 +131,14 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             positive("problem.gamma", *gamma)?;
             ProblemKind::SurfaceDiffusion(SurfaceDiffusion { gamma: *gamma })
         }
-        ProblemSpec::Segmentation { image: source, sigma, lambda, lambda_final, epsilon, edge_refinement } => {
+        ProblemSpec::Segmentation(SegmentationSpec {
+            image: source,
+            sigma,
+            lambda,
+            lambda_final,
+            epsilon,
+            edge_refinement,
+        }) => {
             let grid = load_image(source, inputs)?;
             let epsilon = &epsilon.unwrap_or(super::spec::default_beta_epsilon(grid.scale()));
             positive("problem.epsilon", *epsilon)?;

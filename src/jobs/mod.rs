@@ -17,5 +17,5 @@ pub use results::{job_extras, result_state, state_glb, states_glb, MAX_FRAMES};
 pub use run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
 pub use spec::{
     parse_spec, BoundarySpec, ControlSpec, FlowSpec, InitialSpec, JobSpec, MeshSpec, OutputSpec, ProblemSpec,
-    ShapeDesignSpec, SpecError, StressedFilmSpec, TargetSpec,
+    SegmentationSpec, ShapeDesignSpec, SpecError, StressedFilmSpec, TargetSpec,
 };

@@ -64,29 +64,7 @@ pub enum ProblemSpec {
         gamma: f64,
     },
     /// Geodesic active contours `J = ∫_Γ H + λ∫_Ω H` on an image.
-    Segmentation {
-        /// `"input:NAME"` (PNG/JPEG/TIFF → 2D, NRRD → 3D) or a list of them (a stack
-        /// of 2D slices → 3D, first slice at the bottom).
-        image: ImageSource,
-        /// Gaussian smoothing in pixels; default 1.5 for 2D images, 1 for volumes.
-        #[serde(default)]
-        sigma: Option<f64>,
-        /// Weight of the region term (balloon force); default scales with the
-        /// image size (see [`default_lambda`]).
-        #[serde(default)]
-        lambda: Option<f64>,
-        /// (Addition) once the flow has converged with `lambda`, it continues with
-        /// this weight until it converges again (default 0 in 2D, `lambda` in 3D).
-        #[serde(default)]
-        lambda_final: Option<f64>,
-        /// (Addition) the results show the contour moved onto the image's edges to
-        /// sub-pixel accuracy (`problems::refine_to_edges`); default true.
-        #[serde(default)]
-        edge_refinement: Option<bool>,
-        /// Threshold ε of the Newton weight β (paper §4.2.1); default `0.1 L²`.
-        #[serde(default)]
-        epsilon: Option<f64>,
-    },
+    Segmentation(SegmentationSpec),
     /// Optimal shape design for the Laplace equation (2D): `J = ½∫_D (y − z_g)² + γ|Γ|`.
     ShapeDesign(ShapeDesignSpec),
     /// The epitaxially stressed film (2D, periodic in `x`): `J = ∫_Ω |∇y|² + γ|Γ|`
@@ -207,6 +185,33 @@ pub enum TargetSpec {
 pub enum ImageSource {
     One(String),
     Slices(Vec<String>),
+}
+
+/// `problem` of `segmentation` (without its `type`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SegmentationSpec {
+    /// `"input:NAME"` (PNG/JPEG/TIFF → 2D, NRRD → 3D) or a list of them (a stack
+    /// of 2D slices → 3D, first slice at the bottom).
+    pub image: ImageSource,
+    /// Gaussian smoothing in pixels; default 1.5 (see [`default_sigma`]).
+    #[serde(default)]
+    pub sigma: Option<f64>,
+    /// Weight of the region term (balloon force); default scales with the
+    /// image size (see [`default_lambda`]).
+    #[serde(default)]
+    pub lambda: Option<f64>,
+    /// (Addition) once the flow has converged with `lambda`, it continues with
+    /// this weight until it converges again (default 0 in 2D, `lambda` in 3D).
+    #[serde(default)]
+    pub lambda_final: Option<f64>,
+    /// (Addition) the results show the contour moved onto the image's edges to
+    /// sub-pixel accuracy (`problems::refine_to_edges`); default true.
+    #[serde(default)]
+    pub edge_refinement: Option<bool>,
+    /// Threshold ε of the Newton weight β (paper §4.2.1); default `0.1 L²`.
+    #[serde(default)]
+    pub epsilon: Option<f64>,
 }
 
 /// Prefix of the message of a malformed `problem.image` (see [`parse_spec`]).
@@ -478,7 +483,9 @@ pub fn parse_spec(text: &str) -> Result<JobSpec, SpecError> {
     // the fields of an internally tagged enum lose their paths in serde's buffering:
     // check the shape-design body on its own to name them (`problem.control.inner.radius`)
     let kind = value.pointer("/problem/type").and_then(|t| t.as_str());
-    if kind == Some("shape_design") {
+    if kind == Some("segmentation") {
+        check_body::<SegmentationSpec>(&value)?;
+    } else if kind == Some("shape_design") {
         check_body::<ShapeDesignSpec>(&value)?;
     } else if kind == Some("stressed_film") {
         check_body::<StressedFilmSpec>(&value)?;
