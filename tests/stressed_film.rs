@@ -99,20 +99,31 @@ fn void_areas(c: &CurveMesh) -> Vec<f64> {
         .collect()
 }
 
+/// The paper's scenario (examples/stressed_film.json) at `resolution` vertices, to
+/// t = 0.0085.
+fn paper_job(resolution: usize) -> PreparedJob {
+    let spec = std::fs::read_to_string("examples/stressed_film.json")
+        .unwrap()
+        .replace("\"resolution\": 128", &format!("\"resolution\": {resolution}"))
+        .replace("\"end_time\": 0.0068", "\"end_time\": 0.0085");
+    job(&spec)
+}
+
+/// The flow of a film job with its mesh manager.
+fn managed_flow(job: &PreparedJob) -> Flow<'_, 2> {
+    let (ProblemKind::StressedFilm(problem), AnyMesh::Curve(mesh)) = (&job.problem, &job.mesh) else { unreachable!() };
+    Flow::new(problem as &dyn Problem<2>, mesh.clone(), job.settings.clone())
+        .unwrap()
+        .with_mesh_manager(Box::new(job.curve_manager.unwrap()) as Box<dyn MeshManager<2>>)
+}
+
 /// The paper's scenario (examples/stressed_film.json at 64 vertices): the film
 /// keeps its area and J decreases while it is a graph and then a groove; a void
 /// closes off in finite time and keeps its area.
 #[test]
 fn the_groove_closes_off_a_void_in_finite_time() {
-    let spec = std::fs::read_to_string("examples/stressed_film.json")
-        .unwrap()
-        .replace("\"resolution\": 128", "\"resolution\": 64")
-        .replace("\"end_time\": 0.0068", "\"end_time\": 0.0085");
-    let job = job(&spec);
-    let (ProblemKind::StressedFilm(problem), AnyMesh::Curve(mesh)) = (&job.problem, &job.mesh) else { unreachable!() };
-    let mut flow = Flow::new(problem as &dyn Problem<2>, mesh.clone(), job.settings.clone())
-        .unwrap()
-        .with_mesh_manager(Box::new(job.curve_manager.unwrap()) as Box<dyn MeshManager<2>>);
+    let job = paper_job(64);
+    let mut flow = managed_flow(&job);
     let area0 = flow.mesh().enclosed_measure();
     let mut energy = flow.energy();
     let energy0 = energy;
@@ -164,18 +175,11 @@ fn the_groove_closes_off_a_void_in_finite_time() {
     }
 }
 
-/// The paper's scenario (examples/stressed_film.json) at `resolution` vertices, run
-/// until the first void closes off: its time.
+/// The paper's scenario at `resolution` vertices, run until the first void closes
+/// off: its time.
 fn first_void_time(resolution: usize) -> f64 {
-    let spec = std::fs::read_to_string("examples/stressed_film.json")
-        .unwrap()
-        .replace("\"resolution\": 128", &format!("\"resolution\": {resolution}"))
-        .replace("\"end_time\": 0.0068", "\"end_time\": 0.0085");
-    let job = job(&spec);
-    let (ProblemKind::StressedFilm(problem), AnyMesh::Curve(mesh)) = (&job.problem, &job.mesh) else { unreachable!() };
-    let mut flow = Flow::new(problem as &dyn Problem<2>, mesh.clone(), job.settings.clone())
-        .unwrap()
-        .with_mesh_manager(Box::new(job.curve_manager.unwrap()) as Box<dyn MeshManager<2>>);
+    let job = paper_job(resolution);
+    let mut flow = managed_flow(&job);
     while void_areas(flow.mesh()).is_empty() {
         let r = flow.step().unwrap();
         assert!(r.stop.is_none(), "no void by t = {} at {resolution} vertices", flow.time());
