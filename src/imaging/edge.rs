@@ -252,17 +252,7 @@ impl EdgeField {
             for b in 0..4 {
                 let row = iy[b] + self.dims[1] * iz[c];
                 let base = sy * iy[b] + sz * iz[c];
-                let v: [f64; 4] = if inside {
-                    let r = &self.coef[base + ix[0]..base + ix[0] + 4];
-                    [r[0], r[1], r[2], r[3]]
-                } else {
-                    [self.coef[base + ix[0]], self.coef[base + ix[1]], self.coef[base + ix[2]], self.coef[base + ix[3]]]
-                };
-                let (mut s0, mut si) = (0.0, self.prefix[row * width + m]);
-                for a in 0..4 {
-                    s0 += v[a] * wx[a];
-                    si += v[a] * iwx[a];
-                }
+                let (s0, si) = self.row_sums_with_integral(base, row * width + m, &ix, inside, wx, iwx);
                 let wyz = wy[b] * wz[c];
                 h += wyz * s0;
                 phi += wyz * (si + ax.excess * s0);
@@ -308,6 +298,33 @@ impl EdgeField {
             s2 += v * tx.w[2][a];
         }
         (s0, s1, s2)
+    }
+
+    /// One row of the value and antiderivative sums from `base`: `(Σ_a c_a w_a,
+    /// R + Σ_a c_a iw_a)` over the x taps `ix` (read as one slice when `inside` the
+    /// grid), `R = prefix[prefix_at]` the row's prefix sum before the taps.
+    #[inline(always)]
+    fn row_sums_with_integral(
+        &self,
+        base: usize,
+        prefix_at: usize,
+        ix: &[usize; 4],
+        inside: bool,
+        wx: &[f64; 4],
+        iwx: &[f64; 4],
+    ) -> (f64, f64) {
+        let v: [f64; 4] = if inside {
+            let r = &self.coef[base + ix[0]..base + ix[0] + 4];
+            [r[0], r[1], r[2], r[3]]
+        } else {
+            [self.coef[base + ix[0]], self.coef[base + ix[1]], self.coef[base + ix[2]], self.coef[base + ix[3]]]
+        };
+        let (mut s0, mut si) = (0.0, self.prefix[prefix_at]);
+        for a in 0..4 {
+            s0 += v[a] * wx[a];
+            si += v[a] * iwx[a];
+        }
+        (s0, si)
     }
 
     /// [`Self::sample`] of a 2D field: the same sums in the same order (the
@@ -358,17 +375,7 @@ impl EdgeField {
         for b in 0..4 {
             let row = iy[b];
             let base = self.dims[0] * row;
-            let v: [f64; 4] = if inside {
-                let r = &self.coef[base + ix[0]..base + ix[0] + 4];
-                [r[0], r[1], r[2], r[3]]
-            } else {
-                [self.coef[base + ix[0]], self.coef[base + ix[1]], self.coef[base + ix[2]], self.coef[base + ix[3]]]
-            };
-            let (mut s0, mut si) = (0.0, self.prefix[row * width + m]);
-            for a in 0..4 {
-                s0 += v[a] * wx[a];
-                si += v[a] * iwx[a];
-            }
+            let (s0, si) = self.row_sums_with_integral(base, row * width + m, &ix, inside, wx, iwx);
             // (the general path's weight is `wy[b]·1` for the unused third axis)
             h += wy[b] * s0;
             phi += wy[b] * (si + ax.excess * s0);
