@@ -103,7 +103,8 @@ pub fn refine_to_edges<const D: usize>(field: &EdgeField, mesh: &Mesh<D>) -> (Me
         .map(|i| {
             let t = edge_offset(field, &x[i], &normals[i], s)?;
             let bias = (0.5 * s2 * kappa[i] * px).clamp(-0.25 * s, 0.25 * s);
-            Some(t + bias)
+            // (a degenerate element makes the curvature of its vertices NaN)
+            Some(t + bias).filter(|v| v.is_finite())
         })
         .collect();
     let moved_to = |shift: &[Option<f64>]| -> Vec<Point<D>> {
