@@ -8,8 +8,9 @@
 //!
 //! The energy is integrated with two Gauss points per pixel of segment length on
 //! curves, and on triangles with the 3-point rule on sub-triangles of about `2s`
-//! pixels (`s² = σ² + 2/3` the variance of the blur behind `H`); the domain term uses `∫_Ω H = ∫_Γ Φ ν₁` with the exact
-//! antiderivative `Φ` of the spline of `H` in `x₁`.
+//! pixels (`s² = σ² + 2/3` the variance of the blur behind `H`); the domain term
+//! uses `∫_Ω H = ∫_Γ Φ ν₁` with the exact antiderivative `Φ` of the spline of `H`
+//! in `x₁`.
 
 use crate::fem::Weight;
 use crate::flow::{H1Weights, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
