@@ -60,30 +60,14 @@ impl Segmentation {
             let e = p[1] - p[0];
             let len = e.norm();
             let m = (len * l).ceil().clamp(1.0, 4096.0) as usize;
-            let (mut sh, mut sphi) = (0.0, 0.0);
-            // the Gauss points four at a time (their grid coordinates and weights as
-            // vectors), summed in order
-            let (mut xs, mut ys, mut filled) = ([0.0; 4], [0.0; 4], 0);
+            let mut batch = Batch::new(f);
             for s in 0..m {
                 for g in GAUSS2 {
                     let x = p[0] + e * ((s as f64 + g) / m as f64);
-                    (xs[filled], ys[filled]) = (x[0], x[1]);
-                    filled += 1;
-                    if filled == 4 {
-                        let (h, phi) = f.values_and_antiderivatives_2d(xs, ys);
-                        for j in 0..4 {
-                            sh += h[j];
-                            sphi += phi[j];
-                        }
-                        filled = 0;
-                    }
+                    batch.push([x[0], x[1], 0.0]);
                 }
             }
-            for j in 0..filled {
-                let (h, phi) = f.value_and_antiderivative(&Point::<D>::from_fn(|a, _| [xs[j], ys[j]][a]));
-                sh += h;
-                sphi += phi;
-            }
+            let (sh, sphi, _) = batch.finish();
             let n = (2 * m) as f64;
             (len * sh / n, e[1] * sphi / n)
         } else {
@@ -97,7 +81,7 @@ impl Segmentation {
             let cell = 2.0 * crate::problems::blur_variance(f).sqrt();
             let m = (hmax * l / cell).ceil().clamp(1.0, 256.0) as usize;
             let step = 1.0 / m as f64;
-            let mut batch = Batch { field: f, lanes: [[0.0; 4]; 3], filled: 0, sh: 0.0, sphi: 0.0, count: 0 };
+            let mut batch = Batch::new(f);
             let x0 = [p[0][0], p[0][1], p[0][2]];
             let (u, v) = ([u[0], u[1], u[2]], [v[0], v[1], v[2]]);
             // the m² sub-triangles of the barycentric lattice, 3-point rule on each
@@ -117,9 +101,10 @@ impl Segmentation {
     }
 }
 
-/// The quadrature points of a triangle, evaluated four at a time and summed in
-/// order (plain inlined methods, so that they compile into [`integrals`]' AVX2
-/// version; a closure would be compiled on its own).
+/// The quadrature points of an element, evaluated four at a time (their grid
+/// coordinates and weights as vectors) and summed in order; plain inlined methods,
+/// so that they compile into [`integrals`]' AVX2 version (a closure would be
+/// compiled on its own).
 struct Batch<'a> {
     field: &'a EdgeField,
     lanes: [[f64; 4]; 3],
@@ -129,7 +114,34 @@ struct Batch<'a> {
     count: usize,
 }
 
-impl Batch<'_> {
+impl<'a> Batch<'a> {
+    #[inline(always)]
+    fn new(field: &'a EdgeField) -> Self {
+        Batch { field, lanes: [[0.0; 4]; 3], filled: 0, sh: 0.0, sphi: 0.0, count: 0 }
+    }
+
+    /// Add the point `x` (its third coordinate unused in 2D).
+    #[inline(always)]
+    fn push(&mut self, x: [f64; 3]) {
+        for k in 0..3 {
+            self.lanes[k][self.filled] = x[k];
+        }
+        self.filled += 1;
+        self.count += 1;
+        if self.filled == 4 {
+            let (h, phi) = if self.field.dimension() == 2 {
+                self.field.values_and_antiderivatives_2d(self.lanes[0], self.lanes[1])
+            } else {
+                self.field.values_and_antiderivatives_3d(self.lanes)
+            };
+            for j in 0..4 {
+                self.sh += h[j];
+                self.sphi += phi[j];
+            }
+            self.filled = 0;
+        }
+    }
+
     /// The 3-point rule (points at barycentric `(2/3, 1/6, 1/6)` and permutations) on
     /// the sub-triangle with lattice corners `a, b, c` of `x₀ + s u + t v`.
     #[inline(always)]
@@ -139,19 +151,7 @@ impl Batch<'_> {
         {
             let s = wa * a.0 + wb * b.0 + wc * c.0;
             let t = wa * a.1 + wb * b.1 + wc * c.1;
-            for k in 0..3 {
-                self.lanes[k][self.filled] = x0[k] + u[k] * s + v[k] * t;
-            }
-            self.filled += 1;
-            self.count += 1;
-            if self.filled == 4 {
-                let (h, phi) = self.field.values_and_antiderivatives_3d(self.lanes);
-                for j in 0..4 {
-                    self.sh += h[j];
-                    self.sphi += phi[j];
-                }
-                self.filled = 0;
-            }
+            self.push(std::array::from_fn(|k| x0[k] + u[k] * s + v[k] * t));
         }
     }
 
@@ -159,8 +159,12 @@ impl Batch<'_> {
     #[inline(always)]
     fn finish(mut self) -> (f64, f64, usize) {
         for j in 0..self.filled {
-            let x = nalgebra::Vector3::new(self.lanes[0][j], self.lanes[1][j], self.lanes[2][j]);
-            let (h, phi) = self.field.value_and_antiderivative(&x);
+            let [x, y, z] = [self.lanes[0][j], self.lanes[1][j], self.lanes[2][j]];
+            let (h, phi) = if self.field.dimension() == 2 {
+                self.field.value_and_antiderivative(&nalgebra::Vector2::new(x, y))
+            } else {
+                self.field.value_and_antiderivative(&nalgebra::Vector3::new(x, y, z))
+            };
             self.sh += h;
             self.sphi += phi;
         }
