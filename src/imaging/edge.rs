@@ -133,6 +133,13 @@ impl EdgeField {
         (i0, uc - i0, u - uc)
     }
 
+    /// The four sample indices of the taps of `ax` along axis `a`, clamped to the grid.
+    #[inline(always)]
+    fn tap_indices(&self, ax: &Axis, a: usize) -> [usize; 4] {
+        let n = self.dims[a] as isize;
+        std::array::from_fn(|q| (ax.i0 - 1 + q as isize).clamp(0, n - 1) as usize)
+    }
+
     /// Taps along axis `a`: clamped sample indices, weights `[w, w', w'']` and the
     /// number of taps (`1` with weight 1 for the unused third axis of a 2D field).
     #[inline(always)]
@@ -141,8 +148,7 @@ impl EdgeField {
             return Taps { index: [0; 4], w: [[1.0, 0.0, 0.0, 0.0], [0.0; 4], [0.0; 4]], count: 1 };
         }
         let ax = self.axis(x[a], a);
-        let n = self.dims[a] as isize;
-        let index = std::array::from_fn(|q| (ax.i0 - 1 + q as isize).clamp(0, n - 1) as usize);
+        let index = self.tap_indices(&ax, a);
         let clamped = ax.excess != 0.0;
         // outside the grid the field is constant along this axis
         let w = if !derivatives || clamped {
@@ -238,11 +244,8 @@ impl EdgeField {
         wy: &[f64; 4],
         wz: &[f64; 4],
     ) -> (f64, f64) {
-        let [nx, ny, nz] = self.dims.map(|n| n as isize);
-        let taps = |a: &Axis, n: isize| -> [usize; 4] {
-            std::array::from_fn(|q| (a.i0 - 1 + q as isize).clamp(0, n - 1) as usize)
-        };
-        let (ix, iy, iz) = (taps(ax, nx), taps(ay, ny), taps(az, nz));
+        let nx = self.dims[0] as isize;
+        let (ix, iy, iz) = (self.tap_indices(ax, 0), self.tap_indices(ay, 1), self.tap_indices(az, 2));
         let (sy, sz) = self.strides();
         let width = self.dims[0] + 2 * PAD as usize;
         let m = (ax.i0 - 2 + PAD) as usize;
@@ -363,11 +366,8 @@ impl EdgeField {
     /// The sums of [`Self::value_and_antiderivative_2d`] with the axes and weights given.
     #[inline(always)]
     fn sum_2d(&self, ax: &Axis, ay: &Axis, wx: &[f64; 4], iwx: &[f64; 4], wy: &[f64; 4]) -> (f64, f64) {
-        let (nx, ny) = (self.dims[0] as isize, self.dims[1] as isize);
-        let clamp_x = |q: isize| (ax.i0 - 1 + q).clamp(0, nx - 1) as usize;
-        let clamp_y = |q: isize| (ay.i0 - 1 + q).clamp(0, ny - 1) as usize;
-        let ix: [usize; 4] = [clamp_x(0), clamp_x(1), clamp_x(2), clamp_x(3)];
-        let iy: [usize; 4] = [clamp_y(0), clamp_y(1), clamp_y(2), clamp_y(3)];
+        let nx = self.dims[0] as isize;
+        let (ix, iy) = (self.tap_indices(ax, 0), self.tap_indices(ay, 1));
         let width = self.dims[0] + 2 * PAD as usize;
         let m = (ax.i0 - 2 + PAD) as usize;
         let inside = ax.i0 >= 1 && ax.i0 + 2 < nx;
