@@ -189,7 +189,7 @@ fn a_second_stage_without_balloon_force_sharpens_the_contour() {
         run_with_history(r#"{"problem": {"type": "segmentation", "image": "input:image"}}"#, &[("image", img.clone())]);
     let one = r#"{"problem": {"type": "segmentation", "image": "input:image", "lambda_final": 38.4}}"#;
     let (job1, out1) = run(one, &[("image", img.clone())]);
-    assert!(job1.refine.is_none(), "lambda_final = lambda: one stage");
+    assert!(job1.second_stage.is_none(), "lambda_final = lambda: one stage");
     let (d2, d1) = (dice(&job, &out.last.mesh, &p.truth, 128, 128), dice(&job1, &out1.last.mesh, &p.truth, 128, 128));
     eprintln!(
         "one stage: {} iterations, dice {d1:.4}; two: {} iterations, dice {d2:.4}",

@@ -174,7 +174,7 @@ pub const PINCH_MIN_ANGLE_DEG: f64 = 10.0;
 impl MeshManager<3> for SurfaceManager {
     /// Pinch-off is declared when a neck is thinner than `h_min / 2` (curvature above
     /// `pinch_curvature`), or thinner than `4 h_min` while the managed mesh can no
-    /// longer keep its angles above [`PINCH_MIN_ANGLE_DEG`] (elements of at least
+    /// longer keep its angles above `PINCH_MIN_ANGLE_DEG` (elements of at least
     /// `h_min` around a ring that small).
     fn manage(&mut self, mesh: &SurfaceMesh) -> Result<Managed<3>, FlowError> {
         let curvature = self.pinch_curvature.map(|k| (k, edge_stats(mesh).1 .1));

@@ -109,7 +109,7 @@ const MERGED_MAX: f64 = 0.8;
 /// than `h_max`, or when `h β > ε` at one of its ends and both halves stay above
 /// `h_min`; a vertex is removed when a neighbouring segment is shorter than `h_min`
 /// and the merged segment stays below `h_max`, or when `h β < ε/8` and the merged
-/// segment stays below `0.8 h_max` (the margin of [`desired_sizes`]). Returns `None`
+/// segment stays below `0.8 h_max` (the margin of `desired_sizes`). Returns `None`
 /// if nothing changed.
 pub fn adapt_curve(mesh: &CurveMesh, s: &CurveRemeshSettings) -> Result<Option<CurveMesh>, MeshError> {
     let mut changed = false;

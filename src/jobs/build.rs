@@ -42,7 +42,7 @@ pub enum ProblemKind {
 impl PreparedJob {
     /// The problem of stage `stage` (see [`Checkpoint::stage`](crate::flow::Checkpoint)).
     pub fn stage_problem(&self, stage: usize) -> &ProblemKind {
-        match (stage, &self.refine) {
+        match (stage, &self.second_stage) {
             (1.., Some(p)) => p,
             _ => &self.problem,
         }
@@ -72,7 +72,7 @@ pub struct PreparedJob {
     pub problem: ProblemKind,
     /// (Addition) the problem of a second stage, run from where the first one
     /// converged (segmentation with `lambda_final`).
-    pub refine: Option<ProblemKind>,
+    pub second_stage: Option<ProblemKind>,
     pub settings: FlowSettings,
     pub checkpoint_every: usize,
     /// Mesh management of curves, resolved from the spec and the initial mesh
@@ -83,7 +83,7 @@ pub struct PreparedJob {
     /// The decoded input image of a segmentation job (for masks and overlays).
     pub image: Option<Arc<Grid>>,
     /// (Addition) the edge field the results are refined onto: segmentation with
-    /// `problem.edge_refinement` (default on); see [`PreparedJob::result_state`].
+    /// `problem.edge_refinement` (default on); see [`result_state`](super::result_state).
     pub edges: Option<Arc<EdgeField>>,
 }
 
@@ -118,7 +118,7 @@ fn mesh_err(field: &str, e: MeshError) -> SpecError {
 /// file's bytes.
 pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<PreparedJob, SpecError> {
     let mut image = None;
-    let mut refine = None;
+    let mut second_stage = None;
     let mut edges = None;
     let early = match &spec.problem {
         ProblemSpec::CurvatureFlow { gamma, lambda } => {
@@ -165,7 +165,8 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
                 edges = Some(problem.field.clone());
             }
             if lambda_final != *lambda {
-                refine = Some(ProblemKind::Segmentation(Segmentation { lambda: lambda_final, ..problem.clone() }));
+                second_stage =
+                    Some(ProblemKind::Segmentation(Segmentation { lambda: lambda_final, ..problem.clone() }));
             }
             ProblemKind::Segmentation(problem)
         }
@@ -301,7 +302,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         spec,
         mesh,
         problem,
-        refine,
+        second_stage,
         settings,
         checkpoint_every,
         curve_manager,

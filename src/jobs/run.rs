@@ -34,7 +34,7 @@ pub struct JobFailure {
 }
 
 /// Run `job` (from its start, or from `resume`), reporting to `events`. A job with a
-/// second stage ([`PreparedJob::refine`]) continues with it from where the first one
+/// second stage ([`PreparedJob::second_stage`]) continues with it from where the first one
 /// converged; the iterations count on, and its checkpoints carry `stage: 1`.
 pub fn run_prepared(
     job: &PreparedJob,
@@ -63,12 +63,12 @@ fn run_stages<const D: usize>(
     events: &mut dyn RunEvents,
 ) -> Result<JobOutcome, Box<JobFailure>> {
     let mut start = resume.cloned();
-    let mut stage = resume.map_or(0, |c| c.stage.min(usize::from(job.refine.is_some())));
+    let mut stage = resume.map_or(0, |c| c.stage.min(usize::from(job.second_stage.is_some())));
     // the state a later stage starts from was reported as the end of the one before
     let mut reported = false;
     loop {
         let out = run_stage::<D>(job, stage, mesh, manager(), start.as_ref(), reported, cancel, events)?;
-        if stage == 0 && job.refine.is_some() && out.stop == StopReason::Converged {
+        if stage == 0 && job.second_stage.is_some() && out.stop == StopReason::Converged {
             (start, stage, reported) = (Some(Checkpoint { stage: 1, ..out.last }), 1, true);
             continue;
         }

@@ -194,11 +194,11 @@ pub struct SegmentationSpec {
     /// `"input:NAME"` (PNG/JPEG/TIFF → 2D, NRRD → 3D) or a list of them (a stack
     /// of 2D slices → 3D, first slice at the bottom).
     pub image: ImageSource,
-    /// Gaussian smoothing in pixels; default 1.5 (see [`default_sigma`]).
+    /// Gaussian smoothing in pixels; default 1.5 (`default_sigma`).
     #[serde(default)]
     pub sigma: Option<f64>,
     /// Weight of the region term (balloon force); default scales with the
-    /// image size (see [`default_lambda`]).
+    /// image size (`default_lambda`).
     #[serde(default)]
     pub lambda: Option<f64>,
     /// (Addition) once the flow has converged with `lambda`, it continues with

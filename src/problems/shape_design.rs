@@ -180,7 +180,7 @@ impl ShapeDesign {
     ///
     /// The bulk mesh follows the curve: while the connectivity of `Γ` stays that of
     /// the state of the current step and the triangles at `Γ` keep angles of at least
-    /// [`FOLLOW_MIN_ANGLE`], that state's triangulation is reused with the curve's
+    /// `FOLLOW_MIN_ANGLE`, that state's triangulation is reused with the curve's
     /// vertices moved. `J_h` is then a smooth function of the vertex positions with
     /// the exact gradient [`curve_sensitivity`], and backtracking compares trial
     /// curves with the current one on the same mesh; otherwise `Ω` is triangulated
