@@ -69,8 +69,9 @@ pub struct CrossingWatch {
 }
 
 impl CrossingWatch {
-    /// All crossings among `segments` (as [`find_segment_intersections`](super::find_segment_intersections)): none if
-    /// the certificate of the last full check still holds, else a full check.
+    /// All crossings among `segments` (as
+    /// [`find_segment_intersections`](super::find_segment_intersections)): none if the
+    /// certificate of the last full check still holds, else a full check.
     pub fn crossings(&mut self, points: &[Point<2>], segments: &[[usize; 2]]) -> Vec<SegmentHit> {
         self.check(points, segments, None)
     }
