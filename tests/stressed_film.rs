@@ -105,7 +105,7 @@ fn paper_job(resolution: usize) -> PreparedJob {
     let spec = std::fs::read_to_string("examples/stressed_film.json")
         .unwrap()
         .replace("\"resolution\": 128", &format!("\"resolution\": {resolution}"))
-        .replace("\"end_time\": 0.0068", "\"end_time\": 0.0085");
+        .replace("\"end_time\": 0.0067", "\"end_time\": 0.0085");
     job(&spec)
 }
 
@@ -119,7 +119,8 @@ fn managed_flow(job: &PreparedJob) -> Flow<'_, 2> {
 
 /// The paper's scenario (examples/stressed_film.json at 64 vertices): the film
 /// keeps its area and J decreases while it is a graph and then a groove; a void
-/// closes off in finite time and keeps its area.
+/// closes off in finite time and keeps its area; the run goes on through further
+/// reconnections.
 #[test]
 fn the_groove_closes_off_a_void_in_finite_time() {
     let job = paper_job(64);
@@ -145,7 +146,8 @@ fn the_groove_closes_off_a_void_in_finite_time() {
         if bottom > 0.25 && rise > 0.0 {
             rises.push((flow.time(), rise));
         }
-        assert!(drift < 1e-3, "area drift {drift:e} at t = {}", flow.time());
+        // each step's O(τ²) change is removed (measured: 6e-7 at the void)
+        assert!(drift < 1e-5, "area drift {drift:e} at t = {}", flow.time());
         energy = flow.energy();
     }
     let (t, area, drift) = formed.unwrap();
@@ -164,15 +166,38 @@ fn the_groove_closes_off_a_void_in_finite_time() {
     let windings: Vec<u64> =
         doc["components"].as_array().unwrap().iter().map(|c| c["winding"].as_u64().unwrap()).collect();
     assert!(windings.contains(&0) && windings.contains(&1), "{windings:?}");
-    // while it stays alone, its area is kept
-    for _ in 0..STEPS_AFTER {
-        flow.step().unwrap();
+    // the run goes on: the crack above the void heals back (its tip retracts into a
+    // bulb), runs down again, reopens the void into the surface and closes it off
+    // anew, larger (measured at 64 vertices: the first void lives 1.3e-5, the second
+    // closes off 2.5e-5 after the first). Each void keeps its area while it is
+    // closed, and the film keeps its area throughout.
+    let film0 = flow.mesh().enclosed_measure();
+    let (mut births, mut current, mut first_life) = (vec![(t, area)], Some((t, area)), None);
+    while flow.time() < t + AFTER {
+        let r = flow.step().unwrap();
+        assert!(r.stop.is_none(), "stopped {:?} at t = {} after the void", r.stop, flow.time());
+        let drift = (flow.mesh().enclosed_measure() / film0 - 1.0).abs();
+        assert!(drift < 1e-3, "film area drift {drift:e} at t = {}", flow.time());
         let v = void_areas(flow.mesh());
-        if v.len() != 1 {
-            break;
+        match (v.len(), current) {
+            (1, Some((_, a))) => {
+                assert!((v[0] / a - 1.0).abs() < VOID_TOL, "void area {a} → {} at t = {}", v[0], flow.time())
+            }
+            (1, None) => {
+                current = Some((flow.time(), v[0]));
+                births.push((flow.time(), v[0]));
+            }
+            (0, Some((born, _))) => {
+                first_life.get_or_insert(flow.time() - born);
+                current = None;
+            }
+            (0, None) => {}
+            (n, _) => panic!("{n} voids at t = {}", flow.time()),
         }
-        assert!((v[0] / area - 1.0).abs() < VOID_TOL, "void area {} → {} at t = {}", area, v[0], flow.time());
     }
+    println!("voids closed off (time, area): {births:?}; the first lived {first_life:?}");
+    assert!(first_life.is_none_or(|l| l > 5e-6), "the first void lived {first_life:?}");
+    assert!(births.len() >= 2, "one void only: {births:?}");
 }
 
 /// The paper's scenario at `resolution` vertices, run until the first void closes
@@ -189,7 +214,7 @@ fn first_void_time(resolution: usize) -> f64 {
 
 /// Refinement study (issue: the time at which the inclusion forms is stable to 5 %
 /// when the mesh is refined): the first void at 64, 96 and 128 vertices, measured
-/// t = 0.00700, 0.00676, 0.00667. Each refinement changes it by less than 5 %, and
+/// t = 0.00700, 0.00677, 0.00667. Each refinement changes it by less than 5 %, and
 /// the change shrinks (3.5 %, then 1.4 %).
 #[test]
 fn the_void_forms_at_a_time_stable_under_refinement() {
@@ -205,7 +230,9 @@ fn the_void_forms_at_a_time_stable_under_refinement() {
     assert!(t.iter().all(|&x| x > 0.0064 && x < 0.0072), "{t:?}");
 }
 
-const STEPS_AFTER: usize = 20;
+/// How long the test runs on after the first void closes off.
+const AFTER: f64 = 4e-5;
+/// Relative change of a void's area allowed while it stays closed.
 const VOID_TOL: f64 = 0.01;
 
 #[test]

@@ -7,7 +7,8 @@
 //!    the step is retried with `τ ← 0.9 ε τ / ratio`;
 //! 2. *tangling*: an element that degenerates or flips halves `τ`; so does a change
 //!    of the enclosed measure above `conservation` (relative, when set; down to
-//!    `4 τ_min`);
+//!    `4 τ_min`); an accepted change below it is then removed by offsetting each
+//!    component along its normals ([`Mesh::with_component_measures`]);
 //! 3. *backtracking* (paper §3.2): while `J(Γ_{n+1}) > J(Γ_n)`, halve `τ`.
 //!
 //! Below `τ_min` the run stops with [`StopReason::TauMin`] on the last good state.
@@ -73,7 +74,8 @@ pub struct FlowSettings {
     pub beta: f64,
     /// Largest relative change of the enclosed measure per step (`None`: no
     /// check). For area-conserving (`H^{-1}`) flows, whose steps conserve it up to
-    /// `O(τ²)`: a larger change halves τ.
+    /// `O(τ²)`: a larger change halves τ, a smaller one is removed by offsetting each
+    /// component to its measure before the step.
     #[serde(default)]
     pub conservation: Option<f64>,
     /// Physical evolutions: compare the energy change with `tolerance·|J_n|·τ/τ_cap`
@@ -324,7 +326,10 @@ impl<'p, const D: usize> Flow<'p, D> {
         let s = &self.settings;
         let matrices = &self.matrices;
         let (ax, grad, product) = (&lin.ax, &lin.grad, &lin.product);
-        let a0 = if s.conservation.is_some() { self.mesh.enclosed_measure() } else { 0.0 };
+        let (a0, components) = match s.conservation {
+            Some(_) => (self.mesh.enclosed_measure(), self.mesh.component_measures()),
+            None => (0.0, Vec::new()),
+        };
         loop {
             if tau < s.tau_min {
                 report.stop = Some(StopReason::TauMin);
@@ -351,7 +356,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             }
             let positions: Vec<Point<D>> =
                 self.mesh.positions().iter().zip(&vel.vector).map(|(x, v)| x + v * tau).collect();
-            let candidate = self.mesh.with_positions(positions);
+            let mut candidate = self.mesh.with_positions(positions);
             if let Some(element) = tangled(&self.mesh, &candidate) {
                 tau *= 0.5;
                 report.reductions += 1;
@@ -369,6 +374,8 @@ impl<'p, const D: usize> Flow<'p, D> {
                     report.reductions += 1;
                     continue;
                 }
+                // the step's O(τ²) change of each component's measure, removed
+                candidate = candidate.with_component_measures(&components);
             }
             let energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
             if energy.is_nan() || energy == f64::NEG_INFINITY {
