@@ -188,6 +188,9 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
                 o.last.time,
                 o.last.energy
             );
+            if let Some(note) = o.note {
+                println!("  {note}");
+            }
             (o.last, ExitCode::SUCCESS)
         }
         Err(f) => {

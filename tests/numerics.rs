@@ -1,7 +1,8 @@
 //! Exact solutions, convergence orders and conserved quantities of the engine.
 
 use shapeflow::flow::{
-    Flow, FlowSettings, Problem, ProblemError, ScalarProduct, ShapeGradient, SolverKind, StopReason, SurfaceState,
+    Flow, FlowSettings, Problem, ProblemError, Rejection, ScalarProduct, ShapeGradient, SolverKind, StopReason,
+    SurfaceState,
 };
 use shapeflow::geometry::{circle, ellipse, ellipsoid, icosphere, Mesh};
 use shapeflow::problems::{CurvatureFlow, SurfaceDiffusion};
@@ -269,6 +270,8 @@ fn stop_reasons_converged_cancelled_and_tau_min() {
     let mut flow = Flow::new(&problem, start(), s).unwrap();
     assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::TauMin);
     assert_eq!(flow.iteration(), 0);
+    let cause = flow.stop_cause();
+    assert_eq!(cause, Some(Rejection::StepControl), "{cause:?}");
     // max_iterations
     let s = FlowSettings { tau: 1e-3, tolerance: 0.0, max_iterations: 7, ..FlowSettings::default() };
     let mut flow = Flow::new(&problem, start(), s).unwrap();

@@ -129,6 +129,43 @@ pub struct StepReport {
     pub backtracks: usize,
     /// Reductions of τ by the geometric control or tangling in this step.
     pub reductions: usize,
+    /// Why the last trial step of this call was rejected (with `stop:
+    /// Some(TauMin)`: why the run could not go on).
+    pub rejected: Option<Rejection>,
+}
+
+/// Why a trial step was rejected (τ then shrinks).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Rejection {
+    /// The geometric control: vertices would move too far relative to their elements.
+    StepControl,
+    /// An element would degenerate or flip.
+    Tangled,
+    /// The enclosed measure would change by more than `conservation`.
+    Conservation,
+    /// The problem rejected the shape (energy `+∞`).
+    Inadmissible,
+    /// The energy would increase (backtracking).
+    EnergyIncrease,
+}
+
+impl Rejection {
+    /// A sentence for users: why the last trial steps failed.
+    pub fn describe(&self) -> &'static str {
+        match self {
+            Rejection::StepControl => {
+                "the geometric step control kept shrinking the step (the velocity is very large relative to \
+                 the element sizes somewhere, e.g. at a sharp corner)"
+            }
+            Rejection::Tangled => "every trial step tangled the mesh",
+            Rejection::Conservation => "every trial step changed the enclosed area beyond flow.conservation",
+            Rejection::Inadmissible => {
+                "every trial shape was inadmissible for the problem (shape design: the curve met D or Σ; \
+                 stressed film: the surface met the substrate or a lateral wall outside its crossing)"
+            }
+            Rejection::EnergyIncrease => "every trial step increased the energy (backtracking)",
+        }
+    }
 }
 
 /// A running gradient flow on a mesh of dimension `D`.
@@ -145,6 +182,8 @@ pub struct Flow<'p, const D: usize> {
     tau: f64,
     energy: f64,
     manager: Option<Box<dyn MeshManager<D> + 'p>>,
+    /// Why [`Flow::run`] ended with `tau_min` (the last rejection).
+    stop_cause: Option<Rejection>,
 }
 
 impl<'p, const D: usize> Flow<'p, D> {
@@ -196,7 +235,20 @@ impl<'p, const D: usize> Flow<'p, D> {
         let pattern = Pattern::new(mesh.num_vertices(), mesh.elements());
         let solver = SemiImplicitStep::new(settings.solver);
         let matrices = Matrices::assemble(&mesh, &pattern);
-        Flow { problem, settings, mesh, pattern, solver, matrices, iteration, time, tau, energy, manager: None }
+        Flow {
+            problem,
+            settings,
+            mesh,
+            pattern,
+            solver,
+            matrices,
+            iteration,
+            time,
+            tau,
+            energy,
+            manager: None,
+            stop_cause: None,
+        }
     }
 
     pub fn mesh(&self) -> &Mesh<D> {
@@ -237,6 +289,12 @@ impl<'p, const D: usize> Flow<'p, D> {
         }
     }
 
+    /// Why the last [`Flow::run`] stopped with `tau_min`: the rejection of its last
+    /// trial step.
+    pub fn stop_cause(&self) -> Option<Rejection> {
+        self.stop_cause
+    }
+
     /// Run until a stop reason, calling `on_progress` after every accepted step
     /// (and once at the start), and checking `cancel` before every step.
     pub fn run(&mut self, cancel: &AtomicBool, mut on_progress: impl FnMut(&Self)) -> Result<StopReason, FlowError> {
@@ -250,6 +308,7 @@ impl<'p, const D: usize> Flow<'p, D> {
                 on_progress(self);
             }
             if let Some(stop) = report.stop {
+                self.stop_cause = report.rejected.filter(|_| stop == StopReason::TauMin);
                 return Ok(stop);
             }
         }
@@ -308,7 +367,7 @@ impl<'p, const D: usize> Flow<'p, D> {
     /// Take one step (with its retries), or report why the run is over.
     pub fn step(&mut self) -> Result<StepReport, FlowError> {
         let s = &self.settings;
-        let mut report = StepReport { stop: None, accepted: false, backtracks: 0, reductions: 0 };
+        let mut report = StepReport { stop: None, accepted: false, backtracks: 0, reductions: 0, rejected: None };
         if self.iteration >= s.max_iterations {
             report.stop = Some(StopReason::MaxIterations);
             return Ok(report);
@@ -351,6 +410,7 @@ impl<'p, const D: usize> Flow<'p, D> {
                 if ratio > eps {
                     tau *= (0.9 * eps / ratio).min(0.5);
                     report.reductions += 1;
+                    report.rejected = Some(Rejection::StepControl);
                     continue;
                 }
             }
@@ -360,6 +420,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             if let Some(element) = tangled(&self.mesh, &candidate) {
                 tau *= 0.5;
                 report.reductions += 1;
+                report.rejected = Some(Rejection::Tangled);
                 if tau < s.tau_min {
                     return Err(FlowError::Tangled { element, time: self.time });
                 }
@@ -372,6 +433,7 @@ impl<'p, const D: usize> Flow<'p, D> {
                 if (a1 - a0).abs() > tol * a0.abs() && tau > 4.0 * s.tau_min {
                     tau *= 0.5;
                     report.reductions += 1;
+                    report.rejected = Some(Rejection::Conservation);
                     continue;
                 }
                 // the step's O(τ²) change of each component's measure, removed
@@ -386,6 +448,8 @@ impl<'p, const D: usize> Flow<'p, D> {
             if energy > self.energy && (s.backtracking || energy == f64::INFINITY) {
                 tau *= 0.5;
                 report.backtracks += 1;
+                report.rejected =
+                    Some(if energy == f64::INFINITY { Rejection::Inadmissible } else { Rejection::EnergyIncrease });
                 continue;
             }
             let previous = self.energy;

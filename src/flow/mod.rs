@@ -18,7 +18,7 @@ mod system;
 pub use crate::fem::SparseCholesky;
 pub use consistent::ConsistentSolver;
 pub use cyclic::solve_cyclic_tridiagonal;
-pub use driver::{Checkpoint, Flow, FlowSettings, MeshData, Progress, StepReport, StopReason};
+pub use driver::{Checkpoint, Flow, FlowSettings, MeshData, Progress, Rejection, StepReport, StopReason};
 pub use error::FlowError;
 pub use gmres::{gmres, GmresOutcome};
 pub use lumped::LumpedSolver;

@@ -21,6 +21,8 @@ impl RunEvents for () {}
 #[derive(Debug, Clone, PartialEq)]
 pub struct JobOutcome {
     pub stop: StopReason,
+    /// With `tau_min`: why the last trial steps failed (a sentence for users).
+    pub note: Option<&'static str>,
     /// The final state (also passed to [`RunEvents::checkpoint`]).
     pub last: Checkpoint,
 }
@@ -145,7 +147,7 @@ fn run_stage<const D: usize>(
         events.checkpoint(&last);
     }
     match result {
-        Ok(stop) => Ok(JobOutcome { stop, last }),
+        Ok(stop) => Ok(JobOutcome { stop, note: flow.stop_cause().map(|r| r.describe()), last }),
         Err(e) => Err(fail(e, last)),
     }
 }

@@ -134,7 +134,7 @@ impl Worker {
                 }
                 finish("dismissed", Some("cancelled"), Some("cancelled by request"))
             }
-            Ok(o) => finish("successful", Some(o.stop.as_str()), None),
+            Ok(o) => finish("successful", Some(o.stop.as_str()), o.note),
             Err(f) => finish("failed", None, Some(&f.error.to_string())),
         }
     }
