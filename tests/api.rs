@@ -188,6 +188,7 @@ fn submit_poll_download_delete() {
     let done = srv.wait_for(&id, |j| j["status"] != "accepted" && j["status"] != "running");
     assert_eq!(done["status"], "successful", "{done}");
     assert_eq!(done["stop_reason"], "end_time");
+    assert!(done["message"].is_null(), "{done}");
     assert_eq!(done["progress"]["iteration"], 100);
     // energy history: every iteration, decreasing
     let (s, _, csv) = srv.request("GET", &format!("/v1/jobs/{id}/energy?format=csv"), None);
@@ -252,6 +253,30 @@ fn submit_poll_download_delete() {
     assert_eq!(srv.request("DELETE", &format!("/v1/jobs/{id}"), None).0, 204);
     assert_eq!(srv.request("GET", &format!("/v1/jobs/{id}"), None).0, 404);
     srv.stop();
+}
+
+/// A run that stops at `tau_min` is successful and its message says why: the
+/// square's corners move at `κ ≈ 25` against neighbours at rest, so the geometric
+/// control asks for τ ≈ 1e-3, below `tau_min`.
+#[test]
+fn a_tau_min_stop_says_why_in_the_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let srv = Server::start(&dir.path().join("jobs.db"), 1);
+    let spec = r#"{"problem": {"type": "curvature_flow"},
+        "initial": {"shape": "rectangle", "size": [1.0, 1.0], "resolution": 64},
+        "mesh": {"adapt": false, "regularize": false},
+        "flow": {"tau": 1e-2, "tau_min": 5e-3}}"#;
+    let (status, _, body) = srv.request("POST", "/v1/jobs", Some(("application/json", spec)));
+    assert_eq!(status, 201, "{body}");
+    let id = serde_json::from_str::<Value>(&body).unwrap()["id"].as_str().unwrap().to_string();
+    let done = srv.wait_for(&id, |j| j["status"] != "accepted" && j["status"] != "running");
+    assert_eq!(
+        (done["status"].as_str(), done["stop_reason"].as_str()),
+        (Some("successful"), Some("tau_min")),
+        "{done}"
+    );
+    let message = done["message"].as_str().unwrap_or_default();
+    assert!(message.contains("geometric step control"), "{done}");
 }
 
 #[test]
