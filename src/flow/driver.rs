@@ -127,7 +127,7 @@ pub struct StepReport {
     pub accepted: bool,
     /// Halvings of τ by backtracking (energy increase) in this step.
     pub backtracks: usize,
-    /// Reductions of τ by the geometric control or tangling in this step.
+    /// Reductions of τ by the geometric control, tangling or conservation in this step.
     pub reductions: usize,
     /// Why the last trial step of this call was rejected (with `stop:
     /// Some(TauMin)`: why the run could not go on).
