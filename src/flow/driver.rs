@@ -9,7 +9,15 @@
 //!    of the enclosed measure above `conservation` (relative, when set; down to
 //!    `4 τ_min`); an accepted change below it is then removed by offsetting each
 //!    component along its normals ([`Mesh::with_component_measures`]);
-//! 3. *backtracking* (paper §3.2): while `J(Γ_{n+1}) > J(Γ_n)`, halve `τ`.
+//! 3. *backtracking* (paper §3.2): while `J(Γ_{n+1}) > J(Γ_n)`, halve `τ`;
+//! 4. *contact* (paper §4.1, topological changes): a trial step whose curves cross
+//!    ([`Problem::reconnects`]) and whose reconnected shape has a higher energy is
+//!    not backtracked away from the contact: `τ` is bisected down to just past the
+//!    first contact and that step is taken ([`first_contact`]). Backtracking alone
+//!    would keep such curves apart forever, creeping together with `τ → 0` along a
+//!    growing stretch where they touch without merging, because reconnecting
+//!    removes the stretch where they meet (in shape design, boundary through which
+//!    the state's flux enters `Ω`).
 //!
 //! Below `τ_min` the run stops with [`StopReason::TauMin`] on the last good state.
 
@@ -132,6 +140,9 @@ pub struct StepReport {
     /// Why the last trial step of this call was rejected (with `stop:
     /// Some(TauMin)`: why the run could not go on).
     pub rejected: Option<Rejection>,
+    /// The accepted step ends just past a first contact of the curves (a
+    /// topological change taken although the energy rose; see [`first_contact`]).
+    pub contact: bool,
 }
 
 /// Why a trial step was rejected (τ then shrinks).
@@ -367,7 +378,8 @@ impl<'p, const D: usize> Flow<'p, D> {
     /// Take one step (with its retries), or report why the run is over.
     pub fn step(&mut self) -> Result<StepReport, FlowError> {
         let s = &self.settings;
-        let mut report = StepReport { stop: None, accepted: false, backtracks: 0, reductions: 0, rejected: None };
+        let mut report =
+            StepReport { stop: None, accepted: false, backtracks: 0, reductions: 0, rejected: None, contact: false };
         if self.iteration >= s.max_iterations {
             report.stop = Some(StopReason::MaxIterations);
             return Ok(report);
@@ -439,13 +451,22 @@ impl<'p, const D: usize> Flow<'p, D> {
                 // the step's O(τ²) change of each component's measure, removed
                 candidate = candidate.with_component_measures(&components);
             }
-            let energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
+            let mut energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
             if energy.is_nan() || energy == f64::NEG_INFINITY {
                 return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration + 1 });
             }
+            let mut contact = false;
+            if energy > self.energy && energy.is_finite() && s.backtracking && self.problem.reconnects(&candidate) {
+                // a topological change is an event of the flow, not a descent step:
+                // shorten the step to just past the first contact and take it
+                if let Some((t, c, e)) = first_contact(self.problem, &mut self.solver, &sys)? {
+                    (tau, candidate, energy, contact) = (t, c, e, true);
+                    report.contact = true;
+                }
+            }
             // +∞ marks an inadmissible candidate (shape design: Γ met D or Σ), which
             // is shortened even where backtracking is off
-            if energy > self.energy && (s.backtracking || energy == f64::INFINITY) {
+            if !contact && energy > self.energy && (s.backtracking || energy == f64::INFINITY) {
                 tau *= 0.5;
                 report.backtracks += 1;
                 report.rejected =
@@ -560,6 +581,50 @@ fn relative_motion<const D: usize>(mesh: &Mesh<D>, v: &[Point<D>]) -> f64 {
         }
     }
     worst
+}
+
+/// Bisections of `τ` that locate a first contact (to `2⁻¹⁰` of the trial step).
+const CONTACT_BISECTIONS: usize = 10;
+
+/// The step of `sys` (whose candidate reconnects) shortened to just past the first
+/// contact: `τ` is bisected between `0` (the current shape, which does not cross
+/// itself) and `sys.tau`, keeping the upper end a reconnecting candidate; returns
+/// that `τ`, its candidate and energy, or `None` if the shortened candidate is
+/// tangled or inadmissible (the step is then backtracked as usual).
+#[allow(clippy::type_complexity)]
+fn first_contact<const D: usize>(
+    problem: &dyn Problem<D>,
+    solver: &mut SemiImplicitStep,
+    sys: &LinearSystem<'_, D>,
+) -> Result<Option<(f64, Mesh<D>, f64)>, FlowError> {
+    let mut trial = |tau: f64| -> Result<Option<Mesh<D>>, FlowError> {
+        let vel = solver.velocity(&LinearSystem { tau, ..*sys })?;
+        let positions = sys.mesh.positions().iter().zip(&vel.vector).map(|(x, v)| x + v * tau).collect();
+        let candidate = sys.mesh.with_positions(positions);
+        Ok(if tangled(sys.mesh, &candidate).is_some() { None } else { Some(candidate) })
+    };
+    let (mut lo, mut hi) = (0.0, sys.tau);
+    let mut best = None;
+    for _ in 0..CONTACT_BISECTIONS {
+        let mid = 0.5 * (lo + hi);
+        match trial(mid)? {
+            Some(c) if problem.reconnects(&c) => {
+                hi = mid;
+                best = Some(c);
+            }
+            Some(_) => lo = mid,
+            None => return Ok(None),
+        }
+    }
+    let candidate = match best {
+        Some(c) => c,
+        None => match trial(hi)? {
+            Some(c) => c,
+            None => return Ok(None),
+        },
+    };
+    let energy = problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
+    Ok(energy.is_finite().then_some((hi, candidate, energy)))
 }
 
 /// What a step needs from `Γ_n`.

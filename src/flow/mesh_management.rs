@@ -72,6 +72,7 @@ impl CurveManager {
             h_max: 3.0 * mean,
             min_area: h_min * h_min,
             keep_area: false,
+            fill_pockets: false,
         }
     }
 }
@@ -123,7 +124,7 @@ fn manage_curves(
             Some(w) if cur.period().is_none() => w.crossings_of(cur),
             _ => cur.crossings(),
         };
-        if let Some(m) = resolve_crossings(cur, &hits, s.params.min_area).map_err(fail)? {
+        if let Some(m) = resolve_crossings(cur, &hits, s.params.min_area, s.params.fill_pockets).map_err(fail)? {
             (remeshed, moved) = (Some(m), None);
         }
     }

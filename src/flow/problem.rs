@@ -56,6 +56,12 @@ pub trait Problem<const D: usize>: Send {
     fn is_physical(&self) -> bool {
         false
     }
+    /// Whether [`Problem::energy`] evaluates `mesh` as a reconnected shape: its
+    /// curves cross, and a step to it makes a topological change. The driver then
+    /// takes the step at the first contact even if the energy rises.
+    fn reconnects(&self, _mesh: &Mesh<D>) -> bool {
+        false
+    }
 }
 
 /// The discrete curvature `κ_i = N⃗_i·(A X)_i / |N⃗_i|²` and the unit vertex normals

@@ -378,6 +378,7 @@ mod tests {
             h_max: 0.04,
             min_area: 0.0,
             keep_area: false,
+            fill_pockets: false,
         };
         let hd = desired_sizes(&len, &beta, &s);
         let total: f64 = hd.iter().sum();

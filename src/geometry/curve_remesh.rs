@@ -20,6 +20,10 @@ pub struct CurveRemeshSettings {
     /// Area-conserving flows (`H^{-1}`): after refinement/coarsening each component
     /// is offset along its normals to keep its area (see `keep_area`).
     pub keep_area: bool,
+    /// After a topological change, drop clockwise closed loops: pockets of the
+    /// exterior that a curve closed around are filled (shape design, where such a
+    /// pocket of `Ω` would be cut off from `Σ`).
+    pub fill_pockets: bool,
 }
 
 fn loops_of(mesh: &CurveMesh) -> Vec<Loop> {

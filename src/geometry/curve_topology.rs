@@ -67,10 +67,16 @@ pub fn mesh_winding_number(mesh: &CurveMesh, p: Point<2>) -> i32 {
 /// points themselves are then removed from the kept loops, so that loops which met
 /// at a crossing do not touch. Two overlapping circles become one curve; a curve
 /// pinched into a figure eight becomes two; on the cylinder, a winding curve that
-/// touches itself or its periodic image encloses a closed component. Returns `None`
+/// touches itself or its periodic image encloses a closed component. With
+/// `fill_pockets`, clockwise closed loops (a pocket of the exterior that a curve
+/// closed around) are dropped too, so the pocket joins the interior. Returns `None`
 /// if no segments cross.
-pub fn resolve_intersections(mesh: &CurveMesh, min_area: f64) -> Result<Option<CurveMesh>, MeshError> {
-    resolve_crossings(mesh, &mesh.crossings(), min_area)
+pub fn resolve_intersections(
+    mesh: &CurveMesh,
+    min_area: f64,
+    fill_pockets: bool,
+) -> Result<Option<CurveMesh>, MeshError> {
+    resolve_crossings(mesh, &mesh.crossings(), min_area, fill_pockets)
 }
 
 /// [`resolve_intersections`] given the crossings of `mesh` (as
@@ -79,6 +85,7 @@ pub fn resolve_crossings(
     mesh: &CurveMesh,
     hits: &[super::SegmentHit],
     min_area: f64,
+    fill_pockets: bool,
 ) -> Result<Option<CurveMesh>, MeshError> {
     let pts = mesh.positions();
     let segs = mesh.elements();
@@ -162,8 +169,9 @@ pub fn resolve_crossings(
         let left = mesh_winding_number(mesh, mid + normal_left * eps) > 0;
         let right = mesh_winding_number(mesh, mid - normal_left * eps) > 0;
         // on the cylinder, a clockwise closed loop would be an island of the
-        // interior's complement (a floating piece of film): dropped like a sliver
-        let island = mesh.period().is_some() && l.shift.norm() == 0.0 && loop_area(&l.p) < 0.0;
+        // interior's complement (a floating piece of film): dropped like a sliver;
+        // in the plane, one is a pocket of the exterior, filled on request
+        let island = (mesh.period().is_some() || fill_pockets) && l.shift.norm() == 0.0 && loop_area(&l.p) < 0.0;
         if left != right && !island {
             let p: Vec<Point<2>> = l.p.into_iter().zip(is_crossing).filter(|(_, c)| !c).map(|(p, _)| p).collect();
             if p.len() >= 3 {
@@ -197,13 +205,13 @@ mod tests {
     #[test]
     fn overlapping_circles_merge_and_lens_is_dropped() {
         let m = overlapping(1.2);
-        let merged = resolve_intersections(&m, 1e-8).unwrap().unwrap();
+        let merged = resolve_intersections(&m, 1e-8, false).unwrap().unwrap();
         assert_eq!(merged.num_components(), 1);
         let d: f64 = 1.2;
         let lens = 2.0 * (d / 2.0).acos() - 0.5 * d * (4.0 - d * d).sqrt();
         let exact = 2.0 * std::f64::consts::PI - lens;
         assert!((merged.enclosed_measure() - exact).abs() < 0.01 * exact, "{}", merged.enclosed_measure());
-        assert!(resolve_intersections(&overlapping(2.5), 1e-8).unwrap().is_none());
+        assert!(resolve_intersections(&overlapping(2.5), 1e-8, false).unwrap().is_none());
     }
 
     #[test]
@@ -228,7 +236,7 @@ mod tests {
             .collect()])
         .unwrap();
         let crossed = valid.with_positions(open);
-        let out = resolve_intersections(&crossed, 1e-6).unwrap().unwrap();
+        let out = resolve_intersections(&crossed, 1e-6, false).unwrap().unwrap();
         assert_eq!(out.num_components(), 2);
         for cyc in out.cycles() {
             let l: Vec<Point<2>> = cyc.iter().map(|&v| out.positions()[v]).collect();
@@ -242,6 +250,31 @@ mod tests {
             .map(|c| loop_area(&c.iter().map(|&v| out.positions()[v]).collect::<Vec<_>>()))
             .collect();
         assert!((lobes[0] - lobes[1]).abs() < 1e-3 * total);
+    }
+
+    /// A horseshoe (annular sector between radii 1 and 2, angles `[θ₀, 2π − θ₀]`)
+    /// whose arms are then moved to overlap (`θ₀ < 0`): the arms close around the
+    /// unit disk, a pocket of the exterior.
+    #[test]
+    fn a_closed_pocket_is_kept_as_a_hole_or_filled() {
+        let horseshoe = |t0: f64| -> Vec<Point<2>> {
+            let n = 200;
+            let arc = |r: f64, k: usize| {
+                let t = t0 + (2.0 * std::f64::consts::PI - 2.0 * t0) * k as f64 / n as f64;
+                Point::<2>::new(r * t.cos(), r * t.sin())
+            };
+            (0..=n).map(|k| arc(2.0, k)).chain((0..=n).rev().map(|k| arc(1.0, k))).collect()
+        };
+        let valid = from_polylines(vec![horseshoe(0.3)]).unwrap();
+        let crossed = valid.with_positions(horseshoe(-0.15));
+        let kept = resolve_intersections(&crossed, 1e-6, false).unwrap().unwrap();
+        assert_eq!(kept.num_components(), 2);
+        let annulus = 3.0 * std::f64::consts::PI;
+        assert!((kept.enclosed_measure() - annulus).abs() < 0.01 * annulus, "{}", kept.enclosed_measure());
+        let filled = resolve_intersections(&crossed, 1e-6, true).unwrap().unwrap();
+        assert_eq!(filled.num_components(), 1);
+        let disk = 4.0 * std::f64::consts::PI;
+        assert!((filled.enclosed_measure() - disk).abs() < 0.01 * disk, "{}", filled.enclosed_measure());
     }
 }
 #[cfg(test)]
@@ -290,7 +323,7 @@ mod periodic_tests {
     fn a_film_whose_groove_walls_cross_encloses_a_void() {
         let m = pinched_groove();
         let before = m.enclosed_measure();
-        let out = resolve_intersections(&m, 1e-9).unwrap().unwrap();
+        let out = resolve_intersections(&m, 1e-9, false).unwrap().unwrap();
         assert_eq!(out.num_components(), 2);
         let mut w = out.windings();
         w.sort();

@@ -243,6 +243,8 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     let scalar_product = f.scalar_product.unwrap_or(default_product);
     if let Some(m) = curve_manager.as_mut() {
         m.params.keep_area = scalar_product == ScalarProduct::HMinus1;
+        // a pocket of Ω closed off by Γ would have no Dirichlet boundary
+        m.params.fill_pockets = matches!(problem, ProblemKind::ShapeDesign(_));
     }
     let d = FlowSettings::default();
     let default_tau = match (&problem, scalar_product) {

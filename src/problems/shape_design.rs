@@ -285,7 +285,9 @@ impl<const D: usize> Problem<D> for ShapeDesign {
         let merged;
         let mut c = mesh;
         if self.merge {
-            if let Some(m) = resolve_intersections(mesh, self.min_area).map_err(|e| ProblemError(e.to_string()))? {
+            if let Some(m) =
+                resolve_intersections(mesh, self.min_area, true).map_err(|e| ProblemError(e.to_string()))?
+            {
                 merged = m;
                 c = &merged;
             }
@@ -295,6 +297,11 @@ impl<const D: usize> Problem<D> for ShapeDesign {
             Err(BulkError::Inadmissible(_)) => Ok(f64::INFINITY),
             Err(e) => Err(Self::to_problem_error(e)),
         }
+    }
+
+    /// With merging on, curves that cross are evaluated as their union.
+    fn reconnects(&self, mesh: &Mesh<D>) -> bool {
+        self.merge && curve(mesh).is_ok_and(|c| !c.crossings().is_empty())
     }
 
     fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {

@@ -124,7 +124,7 @@ impl<const D: usize> Problem<D> for StressedFilm {
         let mut c = curve(mesh)?;
         let resolved;
         if self.merge {
-            match resolve_intersections(c, self.min_area) {
+            match resolve_intersections(c, self.min_area, false) {
                 Ok(Some(m)) => {
                     resolved = m;
                     c = &resolved;
