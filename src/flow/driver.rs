@@ -10,14 +10,15 @@
 //!    `4 τ_min`); an accepted change below it is then removed by offsetting each
 //!    component along its normals ([`Mesh::with_component_measures`]);
 //! 3. *backtracking* (paper §3.2): while `J(Γ_{n+1}) > J(Γ_n)`, halve `τ`;
-//! 4. *contact* (paper §4.1, topological changes): a trial step whose curves cross
-//!    ([`Problem::reconnects`]) and whose reconnected shape has a higher energy is
-//!    not backtracked away from the contact: `τ` is bisected down to just past the
-//!    first contact and that step is taken ([`first_contact`]). Backtracking alone
-//!    would keep such curves apart forever, creeping together with `τ → 0` along a
-//!    growing stretch where they touch without merging, because reconnecting
+//! 4. *contact* (paper §4.1, topological changes): a trial step in which two
+//!    curves cross ([`Problem::merges`]) and whose merged shape has a higher energy
+//!    is not backtracked away from the contact: `τ` is bisected down to just past
+//!    the first contact and that step is taken ([`first_contact`]). Backtracking
+//!    alone would keep such curves apart forever, creeping together with `τ → 0`
+//!    along a growing stretch where they touch without merging, because merging
 //!    removes the stretch where they meet (in shape design, boundary through which
-//!    the state's flux enters `Ω`).
+//!    the state's flux enters `Ω`). A curve that touches itself (a neck or a notch
+//!    closing) is backtracked as usual.
 //!
 //! Below `τ_min` the run stops with [`StopReason::TauMin`] on the last good state.
 
@@ -140,8 +141,8 @@ pub struct StepReport {
     /// Why the last trial step of this call was rejected (with `stop:
     /// Some(TauMin)`: why the run could not go on).
     pub rejected: Option<Rejection>,
-    /// The accepted step ends just past a first contact of the curves (a
-    /// topological change taken although the energy rose; see [`first_contact`]).
+    /// The accepted step ends just past the first contact of two curves (a merge
+    /// taken although the energy rose; see [`first_contact`]).
     pub contact: bool,
 }
 
@@ -456,7 +457,7 @@ impl<'p, const D: usize> Flow<'p, D> {
                 return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration + 1 });
             }
             let mut contact = false;
-            if energy > self.energy && energy.is_finite() && s.backtracking && self.problem.reconnects(&candidate) {
+            if energy > self.energy && energy.is_finite() && s.backtracking && self.problem.merges(&candidate) {
                 // a topological change is an event of the flow, not a descent step:
                 // shorten the step to just past the first contact and take it
                 if let Some((t, c, e)) = first_contact(self.problem, &mut self.solver, &sys)? {
@@ -586,9 +587,9 @@ fn relative_motion<const D: usize>(mesh: &Mesh<D>, v: &[Point<D>]) -> f64 {
 /// Bisections of `τ` that locate a first contact (to `2⁻¹⁰` of the trial step).
 const CONTACT_BISECTIONS: usize = 10;
 
-/// The step of `sys` (whose candidate reconnects) shortened to just past the first
-/// contact: `τ` is bisected between `0` (the current shape, which does not cross
-/// itself) and `sys.tau`, keeping the upper end a reconnecting candidate; returns
+/// The step of `sys` (whose candidate merges curves) shortened to just past the
+/// first contact: `τ` is bisected between `0` (the current shape, whose curves do
+/// not cross) and `sys.tau`, keeping the upper end a merging candidate; returns
 /// that `τ`, its candidate and energy, or `None` if the shortened candidate is
 /// tangled or inadmissible (the step is then backtracked as usual).
 #[allow(clippy::type_complexity)]
@@ -608,7 +609,7 @@ fn first_contact<const D: usize>(
     for _ in 0..CONTACT_BISECTIONS {
         let mid = 0.5 * (lo + hi);
         match trial(mid)? {
-            Some(c) if problem.reconnects(&c) => {
+            Some(c) if problem.merges(&c) => {
                 hi = mid;
                 best = Some(c);
             }

@@ -56,10 +56,11 @@ pub trait Problem<const D: usize>: Send {
     fn is_physical(&self) -> bool {
         false
     }
-    /// Whether [`Problem::energy`] evaluates `mesh` as a reconnected shape: its
-    /// curves cross, and a step to it makes a topological change. The driver then
-    /// takes the step at the first contact even if the energy rises.
-    fn reconnects(&self, _mesh: &Mesh<D>) -> bool {
+    /// Whether [`Problem::energy`] evaluates `mesh` as the union of two of its
+    /// components that cross: a step to it merges them. The driver then takes the
+    /// step at the first contact even if the energy rises (a curve touching itself
+    /// is not a merge: such steps are backtracked as usual).
+    fn merges(&self, _mesh: &Mesh<D>) -> bool {
         false
     }
 }

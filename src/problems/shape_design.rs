@@ -300,8 +300,13 @@ impl<const D: usize> Problem<D> for ShapeDesign {
     }
 
     /// With merging on, curves that cross are evaluated as their union.
-    fn reconnects(&self, mesh: &Mesh<D>) -> bool {
-        self.merge && curve(mesh).is_ok_and(|c| !c.crossings().is_empty())
+    fn merges(&self, mesh: &Mesh<D>) -> bool {
+        self.merge
+            && curve(mesh).is_ok_and(|c| {
+                let (component, _) = c.component_labels();
+                let segments = c.elements();
+                c.crossings().iter().any(|h| component[segments[h.a][0]] != component[segments[h.b][0]])
+            })
     }
 
     fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
