@@ -456,18 +456,16 @@ impl<'p, const D: usize> Flow<'p, D> {
             if energy.is_nan() || energy == f64::NEG_INFINITY {
                 return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration + 1 });
             }
-            let mut contact = false;
             if energy > self.energy && energy.is_finite() && s.backtracking && self.problem.merges(&candidate) {
-                // a topological change is an event of the flow, not a descent step:
-                // shorten the step to just past the first contact and take it
+                // a merge is an event of the flow, not a descent step: shorten the
+                // step to just past the first contact and take it
                 if let Some((t, c, e)) = first_contact(self.problem, &mut self.solver, &sys)? {
-                    (tau, candidate, energy, contact) = (t, c, e, true);
-                    report.contact = true;
+                    (tau, candidate, energy, report.contact) = (t, c, e, true);
                 }
             }
             // +∞ marks an inadmissible candidate (shape design: Γ met D or Σ), which
             // is shortened even where backtracking is off
-            if !contact && energy > self.energy && (s.backtracking || energy == f64::INFINITY) {
+            if !report.contact && energy > self.energy && (s.backtracking || energy == f64::INFINITY) {
                 tau *= 0.5;
                 report.backtracks += 1;
                 report.rejected =
