@@ -233,7 +233,10 @@ fn square_ring_initial_energy_matches_the_paper() {
 fn bad_shape_design_specs_name_the_field() {
     let base: serde_json::Value =
         serde_json::from_str(&TEST1.replace("PRODUCT", "h1_newton").replace("ITERATIONS", "10")).unwrap();
-    let cases: [(&str, serde_json::Value, &str); 7] = [
+    let nested = serde_json::json!({"shape": "union", "parts": [
+        {"shape": "circle", "radius": 1.0, "resolution": 64},
+        {"shape": "circle", "radius": 0.5, "resolution": 32}]});
+    let cases: [(&str, serde_json::Value, &str); 8] = [
         ("/problem/control/inner/radius", (-2.0).into(), "problem.control.inner.radius"),
         ("/problem/control/inner/radius", 2.7.into(), "problem.control.inner"),
         ("/problem/target/center", serde_json::json!([2.2, 0.0]), "problem.target.center"),
@@ -241,6 +244,8 @@ fn bad_shape_design_specs_name_the_field() {
         ("/problem/gamma", (-1.0).into(), "problem.gamma"),
         ("/initial/semi_axes", serde_json::json!([2.2, 0.3]), "initial"),
         ("/initial", serde_json::json!({"shape": "sphere", "radius": 1.0}), "initial"),
+        // one curve inside another: the ring between them has no Dirichlet boundary
+        ("/initial", nested, "initial"),
     ];
     for (pointer, value, field) in cases {
         let mut spec = base.clone();

@@ -128,7 +128,23 @@ impl DesignDomain {
             return Err(BulkError::Inadmissible(format!("the curve {what} near ({:.4}, {:.4})", h.point.x, h.point.y)));
         }
         // no crossings: each component lies entirely on one side of every boundary
-        for cycle in curve.cycles() {
+        // and of every other component; one inside another would cut the region
+        // between them off from Σ (Neumann data all around: no state)
+        let cycles = curve.cycles();
+        let loops: Vec<Vec<Point<2>>> =
+            cycles.iter().map(|c| c.iter().map(|&v| curve.positions()[v]).collect()).collect();
+        for (k, l) in loops.iter().enumerate() {
+            let others: Vec<&[Point<2>]> =
+                loops.iter().enumerate().filter(|&(j, _)| j != k).map(|(_, o)| o.as_slice()).collect();
+            if winding_number(&others, l[0]) != 0 {
+                return Err(BulkError::Inadmissible(format!(
+                    "a curve component lies inside another one (at ({:.4}, {:.4})): the region between them \
+                     would be cut off from the outer boundary",
+                    l[0].x, l[0].y
+                )));
+            }
+        }
+        for cycle in cycles {
             let p = curve.positions()[cycle[0]];
             if !self.outer.contains(p) {
                 return Err(BulkError::Inadmissible(format!(
@@ -211,5 +227,11 @@ mod tests {
         assert!(d.check_curve(&curve(0.0, 1.0)).is_ok());
         assert!(matches!(d.check_curve(&curve(0.0, 2.2)), Err(BulkError::Inadmissible(_))));
         assert!(matches!(d.check_curve(&curve(1.0, 1.5)), Err(BulkError::Inadmissible(_))));
+        // two components side by side are fine, one inside the other is not
+        let two = |c: f64, h: f64| crate::geometry::union(&[curve(-c, h), curve(c, h)]).unwrap();
+        assert!(d.check_curve(&two(0.7, 0.3)).is_ok());
+        let nested = crate::geometry::union(&[curve(0.0, 1.5), curve(0.0, 0.5)]).unwrap();
+        let e = d.check_curve(&nested).unwrap_err();
+        assert!(matches!(&e, BulkError::Inadmissible(m) if m.contains("inside another")), "{e}");
     }
 }
