@@ -130,9 +130,7 @@ impl DesignDomain {
         // no crossings: each component lies entirely on one side of every boundary
         // and of every other component; one inside another would cut the region
         // between them off from Σ (Neumann data all around: no state)
-        let cycles = curve.cycles();
-        let loops: Vec<Vec<Point<2>>> =
-            cycles.iter().map(|c| c.iter().map(|&v| curve.positions()[v]).collect()).collect();
+        let loops: Vec<Vec<Point<2>>> = curve.lifted_cycles().into_iter().map(|(l, _)| l).collect();
         for (k, l) in loops.iter().enumerate() {
             let others: Vec<&[Point<2>]> =
                 loops.iter().enumerate().filter(|&(j, _)| j != k).map(|(_, o)| o.as_slice()).collect();
@@ -144,7 +142,7 @@ impl DesignDomain {
                 )));
             }
         }
-        for cycle in cycles {
+        for cycle in curve.cycles() {
             let p = curve.positions()[cycle[0]];
             if !self.outer.contains(p) {
                 return Err(BulkError::Inadmissible(format!(
