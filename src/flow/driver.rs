@@ -13,7 +13,7 @@
 //! 4. *contact* (paper §4.1, topological changes): a trial step in which two
 //!    curves cross ([`Problem::merges`]) and whose merged shape has a higher energy
 //!    is not backtracked away from the contact: `τ` is bisected down to just past
-//!    the first contact and that step is taken ([`first_contact`]). Backtracking
+//!    the first contact and that step is taken. Backtracking
 //!    alone would keep such curves apart forever, creeping together with `τ → 0`
 //!    along a growing stretch where they touch without merging, because merging
 //!    removes the stretch where they meet (in shape design, boundary through which
@@ -142,7 +142,7 @@ pub struct StepReport {
     /// Some(TauMin)`: why the run could not go on).
     pub rejected: Option<Rejection>,
     /// The accepted step ends just past the first contact of two curves (a merge
-    /// taken although the energy rose; see [`first_contact`]).
+    /// taken although the energy rose; see the module documentation, item 4).
     pub contact: bool,
 }
 
