@@ -322,10 +322,16 @@ fn squares(side: f64, center: f64, iterations: usize) -> String {
 /// Paper Figure 6: two disjoint squares merge into one curve and J falls by orders
 /// of magnitude, to a local minimum that is not the unit circle. The paper's start
 /// value 0.08224 (in the `½` convention of Figure 7) is that of two squares of side
-/// 3/8 (0.08276); their distance it leaves open: 0.4 from the origin (gap 0.425).
+/// 3/8 (0.08276); their distance it leaves open: 0.4 from the origin (gap 0.425),
+/// as in `examples/design_squares.json`.
 #[test]
 fn two_squares_merge_into_one_curve() {
-    let job = prepared(&squares(0.375, 0.4, 200));
+    let example =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/design_squares.json")).unwrap();
+    let (a, b): (serde_json::Value, serde_json::Value) =
+        (serde_json::from_str(&example).unwrap(), serde_json::from_str(&squares(0.375, 0.4, 200)).unwrap());
+    assert_eq!(a, b, "the example is the configuration tested here");
+    let job = prepared(&example);
     let mut t = Trace(Vec::new());
     let out = run_prepared(&job, None, &AtomicBool::new(false), &mut t).unwrap();
     let (j0, j1) = (t.0[0].energy, t.0.last().unwrap().energy);
