@@ -13,12 +13,12 @@
 //! 4. *contact* (paper §4.1, topological changes): a trial step in which two
 //!    curves cross ([`Problem::merges`]) and whose merged shape has a higher energy
 //!    is not backtracked away from the contact: `τ` is bisected down to just past
-//!    the first contact and that step is taken. Backtracking
-//!    alone would keep such curves apart forever, creeping together with `τ → 0`
-//!    along a growing stretch where they touch without merging, because merging
-//!    removes the stretch where they meet (in shape design, boundary through which
-//!    the state's flux enters `Ω`). A curve that touches itself (a neck or a notch
-//!    closing) is backtracked as usual.
+//!    the first contact and that step is taken. Backtracking alone would keep such
+//!    curves apart forever, creeping together with `τ → 0` along a growing stretch
+//!    where they touch without merging, because merging removes the stretch where
+//!    they meet (in shape design, boundary through which the state's flux enters
+//!    `Ω`). A curve that touches itself (a neck or a notch closing) is backtracked
+//!    as usual.
 //!
 //! Below `τ_min` the run stops with [`StopReason::TauMin`] on the last good state.
 
