@@ -459,7 +459,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             if energy > self.energy && energy.is_finite() && s.backtracking && self.problem.merges(&candidate) {
                 // a merge is an event of the flow, not a descent step: shorten the
                 // step to just past the first contact and take it
-                if let Some((t, c, e)) = first_contact(self.problem, &mut self.solver, &sys)? {
+                if let Some((t, c, e)) = first_contact(self.problem, &mut self.solver, &sys, (&candidate, energy))? {
                     (tau, candidate, energy, report.contact) = (t, c, e, true);
                 }
             }
@@ -585,16 +585,18 @@ fn relative_motion<const D: usize>(mesh: &Mesh<D>, v: &[Point<D>]) -> f64 {
 /// Bisections of `τ` that locate a first contact (to `2⁻¹⁰` of the trial step).
 const CONTACT_BISECTIONS: usize = 10;
 
-/// The step of `sys` (whose candidate merges curves) shortened to just past the
-/// first contact: `τ` is bisected between `0` (the current shape, whose curves do
-/// not cross) and `sys.tau`, keeping the upper end a merging candidate; returns
-/// that `τ`, its candidate and energy, or `None` if the shortened candidate is
-/// tangled or inadmissible (the step is then backtracked as usual).
+/// The step of `sys` (whose candidate `full`, with its energy, merges curves)
+/// shortened to just past the first contact: `τ` is bisected between `0` (the
+/// current shape, whose curves do not cross) and `sys.tau`, keeping the upper end a
+/// merging candidate; returns that `τ`, its candidate and energy, or `None` if a
+/// shortened candidate is tangled or inadmissible (the step is then backtracked as
+/// usual).
 #[allow(clippy::type_complexity)]
 fn first_contact<const D: usize>(
     problem: &dyn Problem<D>,
     solver: &mut SemiImplicitStep,
     sys: &LinearSystem<'_, D>,
+    full: (&Mesh<D>, f64),
 ) -> Result<Option<(f64, Mesh<D>, f64)>, FlowError> {
     let mut trial = |tau: f64| -> Result<Option<Mesh<D>>, FlowError> {
         let vel = solver.velocity(&LinearSystem { tau, ..*sys })?;
@@ -615,13 +617,8 @@ fn first_contact<const D: usize>(
             None => return Ok(None),
         }
     }
-    let candidate = match best {
-        Some(c) => c,
-        None => match trial(hi)? {
-            Some(c) => c,
-            None => return Ok(None),
-        },
-    };
+    // no shorter step merged: the contact lies within the last bisection interval
+    let Some(candidate) = best else { return Ok(Some((sys.tau, full.0.clone(), full.1))) };
     let energy = problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
     Ok(energy.is_finite().then_some((hi, candidate, energy)))
 }
