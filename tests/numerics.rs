@@ -368,3 +368,60 @@ fn surface_diffusion_decays_perturbations_at_the_linear_rates() {
     assert!((rate2 - 240.0).abs() < 0.01 * 240.0, "{rate2}");
     assert!((rate3 - 24.0).abs() < 0.05 * 24.0, "{rate3}");
 }
+
+/// Curve shortening whose discretization of the current shape is "stale": the
+/// energy of the start was evaluated too low by `bias` (as a followed bulk mesh can
+/// be, in shape design), so every trial step looks like an increase until the
+/// problem re-evaluates the current shape afresh.
+struct StaleStart {
+    bias: f64,
+    fresh: bool,
+    evaluations: std::sync::Mutex<usize>,
+}
+
+impl Problem<2> for StaleStart {
+    fn name(&self) -> &'static str {
+        "stale_start"
+    }
+    fn energy(&self, mesh: &Mesh<2>) -> Result<f64, ProblemError> {
+        let mut n = self.evaluations.lock().unwrap();
+        *n += 1;
+        Ok(mesh.boundary_measure() - if *n == 1 { self.bias } else { 0.0 })
+    }
+    fn shape_gradient(&self, state: &SurfaceState<'_, 2>) -> Result<ShapeGradient, ProblemError> {
+        let n = state.mesh.num_vertices();
+        Ok(ShapeGradient { g: vec![1.0; n], f: vec![0.0; n], aux: Vec::new() })
+    }
+    fn rediscretize(&self, mesh: &Mesh<2>) -> Result<Option<f64>, ProblemError> {
+        Ok(self.fresh.then(|| mesh.boundary_measure()))
+    }
+}
+
+/// Driver item 5: when backtracking fails, the current state is re-evaluated on a
+/// fresh discretization and the step is tried again; without that the run stops
+/// with `tau_min` although the flow has not converged.
+#[test]
+fn failed_backtracking_rediscretizes_the_current_state_once() {
+    let settings =
+        FlowSettings { tau: 1e-2, tau_min: 1e-6, tolerance: 0.0, max_iterations: 5, ..FlowSettings::default() };
+    let start = || circle([0.0, 0.0], 1.0, 64).unwrap();
+    // a bias far above what a step gains: stale, the first step cannot be taken
+    let stale = StaleStart { bias: 0.1, fresh: false, evaluations: Default::default() };
+    let mut flow = Flow::new(&stale, start(), settings.clone()).unwrap();
+    let r = flow.step().unwrap();
+    assert_eq!(
+        (r.stop, r.rediscretized, r.rejected),
+        (Some(StopReason::TauMin), false, Some(Rejection::EnergyIncrease))
+    );
+    // with a fresh evaluation the step is retried from the fresh energy and taken
+    let fresh = StaleStart { bias: 0.1, fresh: true, evaluations: Default::default() };
+    let mut flow = Flow::new(&fresh, start(), settings).unwrap();
+    let j0 = flow.energy();
+    let r = flow.step().unwrap();
+    assert!(r.rediscretized && !r.accepted && r.stop.is_none(), "{r:?}");
+    let j_fresh = flow.energy();
+    assert!((j_fresh - (j0 + 0.1)).abs() < 1e-12, "{j0} → {j_fresh}");
+    assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::MaxIterations);
+    assert_eq!(flow.iteration(), 5);
+    assert!(flow.energy() < j_fresh, "curve shortening shortens: {j_fresh} → {}", flow.energy());
+}

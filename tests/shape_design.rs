@@ -257,20 +257,34 @@ fn bad_shape_design_specs_name_the_field() {
 }
 
 /// Paper Figure 7: `z_g = 0.45 + 0.4 cos 6θ` on the ring of Test 1, from a small
-/// centred circle: J decreases and the curve takes the six-fold structure of `z_g`,
-/// reaching out (larger radius) where `z_g` is large.
+/// centred circle (`examples/design_polar.json`: τ = 0.2, no mesh management): J
+/// keeps decreasing for 1,000 iterations and the curve takes the six-fold structure
+/// of `z_g`, reaching out (larger radius) where `z_g` is large.
 #[test]
-fn polar_target_gives_a_six_fold_shape() {
+fn polar_target_j_keeps_decreasing_into_a_six_fold_shape() {
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/design_polar.json")).unwrap();
     let mut spec: serde_json::Value = serde_json::from_str(&text).unwrap();
-    // the six-fold structure is there after 150 iterations (later, knobs at the
-    // corners pinch off: with γ = 0 the functional rewards them)
-    spec["flow"]["max_iterations"] = 150.into();
+    spec["flow"]["max_iterations"] = 1000.into();
     let job = prepared(&spec.to_string());
     let mut h = History(Vec::new());
     let out = run_prepared(&job, None, &AtomicBool::new(false), &mut h).unwrap();
-    let (j0, j1) = (h.0[0], *h.0.last().unwrap());
-    assert!(j1 < 0.6 * j0, "J {j0} → {j1}");
+    let j = &h.0;
+    assert_eq!(j.len(), 1001, "stopped early: {:?}", out.stop);
+    // measured: J decreases at every step, from 0.6198 to 0.31577 (the paper:
+    // 0.32786 at k = 960, 0.31461 at k = 1,600; ours 0.31483 at 1,600). A step on a
+    // fresh bulk mesh after backtracking failed on the followed one (driver item 5)
+    // would show as one rise of ~5e-5 (measured at τ = 0.3, 0.5); none occurs here.
+    let rises: Vec<(usize, f64)> = (1..j.len()).filter(|&k| j[k] > j[k - 1]).map(|k| (k, j[k] - j[k - 1])).collect();
+    assert!(rises.len() <= 1 && rises.iter().all(|r| r.1 < 1e-4), "J rose: {rises:?}");
+    for k in (100..=1000).step_by(100) {
+        assert!(
+            j[k] < j[k - 100] - 1e-5,
+            "J did not decrease from iteration {} to {k}: {:?}",
+            k - 100,
+            &j[k - 100..=k]
+        );
+    }
+    assert!(j[1000] < 0.3160 && j[1000] > 0.3140, "J after 1,000 iterations: {}", j[1000]);
     let last: CurveMesh = out.last.mesh.to_mesh::<2>().unwrap();
     assert_eq!(last.num_components(), 1);
     // Fourier modes of r(θ) around the origin, by the midpoint rule in θ

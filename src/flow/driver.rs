@@ -20,6 +20,14 @@
 //!    `Ω`). A curve that touches itself (a neck or a notch closing) is backtracked
 //!    as usual.
 //!
+//! 5. *rediscretization*: when backtracking has brought `τ` below `τ_min`, the
+//!    problem may re-evaluate the current state on a fresh discretization
+//!    ([`Problem::rediscretize`]; shape design: trial curves reuse the current
+//!    state's bulk mesh, and once its triangles at `Γ` are too flat every trial is
+//!    triangulated afresh and differs from `J_n` by that change of mesh, which can
+//!    exceed what the step gains). `J_n` is replaced by the fresh value and the step
+//!    is tried again, once per iteration.
+//!
 //! Below `τ_min` the run stops with [`StopReason::TauMin`] on the last good state.
 
 use super::mesh_management::{Managed, MeshManager};
@@ -144,6 +152,10 @@ pub struct StepReport {
     /// The accepted step ends just past the first contact of two curves (a merge
     /// taken although the energy rose; see the module documentation, item 4).
     pub contact: bool,
+    /// Backtracking failed on the followed discretization, and the current state was
+    /// re-evaluated on a fresh one ([`Problem::rediscretize`]; module documentation,
+    /// item 5): no step was taken, the next call starts from the new energy.
+    pub rediscretized: bool,
 }
 
 /// Why a trial step was rejected (τ then shrinks).
@@ -196,6 +208,9 @@ pub struct Flow<'p, const D: usize> {
     manager: Option<Box<dyn MeshManager<D> + 'p>>,
     /// Why [`Flow::run`] ended with `tau_min` (the last rejection).
     stop_cause: Option<Rejection>,
+    /// The iteration at which [`Problem::rediscretize`] was last called (once per
+    /// iteration).
+    rediscretized_at: Option<usize>,
 }
 
 impl<'p, const D: usize> Flow<'p, D> {
@@ -260,6 +275,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             energy,
             manager: None,
             stop_cause: None,
+            rediscretized_at: None,
         }
     }
 
@@ -379,8 +395,15 @@ impl<'p, const D: usize> Flow<'p, D> {
     /// Take one step (with its retries), or report why the run is over.
     pub fn step(&mut self) -> Result<StepReport, FlowError> {
         let s = &self.settings;
-        let mut report =
-            StepReport { stop: None, accepted: false, backtracks: 0, reductions: 0, rejected: None, contact: false };
+        let mut report = StepReport {
+            stop: None,
+            accepted: false,
+            backtracks: 0,
+            reductions: 0,
+            rejected: None,
+            contact: false,
+            rediscretized: false,
+        };
         if self.iteration >= s.max_iterations {
             report.stop = Some(StopReason::MaxIterations);
             return Ok(report);
@@ -404,6 +427,16 @@ impl<'p, const D: usize> Flow<'p, D> {
         };
         loop {
             if tau < s.tau_min {
+                if report.rejected == Some(Rejection::EnergyIncrease) && self.rediscretized_at != Some(self.iteration) {
+                    self.rediscretized_at = Some(self.iteration);
+                    let fresh = self.problem.rediscretize(&self.mesh).map_err(|e| FlowError::Problem(e.0))?;
+                    if let Some(energy) = fresh.filter(|e| e.is_finite() && *e != self.energy) {
+                        tracing::debug!(iteration = self.iteration, from = self.energy, to = energy, "rediscretized");
+                        self.energy = energy;
+                        report.rediscretized = true;
+                        return Ok(report);
+                    }
+                }
                 report.stop = Some(StopReason::TauMin);
                 return Ok(report);
             }

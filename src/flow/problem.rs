@@ -63,6 +63,14 @@ pub trait Problem<const D: usize>: Send {
     fn merges(&self, _mesh: &Mesh<D>) -> bool {
         false
     }
+    /// Drop whatever discretization follows the shape from step to step (shape
+    /// design: the bulk mesh that trial curves reuse) and evaluate `J(mesh)` on a
+    /// fresh one. `None` if the problem keeps no such state. The driver calls this
+    /// when backtracking fails: the trials may then differ from the current shape
+    /// by the discretization error of a new bulk mesh rather than by the step.
+    fn rediscretize(&self, _mesh: &Mesh<D>) -> Result<Option<f64>, ProblemError> {
+        Ok(None)
+    }
 }
 
 /// The discrete curvature `κ_i = N⃗_i·(A X)_i / |N⃗_i|²` and the unit vertex normals

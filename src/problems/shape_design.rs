@@ -309,6 +309,14 @@ impl<const D: usize> Problem<D> for ShapeDesign {
             })
     }
 
+    /// A fresh triangulation of `Ω` for the current curve, which the next step's
+    /// trial curves then follow.
+    fn rediscretize(&self, mesh: &Mesh<D>) -> Result<Option<f64>, ProblemError> {
+        *self.base.lock().expect("base") = None;
+        *self.cache.lock().expect("cache") = None;
+        self.energy(mesh).map(Some)
+    }
+
     fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
         let mesh = curve(state.mesh)?;
         let s = self.solve(mesh).map_err(Self::to_problem_error)?;
