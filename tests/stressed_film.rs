@@ -201,33 +201,41 @@ fn the_groove_closes_off_a_void_in_finite_time() {
 }
 
 /// The paper's scenario at `resolution` vertices, run until the first void closes
-/// off: its time.
-fn first_void_time(resolution: usize) -> f64 {
+/// off: its time, and the change of J in the step that closed it off.
+fn first_void(resolution: usize) -> (f64, f64) {
     let job = paper_job(resolution);
     let mut flow = managed_flow(&job);
+    let mut before = flow.energy();
     while void_areas(flow.mesh()).is_empty() {
+        before = flow.energy();
         let r = flow.step().unwrap();
         assert!(r.stop.is_none(), "no void by t = {} at {resolution} vertices", flow.time());
     }
-    flow.time()
+    (flow.time(), flow.energy() - before)
 }
 
 /// Refinement study (issue: the time at which the inclusion forms is stable to 5 %
 /// when the mesh is refined): the first void at 64, 96 and 128 vertices, measured
 /// t = 0.00700, 0.00677, 0.00667. Each refinement changes it by less than 5 %, and
-/// the change shrinks (3.5 %, then 1.4 %).
+/// the change shrinks (3.4 %, then 1.5 %). The rise of J at that reconnection (the
+/// walls welded over the void can carry the field across, which raises the
+/// Dirichlet energy) is a discretization effect that shrinks under refinement:
+/// measured 0.073, 0.060, 0.047 (0.039 at 192 vertices).
 #[test]
 fn the_void_forms_at_a_time_stable_under_refinement() {
-    let t: Vec<f64> = std::thread::scope(|s| {
-        let runs: Vec<_> = [64, 96, 128].map(|n| s.spawn(move || first_void_time(n))).into_iter().collect();
+    let runs: Vec<(f64, f64)> = std::thread::scope(|s| {
+        let runs: Vec<_> = [64, 96, 128].map(|n| s.spawn(move || first_void(n))).into_iter().collect();
         runs.into_iter().map(|r| r.join().unwrap()).collect()
     });
+    let t: Vec<f64> = runs.iter().map(|r| r.0).collect();
+    let jumps: Vec<f64> = runs.iter().map(|r| r.1).collect();
     let change = |a: f64, b: f64| (a / b - 1.0).abs();
     let (coarse, fine) = (change(t[0], t[1]), change(t[1], t[2]));
-    println!("first void at t = {t:?}: changes {coarse:.4}, {fine:.4}");
+    println!("first void at t = {t:?}: changes {coarse:.4}, {fine:.4}; J jumps {jumps:?}");
     assert!(coarse < 0.05 && fine < 0.05, "{t:?}");
     assert!(fine < coarse, "not converging: {t:?}");
     assert!(t.iter().all(|&x| x > 0.0064 && x < 0.0072), "{t:?}");
+    assert!(jumps[0] < 0.1 && jumps[1] < 0.9 * jumps[0] && jumps[2] < 0.9 * jumps[1], "J jumps {jumps:?}");
 }
 
 /// How long the test runs on after the first void closes off.
