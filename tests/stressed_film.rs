@@ -262,6 +262,10 @@ fn spec_errors_name_the_field() {
     );
     assert_eq!(err(&base.replace("\"length\": 1.0, ", "")), "problem");
     assert_eq!(err(&base.replace("\"amplitude\": 0.02", "\"amplitude\": 0.7")), "initial.amplitude");
+    let wet = |d: &str| base.replace("\"gamma\": 0.2", &format!("\"gamma\": 0.2, \"wetting_layer\": {d}"));
+    assert!(prepare(parse_spec(&wet("0.02")).unwrap(), &HashMap::new()).is_ok());
+    assert_eq!(err(&wet("-0.1")), "problem.wetting_layer");
+    assert_eq!(err(&wet("0.49")), "problem.wetting_layer");
     assert_eq!(
         err(&base.replace(
             "\"shape\": \"film\", \"height\": 0.5, \"amplitude\": 0.02",

@@ -482,7 +482,11 @@ impl<'p, const D: usize> Flow<'p, D> {
                     report.rejected = Some(Rejection::Conservation);
                     continue;
                 }
-                // the step's O(τ²) change of each component's measure, removed
+            }
+            // the problem's constraints (an obstacle), then the step's O(τ²) change of
+            // each component's measure (and what the constraint added) removed
+            candidate = self.problem.constrain(candidate);
+            if s.conservation.is_some() {
                 candidate = candidate.with_component_measures(&components);
             }
             let mut energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;

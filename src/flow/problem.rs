@@ -71,6 +71,11 @@ pub trait Problem<const D: usize>: Send {
     fn rediscretize(&self, _mesh: &Mesh<D>) -> Result<Option<f64>, ProblemError> {
         Ok(None)
     }
+    /// A trial step's shape with the problem's constraints enforced (stressed film:
+    /// the wetting layer as an obstacle); by default unchanged.
+    fn constrain(&self, candidate: Mesh<D>) -> Mesh<D> {
+        candidate
+    }
 }
 
 /// The discrete curvature `κ_i = N⃗_i·(A X)_i / |N⃗_i|²` and the unit vertex normals

@@ -225,7 +225,23 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             }
             let cell = film_cell.expect("film cell");
             let meshing = StressedFilm::meshing_for(h);
-            ProblemKind::StressedFilm(StressedFilm::new(cell, fs.gamma, meshing, spec.mesh.topology_changes, min_area))
+            let wetting = match fs.wetting_layer {
+                Some(d) => {
+                    let d = positive("problem.wetting_layer", d)?;
+                    if c.positions().iter().any(|p| p.y <= d) {
+                        return Err(SpecError::new(
+                            "problem.wetting_layer",
+                            "the initial surface must lie above the wetting layer",
+                        ));
+                    }
+                    Some(d)
+                }
+                None => None,
+            };
+            ProblemKind::StressedFilm(
+                StressedFilm::new(cell, fs.gamma, meshing, spec.mesh.topology_changes, min_area)
+                    .with_wetting_layer(wetting),
+            )
         }
         (ProblemSpec::ShapeDesign(_), AnyMesh::Surface(_)) => {
             return Err(SpecError::new("initial", "shape design is two-dimensional: it needs a curve"));

@@ -84,6 +84,11 @@ pub struct StressedFilmSpec {
     /// The Dirichlet data `g` on the substrate `y = 0` and the walls; default `x`.
     #[serde(default)]
     pub boundary: FilmBoundarySpec,
+    /// (Addition) thickness `δ > 0` of a wetting layer: the free surface and the
+    /// voids are kept at `y ≥ δ` (an obstacle), so the gas never reaches the
+    /// substrate. Without it a surface that meets the substrate is inadmissible.
+    #[serde(default)]
+    pub wetting_layer: Option<f64>,
 }
 
 /// `problem.boundary` of `stressed_film`: `g`.

@@ -30,6 +30,8 @@ pub struct StressedFilm {
     pub merge: bool,
     /// Loops below this area are dropped when curves are reconnected.
     pub min_area: f64,
+    /// Thickness `δ` of a wetting layer: every vertex is kept at `y ≥ δ`.
+    pub wetting_layer: Option<f64>,
     cache: Mutex<Option<(Vec<Point<2>>, Vec<[usize; 2]>, Arc<(FilmMesh, StressField)>)>>,
 }
 
@@ -43,6 +45,7 @@ impl Clone for StressedFilm {
     /// A copy with an empty cache.
     fn clone(&self) -> Self {
         StressedFilm::new(self.cell, self.gamma, self.meshing, self.merge, self.min_area)
+            .with_wetting_layer(self.wetting_layer)
     }
 }
 
@@ -53,12 +56,19 @@ impl PartialEq for StressedFilm {
             && self.meshing == o.meshing
             && self.merge == o.merge
             && self.min_area == o.min_area
+            && self.wetting_layer == o.wetting_layer
     }
 }
 
 impl StressedFilm {
     pub fn new(cell: FilmCell, gamma: f64, meshing: MeshingOptions, merge: bool, min_area: f64) -> Self {
-        StressedFilm { cell, gamma, meshing, merge, min_area, cache: Mutex::new(None) }
+        StressedFilm { cell, gamma, meshing, merge, min_area, wetting_layer: None, cache: Mutex::new(None) }
+    }
+
+    /// With a wetting layer of thickness `δ` (an obstacle `y ≥ δ` for the surface).
+    pub fn with_wetting_layer(mut self, delta: Option<f64>) -> Self {
+        self.wetting_layer = delta;
+        self
     }
 
     /// Meshing options for a curve of mean segment length `h`: 28°, triangle areas
@@ -164,6 +174,25 @@ impl<const D: usize> Problem<D> for StressedFilm {
 
     fn default_scalar_product(&self) -> ScalarProduct {
         ScalarProduct::HMinus1
+    }
+
+    /// The wetting layer as an obstacle: vertices of the trial step below `y = δ`
+    /// are put on it.
+    fn constrain(&self, candidate: Mesh<D>) -> Mesh<D> {
+        let Some(delta) = self.wetting_layer else { return candidate };
+        if candidate.positions().iter().all(|p| p[1] >= delta) {
+            return candidate;
+        }
+        let positions = candidate
+            .positions()
+            .iter()
+            .map(|p| {
+                let mut q = *p;
+                q[1] = q[1].max(delta);
+                q
+            })
+            .collect();
+        candidate.with_positions(positions)
     }
 
     fn is_physical(&self) -> bool {
