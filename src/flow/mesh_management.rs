@@ -4,8 +4,8 @@
 
 use super::FlowError;
 use crate::geometry::{
-    adapt_surface, close_contact, edge_statistics, manage_curve, regularize_surface, resolve_crossings, CrossingWatch,
-    CurveMesh, CurveRemeshSettings, Mesh, SurfaceMesh, SurfaceRemeshSettings,
+    adapt_surface, edge_statistics, manage_curve, regularize_surface, resolve_crossings, CrossingWatch, CurveMesh,
+    CurveRemeshSettings, Mesh, SurfaceMesh, SurfaceRemeshSettings,
 };
 
 /// What mesh management did to the mesh after a step.
@@ -42,10 +42,6 @@ pub struct CurveManager {
     pub adapt: bool,
     pub topology_changes: bool,
     pub params: CurveRemeshSettings,
-    /// With topology changes: parts of a curve facing each other across its
-    /// interior closer than this fraction of their segments touch
-    /// ([`crate::geometry::close_contact`]).
-    pub contact: Option<f64>,
 }
 
 impl CurveManager {
@@ -123,13 +119,9 @@ fn manage_curves(
         (m, _) => (None, m),
     };
     if s.topology_changes {
-        let mut cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
-        let touched = s.contact.and_then(|f| close_contact(cur, f));
-        if let Some(t) = touched.as_ref() {
-            cur = t;
-        }
+        let cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
         let hits = match watch {
-            Some(w) if cur.period().is_none() && touched.is_none() => w.crossings_of(cur),
+            Some(w) if cur.period().is_none() => w.crossings_of(cur),
             _ => cur.crossings(),
         };
         if let Some(m) = resolve_crossings(cur, &hits, s.params.min_area, s.params.fill_pockets).map_err(fail)? {

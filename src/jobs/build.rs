@@ -448,11 +448,6 @@ fn curve_manager(m: &super::spec::MeshSpec, initial: &CurveMesh) -> Result<Optio
         adapt: m.adapt,
         topology_changes: m.topology_changes,
         params,
-        contact: match m.contact {
-            Some(f) if f.is_finite() && f > 0.0 && f <= 1.0 => Some(f),
-            Some(_) => return Err(SpecError::new("mesh.contact", "must be a fraction in (0, 1]")),
-            None => None,
-        },
     }))
 }
 
