@@ -8,7 +8,9 @@
 //! 2. *tangling*: an element that degenerates or flips halves `τ`; so does a change
 //!    of the enclosed measure above `conservation` (relative, when set; down to
 //!    `4 τ_min`); an accepted change below it is then removed by offsetting each
-//!    component along its normals ([`Mesh::with_component_measures`]);
+//!    component along its normals ([`Mesh::with_component_measures`]), after the
+//!    problem's constraints are enforced ([`Problem::constrain`]: the film's
+//!    wetting layer);
 //! 3. *backtracking* (paper §3.2): while `J(Γ_{n+1}) > J(Γ_n)`, halve `τ`;
 //! 4. *contact* (paper §4.1, topological changes): a trial step in which two
 //!    curves cross ([`Problem::merges`]) and whose merged shape has a higher energy
