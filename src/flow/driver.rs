@@ -20,8 +20,7 @@
 //!    where they touch without merging, because merging removes the stretch where
 //!    they meet (in shape design, boundary through which the state's flux enters
 //!    `Ω`). A curve that touches itself (a neck or a notch closing) is backtracked
-//!    as usual.
-//!
+//!    as usual;
 //! 5. *rediscretization*: when backtracking has brought `τ` below `τ_min`, the
 //!    problem may re-evaluate the current state on a fresh discretization
 //!    ([`Problem::rediscretize`]; shape design: trial curves reuse the current
@@ -462,9 +461,7 @@ impl<'p, const D: usize> Flow<'p, D> {
                     continue;
                 }
             }
-            let positions: Vec<Point<D>> =
-                self.mesh.positions().iter().zip(&vel.vector).map(|(x, v)| x + v * tau).collect();
-            let mut candidate = self.mesh.with_positions(positions);
+            let mut candidate = advanced(&self.mesh, &vel.vector, tau);
             if let Some(element) = tangled(&self.mesh, &candidate) {
                 tau *= 0.5;
                 report.reductions += 1;
@@ -621,6 +618,11 @@ fn relative_motion<const D: usize>(mesh: &Mesh<D>, v: &[Point<D>]) -> f64 {
     worst
 }
 
+/// `Γ_n` moved by `τ V⃗`.
+fn advanced<const D: usize>(mesh: &Mesh<D>, velocity: &[Point<D>], tau: f64) -> Mesh<D> {
+    mesh.with_positions(mesh.positions().iter().zip(velocity).map(|(x, v)| x + v * tau).collect())
+}
+
 /// Bisections of `τ` that locate a first contact (to `2⁻¹⁰` of the trial step).
 const CONTACT_BISECTIONS: usize = 10;
 
@@ -639,8 +641,7 @@ fn first_contact<const D: usize>(
 ) -> Result<Option<(f64, Mesh<D>, f64)>, FlowError> {
     let mut trial = |tau: f64| -> Result<Option<Mesh<D>>, FlowError> {
         let vel = solver.velocity(&LinearSystem { tau, ..*sys })?;
-        let positions = sys.mesh.positions().iter().zip(&vel.vector).map(|(x, v)| x + v * tau).collect();
-        let candidate = sys.mesh.with_positions(positions);
+        let candidate = advanced(sys.mesh, &vel.vector, tau);
         Ok(if tangled(sys.mesh, &candidate).is_some() { None } else { Some(candidate) })
     };
     let (mut lo, mut hi) = (0.0, sys.tau);
