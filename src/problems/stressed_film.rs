@@ -30,7 +30,8 @@ pub struct StressedFilm {
     pub merge: bool,
     /// Loops below this area are dropped when curves are reconnected.
     pub min_area: f64,
-    /// Thickness `δ` of a wetting layer: every vertex is kept at `y ≥ δ`.
+    /// Thickness `δ` of a wetting layer: every vertex of a trial step is put at
+    /// `y ≥ δ` (the driver's per-step area correction then offsets it by ~1e-4).
     pub wetting_layer: Option<f64>,
     cache: Mutex<Option<(Vec<Point<2>>, Vec<[usize; 2]>, Arc<(FilmMesh, StressField)>)>>,
 }
