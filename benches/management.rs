@@ -92,7 +92,6 @@ fn curve_flow_run(mesh: &CurveMesh, steps: usize) -> (f64, f64, CurveMesh) {
         adapt: true,
         topology_changes: true,
         params: CurveManager::defaults_for(mesh),
-        contact_distance: None,
     };
     let mut flow = Flow::new(&problem, mesh.clone(), settings)
         .unwrap()
@@ -136,7 +135,6 @@ fn main() {
             adapt: true,
             topology_changes: true,
             params: CurveManager::defaults_for(&mesh),
-            contact_distance: None,
         };
         let t_manage = time_it(0.5, || {
             black_box(manager.manage(&mesh).unwrap());

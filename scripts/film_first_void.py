@@ -31,17 +31,14 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-def spec(gamma, n, end, max_iterations=None, contact=None):
+def spec(gamma, n, end, max_iterations=None):
     flow = {"tau": 1e-5, "end_time": end, "max_iterations": max_iterations or 1_000_000, "tolerance": 0}
-    s = {
+    return {
         "problem": {"type": "stressed_film", "length": 1.0, "gamma": gamma, "boundary": {"type": "x"}},
         "initial": {"shape": "film", "height": 0.5, "amplitude": 0.02, "mode": 1, "resolution": n},
         "flow": flow,
         "output": {"checkpoint_every": 1_000_000},
     }
-    if contact is not None:
-        s["mesh"] = {"contact_distance": contact}
-    return s
 
 
 def run(binary, s, out):
@@ -60,15 +57,14 @@ def main():
     ap.add_argument("--gamma", type=float, default=0.2)
     ap.add_argument("--end", type=float, default=0.0072, help="end time, a little past the first void")
     ap.add_argument("--binary", default=os.path.join(ROOT, "target", "release", "shapeflow"))
-    ap.add_argument("--contact", type=float, default=None, help="mesh.contact_distance")
     ap.add_argument("resolutions", type=int, nargs="+")
     a = ap.parse_args()
     work = tempfile.mkdtemp(prefix="film_first_void_")
-    print(f"# gamma {a.gamma}, contact distance {a.contact}; runs in {work}")
+    print(f"# gamma {a.gamma}; runs in {work}")
     print("vertices  iteration  time        area        y_min   y_max   J rise")
     for n in a.resolutions:
         out = os.path.join(work, f"n{n}")
-        run(a.binary, spec(a.gamma, n, a.end, contact=a.contact), out)
+        run(a.binary, spec(a.gamma, n, a.end), out)
         rows = list(csv.DictReader(open(os.path.join(out, "energy.csv"))))
         k = next((i for i, r in enumerate(rows) if int(r["components"]) >= 2), None)
         if k is None:
@@ -76,7 +72,7 @@ def main():
             continue
         it = int(rows[k]["iteration"])
         rise = float(rows[k]["energy"]) - float(rows[k - 1]["energy"])
-        run(a.binary, spec(a.gamma, n, a.end, it, a.contact), out + "_void")
+        run(a.binary, spec(a.gamma, n, a.end, it), out + "_void")
         shape = json.load(open(os.path.join(out + "_void", "shape.json")))
         for c in shape["components"][1:]:
             ys = [p[1] for p in c["vertices"]]

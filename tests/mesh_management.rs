@@ -20,7 +20,7 @@ fn dumbbell(n: usize, neck: f64, skew: f64) -> CurveMesh {
 }
 
 fn manager(regularize: bool, adapt: bool, topology: bool, params: CurveRemeshSettings) -> Box<dyn MeshManager<2>> {
-    Box::new(CurveManager { regularize, sweeps: 3, adapt, topology_changes: topology, params, contact_distance: None })
+    Box::new(CurveManager { regularize, sweeps: 3, adapt, topology_changes: topology, params })
 }
 
 /// Runs curvature flow and returns the worst longest/shortest edge ratio seen.

@@ -4,8 +4,8 @@
 
 use super::FlowError;
 use crate::geometry::{
-    adapt_surface, close_contact, edge_statistics, manage_curve, regularize_surface, resolve_crossings, CrossingWatch,
-    CurveMesh, CurveRemeshSettings, Mesh, SurfaceMesh, SurfaceRemeshSettings,
+    adapt_surface, edge_statistics, manage_curve, regularize_surface, resolve_crossings, CrossingWatch, CurveMesh,
+    CurveRemeshSettings, Mesh, SurfaceMesh, SurfaceRemeshSettings,
 };
 
 /// What mesh management did to the mesh after a step.
@@ -42,10 +42,6 @@ pub struct CurveManager {
     pub adapt: bool,
     pub topology_changes: bool,
     pub params: CurveRemeshSettings,
-    /// With topology changes: parts of a curve facing each other across its
-    /// interior closer than this distance touch and reconnect
-    /// ([`crate::geometry::close_contact`]); `None`: only crossings reconnect.
-    pub contact_distance: Option<f64>,
 }
 
 impl CurveManager {
@@ -124,19 +120,11 @@ fn manage_curves(
     };
     if s.topology_changes {
         let cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
-        // a contact closer than the contact distance, if its reconnection is clean
-        // (otherwise the step goes on as if there were none)
-        let touched = s.contact_distance.and_then(|d| close_contact(cur, d)).and_then(|t| {
-            resolve_crossings(&t, &t.crossings(), s.params.min_area, s.params.fill_pockets).ok().flatten()
-        });
-        let cur = touched.as_ref().unwrap_or(cur);
         let hits = match watch {
             Some(w) if cur.period().is_none() => w.crossings_of(cur),
             _ => cur.crossings(),
         };
         if let Some(m) = resolve_crossings(cur, &hits, s.params.min_area, s.params.fill_pockets).map_err(fail)? {
-            (remeshed, moved) = (Some(m), None);
-        } else if let Some(m) = touched {
             (remeshed, moved) = (Some(m), None);
         }
     }

@@ -3,7 +3,6 @@
 //! is kept apart from positions; derived quantities are computed on request.
 
 mod crossing_watch;
-mod curve_contact;
 mod curve_loop;
 mod curve_remesh;
 mod curve_topology;
@@ -17,7 +16,6 @@ mod surfaces;
 mod validate;
 
 pub use crossing_watch::CrossingWatch;
-pub use curve_contact::{close_contact, find_contact, Contact};
 pub use curve_remesh::{adapt_curve, manage_curve, regularize_curve, CurveRemeshSettings};
 pub use curve_topology::{mesh_winding_number, resolve_crossings, resolve_intersections, winding_number};
 pub use curves::{circle, ellipse, polygon, rectangle, union};

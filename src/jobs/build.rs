@@ -421,9 +421,6 @@ fn surface_manager(
     initial: &SurfaceMesh,
     pinch_off: bool,
 ) -> Result<Option<SurfaceManager>, SpecError> {
-    if m.contact_distance.is_some() {
-        return Err(SpecError::new("mesh.contact_distance", "applies to curves (2D) only"));
-    }
     if !(m.regularize || m.adapt || pinch_off) {
         return Ok(None);
     }
@@ -451,7 +448,6 @@ fn curve_manager(m: &super::spec::MeshSpec, initial: &CurveMesh) -> Result<Optio
         adapt: m.adapt,
         topology_changes: m.topology_changes,
         params,
-        contact_distance: m.contact_distance.map(|d| positive("mesh.contact_distance", d)).transpose()?,
     }))
 }
 

@@ -434,10 +434,6 @@ pub struct MeshSpec {
     /// Surfaces: stop with `pinch_off` when a neck radius falls below `h_min/2`
     /// (default on, except for segmentation, whose creases are not necks).
     pub pinch_off: Option<bool>,
-    /// (Addition) curves: parts facing each other across the interior (the gas of
-    /// the stressed film) closer than this distance touch and reconnect (default
-    /// off: only crossings reconnect).
-    pub contact_distance: Option<f64>,
 }
 
 impl Default for MeshSpec {
@@ -453,7 +449,6 @@ impl Default for MeshSpec {
             min_area: None,
             max_angle: 120.0,
             pinch_off: None,
-            contact_distance: None,
         }
     }
 }
