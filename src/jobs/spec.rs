@@ -86,7 +86,8 @@ pub struct StressedFilmSpec {
     pub boundary: FilmBoundarySpec,
     /// (Addition) thickness `δ > 0` of a wetting layer: the free surface and the
     /// voids are kept at `y ≥ δ` (an obstacle, up to the per-step area correction),
-    /// so the gas never reaches the substrate. Without it a surface that meets the substrate is inadmissible.
+    /// so the gas never reaches the substrate. Without it a surface that meets the
+    /// substrate is inadmissible.
     #[serde(default)]
     pub wetting_layer: Option<f64>,
 }
