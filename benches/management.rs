@@ -28,7 +28,17 @@ fn l2_step_time<const D: usize>(mesh: &shapeflow::geometry::Mesh<D>) -> (f64, f6
     let mut step = SemiImplicitStep::new(SolverKind::Lumped);
     let mut solve = |m: &Matrices<D>, ax: &[Point<D>]| {
         let product = ProductWeights::L2;
-        let sys = LinearSystem { mesh, pattern: &pattern, matrices: m, ax, g: &g, f: &f, product: &product, tau: 1e-4 };
+        let sys = LinearSystem {
+            mesh,
+            pattern: &pattern,
+            matrices: m,
+            ax,
+            g: &g,
+            f: &f,
+            product: &product,
+            tau: 1e-4,
+            bending: 0.0,
+        };
         black_box(step.velocity(&sys).unwrap());
     };
     let whole = time_it(0.5, || {

@@ -45,7 +45,17 @@ fn case<const D: usize>(mesh: &Mesh<D>, product: &str) -> f64 {
     time_it(0.5, || {
         m.assemble_into(mesh, &pattern, false);
         let ax = m.stiffness_times_positions(mesh, &pattern);
-        let sys = LinearSystem { mesh, pattern: &pattern, matrices: &m, ax: &ax, g: &g, f: &f, product: &weights, tau };
+        let sys = LinearSystem {
+            mesh,
+            pattern: &pattern,
+            matrices: &m,
+            ax: &ax,
+            g: &g,
+            f: &f,
+            product: &weights,
+            tau,
+            bending: 0.0,
+        };
         black_box(step.velocity(&sys).unwrap());
     })
 }

@@ -31,10 +31,13 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-def spec(gamma, n, end, max_iterations=None):
+def spec(gamma, n, end, max_iterations=None, bending=0.0):
     flow = {"tau": 1e-5, "end_time": end, "max_iterations": max_iterations or 1_000_000, "tolerance": 0}
+    problem = {"type": "stressed_film", "length": 1.0, "gamma": gamma, "boundary": {"type": "x"}}
+    if bending:
+        problem["bending"] = bending
     return {
-        "problem": {"type": "stressed_film", "length": 1.0, "gamma": gamma, "boundary": {"type": "x"}},
+        "problem": problem,
         "initial": {"shape": "film", "height": 0.5, "amplitude": 0.02, "mode": 1, "resolution": n},
         "flow": flow,
         "output": {"checkpoint_every": 1_000_000},
@@ -55,16 +58,17 @@ def area(v):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--gamma", type=float, default=0.2)
+    ap.add_argument("--bending", type=float, default=0.0, help="epsilon of the bending energy (an addition)")
     ap.add_argument("--end", type=float, default=0.0072, help="end time, a little past the first void")
     ap.add_argument("--binary", default=os.path.join(ROOT, "target", "release", "shapeflow"))
     ap.add_argument("resolutions", type=int, nargs="+")
     a = ap.parse_args()
     work = tempfile.mkdtemp(prefix="film_first_void_")
-    print(f"# gamma {a.gamma}; runs in {work}")
+    print(f"# gamma {a.gamma}, bending {a.bending}; runs in {work}")
     print("vertices  iteration  time        area        y_min   y_max   J rise")
     for n in a.resolutions:
         out = os.path.join(work, f"n{n}")
-        run(a.binary, spec(a.gamma, n, a.end), out)
+        run(a.binary, spec(a.gamma, n, a.end, bending=a.bending), out)
         rows = list(csv.DictReader(open(os.path.join(out, "energy.csv"))))
         k = next((i for i, r in enumerate(rows) if int(r["components"]) >= 2), None)
         if k is None:
@@ -72,7 +76,7 @@ def main():
             continue
         it = int(rows[k]["iteration"])
         rise = float(rows[k]["energy"]) - float(rows[k - 1]["energy"])
-        run(a.binary, spec(a.gamma, n, a.end, it), out + "_void")
+        run(a.binary, spec(a.gamma, n, a.end, it, a.bending), out + "_void")
         shape = json.load(open(os.path.join(out + "_void", "shape.json")))
         for c in shape["components"][1:]:
             ys = [p[1] for p in c["vertices"]]

@@ -224,6 +224,7 @@ impl<'p, const D: usize> Flow<'p, D> {
     /// Start a flow at iteration 0, time 0.
     pub fn new(problem: &'p dyn Problem<D>, mesh: Mesh<D>, settings: FlowSettings) -> Result<Self, FlowError> {
         check_settings(&settings)?;
+        check_bending(problem, &settings)?;
         let energy = problem.energy(&mesh).map_err(|e| FlowError::Problem(e.0))?;
         if !energy.is_finite() {
             return Err(FlowError::NonFiniteEnergy { value: energy, iteration: 0 });
@@ -239,6 +240,7 @@ impl<'p, const D: usize> Flow<'p, D> {
         settings: FlowSettings,
     ) -> Result<Self, FlowError> {
         check_settings(&settings)?;
+        check_bending(problem, &settings)?;
         let mesh = checkpoint.mesh.to_mesh::<D>().map_err(|e| FlowError::Checkpoint(e.to_string()))?;
         Ok(Self::assemble_state(
             problem,
@@ -388,6 +390,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             f: &lin.grad.f,
             product: &lin.product,
             tau: self.tau,
+            bending: self.problem.bending(),
         };
         let vel = self.solver.velocity(&sys)?;
         Ok((lin.curvature, vel.normal))
@@ -450,6 +453,7 @@ impl<'p, const D: usize> Flow<'p, D> {
                 f: &grad.f,
                 product,
                 tau,
+                bending: self.problem.bending(),
             };
             let vel = self.solver.velocity(&sys)?;
             if let Some(eps) = s.step_control {
@@ -590,6 +594,27 @@ fn check_settings(s: &FlowSettings) -> Result<(), FlowError> {
     }
     if !(s.beta.is_finite() && s.beta > 0.0) {
         return bad("flow.beta", "must be a positive number");
+    }
+    Ok(())
+}
+
+/// A bending energy needs the `H^{-1}` product, the lumped solver and a curve.
+fn check_bending<const D: usize>(problem: &dyn Problem<D>, s: &FlowSettings) -> Result<(), FlowError> {
+    let eps = problem.bending();
+    let bad = |reason: &str| Err(FlowError::Settings { field: "problem.bending", reason: reason.into() });
+    if !(eps.is_finite() && eps >= 0.0) {
+        return bad("must be a nonnegative number");
+    }
+    if eps > 0.0 {
+        if D != 2 {
+            return bad("is implemented for curves (2D) only");
+        }
+        if s.scalar_product != ScalarProduct::HMinus1 {
+            return bad("needs flow.scalar_product h_minus_1");
+        }
+        if s.solver != SolverKind::Lumped {
+            return bad("needs flow.solver lumped");
+        }
     }
     Ok(())
 }

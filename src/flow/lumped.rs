@@ -66,6 +66,8 @@ pub(super) enum Last {
     HMinus1 {
         scalar_mass: Vec<f64>,
         cyclic: Option<Vec<[Vec<f64>; 3]>>,
+        /// `C = M̂ + cA` of a bending energy (curves): `P̃⁻¹ = C⁻¹ M̂ B⁻¹ M̂ B⁻¹`.
+        bending: Option<Vec<[Vec<f64>; 3]>>,
     },
 }
 
@@ -200,7 +202,11 @@ impl LumpedSolver {
         match &self.last {
             Last::None => {}
             Last::OneRingCholesky => self.chol.as_ref().unwrap().solve_in_place(x),
-            Last::HMinus1 { scalar_mass, cyclic } => {
+            Last::HMinus1 { scalar_mass, cyclic, bending } => {
+                if let Some(c) = bending {
+                    cyclic_solve(self.cycles.as_ref().unwrap(), c, x);
+                    x.iter_mut().zip(scalar_mass).for_each(|(xi, m)| *xi *= m);
+                }
                 self.solve_b(cyclic.as_deref(), x);
                 x.iter_mut().zip(scalar_mass).for_each(|(xi, m)| *xi *= m);
                 self.solve_b(cyclic.as_deref(), x);

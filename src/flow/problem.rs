@@ -71,6 +71,14 @@ pub trait Problem<const D: usize>: Send {
     fn rediscretize(&self, _mesh: &Mesh<D>) -> Result<Option<f64>, ProblemError> {
         Ok(None)
     }
+    /// `ε ≥ 0` of an added bending energy `ε/2 ∫_Γ κ²` (an addition to the paper's
+    /// functionals; curves only, `H^{-1}` product, lumped solver). Its gradient is
+    /// `ε(−Δ_Γκ − κ³/2)`: the flow keeps `−εΔ_Γκ` implicit in the step (the system
+    /// then reads `M̂ V + A((g + ε M̂⁻¹A) K + f) = 0`), while the problem itself adds
+    /// `ε/2 ∫ κ²` to [`Problem::energy`] and `−εκ³/2` to `f`.
+    fn bending(&self) -> f64 {
+        0.0
+    }
     /// A trial step's shape with the problem's constraints enforced (stressed film:
     /// the wetting layer as an obstacle); by default unchanged.
     fn constrain(&self, candidate: Mesh<D>) -> Mesh<D> {

@@ -39,7 +39,8 @@ pub enum ProductWeights {
 /// M⃗ V⃗ − N⃗ V    = 0
 /// ```
 ///
-/// and for `H^{-1}` the third row is `M V + A (g K + f) = 0`.
+/// and for `H^{-1}` the third row is `M V + A (g K + f) = 0`, or with a bending
+/// energy `ε/2 ∫ κ²` ([`super::Problem::bending`]) `M V + A ((g + ε M⁻¹A) K + f) = 0`.
 pub struct LinearSystem<'a, const D: usize> {
     pub mesh: &'a Mesh<D>,
     pub pattern: &'a Pattern<D>,
@@ -52,4 +53,6 @@ pub struct LinearSystem<'a, const D: usize> {
     pub f: &'a [f64],
     pub product: &'a ProductWeights,
     pub tau: f64,
+    /// `ε` of the bending energy (0: none); `H^{-1}` on curves only.
+    pub bending: f64,
 }

@@ -3,7 +3,7 @@
 
 use super::mesh_io::read_mesh_file;
 use super::spec::{ImageSource, InitialSpec, JobSpec, ProblemSpec, SegmentationSpec, SpecError};
-use crate::flow::{CurveManager, FlowSettings, Problem, ScalarProduct, SurfaceManager};
+use crate::flow::{CurveManager, FlowSettings, Problem, ScalarProduct, SolverKind, SurfaceManager};
 use crate::geometry::{self, CurveMesh, Mesh, MeshError, Point, SurfaceMesh};
 use crate::imaging::{decode_image, decode_slices, decode_volume, EdgeField, Grid, ImageLimits};
 use crate::problems::{CurvatureFlow, Segmentation, ShapeDesign, StressedFilm, SurfaceDiffusion};
@@ -238,9 +238,16 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
                 }
                 None => None,
             };
+            if !(fs.bending.is_finite() && fs.bending >= 0.0) {
+                return Err(SpecError::new(
+                    "problem.bending",
+                    format!("must be a nonnegative number, got {}", fs.bending),
+                ));
+            }
             ProblemKind::StressedFilm(
                 StressedFilm::new(cell, fs.gamma, meshing, spec.mesh.topology_changes, min_area)
-                    .with_wetting_layer(wetting),
+                    .with_wetting_layer(wetting)
+                    .with_bending(fs.bending),
             )
         }
         (ProblemSpec::ShapeDesign(_), AnyMesh::Surface(_)) => {
@@ -257,6 +264,14 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         ProblemKind::StressedFilm(p) => Problem::<2>::default_scalar_product(p),
     };
     let scalar_product = f.scalar_product.unwrap_or(default_product);
+    if let ProblemKind::StressedFilm(p) = &problem {
+        if p.bending > 0.0 && scalar_product != ScalarProduct::HMinus1 {
+            return Err(SpecError::new("problem.bending", "needs flow.scalar_product h_minus_1"));
+        }
+        if p.bending > 0.0 && f.solver.unwrap_or_default() != SolverKind::Lumped {
+            return Err(SpecError::new("problem.bending", "needs flow.solver lumped"));
+        }
+    }
     if let Some(m) = curve_manager.as_mut() {
         m.params.keep_area = scalar_product == ScalarProduct::HMinus1;
         // a pocket of Ω closed off by Γ would have no Dirichlet boundary

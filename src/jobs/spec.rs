@@ -90,6 +90,11 @@ pub struct StressedFilmSpec {
     /// substrate is inadmissible.
     #[serde(default)]
     pub wetting_layer: Option<f64>,
+    /// (Addition) `ε ≥ 0` of a bending energy `ε/2 ∫_Γ κ²` added to `J`: a
+    /// curvature regularization that gives a crack tip a radius of about `√(ε/γ)`.
+    /// Needs the `h_minus_1` product and the lumped solver (the defaults).
+    #[serde(default)]
+    pub bending: f64,
 }
 
 /// `problem.boundary` of `stressed_film`: `g`.

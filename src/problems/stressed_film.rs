@@ -14,7 +14,7 @@
 //! periodic curve (no bulk mesh is built).
 
 use crate::bulk::{BulkError, MeshingOptions};
-use crate::fem::tangential_derivative;
+use crate::fem::{tangential_derivative, Matrices, Pattern};
 use crate::film::{solve_stress, FilmCell, FilmMesh, StressField};
 use crate::flow::{Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
 use crate::geometry::{resolve_intersections, CurveMesh, Mesh, Point};
@@ -33,6 +33,9 @@ pub struct StressedFilm {
     /// Thickness `δ` of a wetting layer: every vertex of a trial step is put at
     /// `y ≥ δ` (the driver's per-step area correction then offsets it by ~1e-4).
     pub wetting_layer: Option<f64>,
+    /// `ε ≥ 0` of an added bending energy `ε/2 ∫_Γ κ²` (an addition): a curvature
+    /// regularization of the crack tip; see [`Problem::bending`].
+    pub bending: f64,
     cache: Mutex<Option<(Vec<Point<2>>, Vec<[usize; 2]>, Arc<(FilmMesh, StressField)>)>>,
 }
 
@@ -47,6 +50,7 @@ impl Clone for StressedFilm {
     fn clone(&self) -> Self {
         StressedFilm::new(self.cell, self.gamma, self.meshing, self.merge, self.min_area)
             .with_wetting_layer(self.wetting_layer)
+            .with_bending(self.bending)
     }
 }
 
@@ -58,17 +62,33 @@ impl PartialEq for StressedFilm {
             && self.merge == o.merge
             && self.min_area == o.min_area
             && self.wetting_layer == o.wetting_layer
+            && self.bending == o.bending
     }
 }
 
 impl StressedFilm {
     pub fn new(cell: FilmCell, gamma: f64, meshing: MeshingOptions, merge: bool, min_area: f64) -> Self {
-        StressedFilm { cell, gamma, meshing, merge, min_area, wetting_layer: None, cache: Mutex::new(None) }
+        StressedFilm {
+            cell,
+            gamma,
+            meshing,
+            merge,
+            min_area,
+            wetting_layer: None,
+            bending: 0.0,
+            cache: Mutex::new(None),
+        }
     }
 
     /// With a wetting layer of thickness `δ` (an obstacle `y ≥ δ` for the surface).
     pub fn with_wetting_layer(mut self, delta: Option<f64>) -> Self {
         self.wetting_layer = delta;
+        self
+    }
+
+    /// With a bending energy `ε/2 ∫_Γ κ²` added to `J`.
+    pub fn with_bending(mut self, eps: f64) -> Self {
+        self.bending = eps;
         self
     }
 
@@ -119,6 +139,21 @@ fn unit_tangents(c: &CurveMesh) -> Vec<Point<2>> {
     t.iter().map(|v| v.normalize()).collect()
 }
 
+/// `∫_Γ κ² ≈ Σ_i m̂_i κ_i²` with the flow's discrete curvature
+/// `κ_i = N⃗_i·(A X)_i / |N⃗_i|²` and `m̂_i = |N⃗_i|² / m_i`.
+fn curvature_squared(c: &CurveMesh) -> f64 {
+    let pattern = Pattern::new(c.num_vertices(), c.elements());
+    let m = Matrices::assemble(c, &pattern);
+    let ax = m.stiffness_times_positions(c, &pattern);
+    (0..c.num_vertices())
+        .map(|i| {
+            let n = m.lumped_normal[i];
+            let k = n.dot(&ax[i]) / n.norm_squared();
+            n.norm_squared() / m.lumped_mass[i] * k * k
+        })
+        .sum()
+}
+
 fn problem_error(e: BulkError) -> ProblemError {
     ProblemError(format!("stressed film: {e}"))
 }
@@ -146,8 +181,9 @@ impl<const D: usize> Problem<D> for StressedFilm {
         } else if !c.crossings().is_empty() {
             return Ok(f64::INFINITY);
         }
+        let bending = if self.bending > 0.0 { self.bending * 0.5 * curvature_squared(c) } else { 0.0 };
         match self.solve(c) {
-            Ok(s) => Ok(s.map_or(0.0, |s| s.1.energy) + self.gamma * c.boundary_measure()),
+            Ok(s) => Ok(s.map_or(0.0, |s| s.1.energy) + self.gamma * c.boundary_measure() + bending),
             Err(BulkError::Inadmissible(_)) => Ok(f64::INFINITY),
             Err(e) => Err(problem_error(e)),
         }
@@ -170,6 +206,11 @@ impl<const D: usize> Problem<D> for StressedFilm {
                 dw.iter().zip(&t).map(|(d, t)| -(d + b * t.x).powi(2)).collect()
             }
         };
+        let mut f = f;
+        if self.bending > 0.0 {
+            // ε(−Δ_Γκ − κ³/2): the first term is implicit in the step (Problem::bending)
+            f.iter_mut().zip(state.curvature).for_each(|(fi, k)| *fi -= 0.5 * self.bending * k.powi(3));
+        }
         Ok(ShapeGradient { g: vec![self.gamma; n], f, aux: Vec::new() })
     }
 
@@ -198,5 +239,9 @@ impl<const D: usize> Problem<D> for StressedFilm {
 
     fn is_physical(&self) -> bool {
         true
+    }
+
+    fn bending(&self) -> f64 {
+        self.bending
     }
 }
