@@ -267,26 +267,52 @@ fn the_void_forms_at_a_time_stable_under_refinement() {
 
 /// The paper's scenario with a bending energy `ε/2 ∫ κ²`, `ε = 2·10⁻⁴`
 /// (`examples/stressed_film_bending.json`, an addition) at `resolution` vertices, run
-/// until the first inclusion closes off: its time, area and height.
+/// until the first inclusion closes off (the film's area kept to 1e-3 and J
+/// decreasing at every step on the way): its time, area and height; then up to 100
+/// steps more while it stays closed, keeping its area to 1 %.
 fn first_inclusion_with_bending(resolution: usize) -> (f64, f64, f64) {
     let spec = std::fs::read_to_string("examples/stressed_film_bending.json")
         .unwrap()
         .replace("\"resolution\": 128", &format!("\"resolution\": {resolution}"));
     let job = job(&spec);
     let mut flow = managed_flow(&job);
-    loop {
+    let film0 = flow.mesh().enclosed_measure();
+    let mut energy = flow.energy();
+    let (time, area, height) = loop {
         let r = flow.step().unwrap();
         assert!(r.stop.is_none(), "no inclusion by t = {} at {resolution} vertices", flow.time());
         let c = flow.mesh();
+        let drift = (c.enclosed_measure() / film0 - 1.0).abs();
+        assert!(drift < 1e-3, "{resolution} vertices: film area drift {drift:e} at t = {}", flow.time());
         if let Some((area, ((p, _), _))) = void_areas(c)
             .into_iter()
             .zip(c.lifted_cycles().into_iter().zip(c.windings()).filter(|(_, w)| *w == 0))
             .next()
         {
             let (lo, hi) = p.iter().fold((f64::MAX, f64::MIN), |(lo, hi), q| (lo.min(q.y), hi.max(q.y)));
-            return (flow.time(), area, hi - lo);
+            break (flow.time(), area, hi - lo);
+        }
+        // J decreases at every step while the surface is one curve (measured)
+        assert!(flow.energy() <= energy, "{resolution} vertices: J rose to {} at t = {}", flow.energy(), flow.time());
+        energy = flow.energy();
+    };
+    // the inclusion keeps its area while it stays closed (it reopens later). Its
+    // sharp top can pinch off a sliver below `mesh.min_area`, which is dropped:
+    // measured at 128 vertices 1.0e-4 (1.8 %) three steps after it closed off, and
+    // no change above 1e-7 otherwise.
+    let mut last = area;
+    for _ in 0..100 {
+        flow.step().unwrap();
+        match void_areas(flow.mesh())[..] {
+            [a] => {
+                assert!((a / area - 1.0).abs() < 0.025, "{resolution} vertices: inclusion {area} → {a}");
+                last = a;
+            }
+            _ => break,
         }
     }
+    println!("{resolution} vertices: inclusion area {area} at t = {time}, {last} 100 steps later or at reopening");
+    (time, area, height)
 }
 
 /// With the bending energy the crack tip has a radius of about `√(ε/γ)` instead of
