@@ -12,6 +12,11 @@
 //! shifts the growth rate of the linear instability (measured; not used). With `g`
 //! constant the field is constant and the flow is plain surface diffusion of the
 //! periodic curve (no bulk mesh is built).
+//!
+//! Optionally (an addition, `problem.bending`) `J` gains a bending energy
+//! `ε/2 ∫_Γ κ²`, whose gradient `ε(−Δ_Γκ − κ³/2)` gives the groove's tip a radius of
+//! about `√(ε/γ)` instead of a segment; `−εΔ_Γκ` is implicit in the step
+//! ([`Problem::bending`]), `−εκ³/2` is added to `f`.
 
 use crate::bulk::{BulkError, MeshingOptions};
 use crate::fem::{tangential_derivative, Matrices, Pattern};
