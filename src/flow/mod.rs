@@ -23,6 +23,7 @@ pub use error::FlowError;
 pub use gmres::{gmres, GmresOutcome};
 pub use lumped::LumpedSolver;
 pub use mesh_management::{CurveManager, Managed, MeshManager, SurfaceManager, WatchedCurveManager};
+pub(crate) use problem::curvature_and_normals;
 pub use problem::{shape_derivative, H1Weights, Problem, ProblemError, ShapeGradient, SurfaceState};
 pub use step::{SemiImplicitStep, SolverKind, Velocity};
 pub use system::{LinearSystem, ProductWeights, ScalarProduct};

@@ -21,7 +21,7 @@
 use crate::bulk::{BulkError, MeshingOptions};
 use crate::fem::{tangential_derivative, Matrices, Pattern};
 use crate::film::{solve_stress, FilmCell, FilmMesh, StressField};
-use crate::flow::{Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
+use crate::flow::{curvature_and_normals, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
 use crate::geometry::{resolve_intersections, CurveMesh, Mesh, Point};
 use std::sync::{Arc, Mutex};
 
@@ -150,13 +150,8 @@ fn curvature_squared(c: &CurveMesh) -> f64 {
     let pattern = Pattern::new(c.num_vertices(), c.elements());
     let m = Matrices::assemble(c, &pattern);
     let ax = m.stiffness_times_positions(c, &pattern);
-    (0..c.num_vertices())
-        .map(|i| {
-            let n = m.lumped_normal[i];
-            let k = n.dot(&ax[i]) / n.norm_squared();
-            n.norm_squared() / m.lumped_mass[i] * k * k
-        })
-        .sum()
+    let (kappa, _) = curvature_and_normals(&m, &ax);
+    kappa.iter().zip(&m.scalar_mass).map(|(k, mh)| mh * k * k).sum()
 }
 
 fn problem_error(e: BulkError) -> ProblemError {
