@@ -5,7 +5,9 @@
 //! `cargo bench --bench step` runs every case in a child process (so that the peak
 //! resident memory, VmHWM, belongs to that case alone) and prints a Markdown table
 //! plus the fitted exponents `time ∝ N^p`. `cargo bench --bench step -- quick` runs
-//! the smaller sizes only.
+//! the smaller sizes only. `cargo bench --bench step -- bending` compares the
+//! `H^{-1}` curve step with and without a bending energy `ε/2 ∫ κ²` (ε = 2e-4,
+//! τ = 1e-5, g = 1: the implicit `−εΔ_Γκ` and the third preconditioner factor).
 
 use shapeflow::fem::{Matrices, Pattern, Weight};
 use shapeflow::flow::{LinearSystem, ProductWeights, SemiImplicitStep, SolverKind, SparseCholesky};
@@ -16,7 +18,7 @@ use std::hint::black_box;
 mod common;
 use common::{peak_rss_mib, time_it};
 
-fn case<const D: usize>(mesh: &Mesh<D>, product: &str) -> f64 {
+fn case<const D: usize>(mesh: &Mesh<D>, product: &str, bending: f64) -> f64 {
     let pattern = Pattern::new(mesh.num_vertices(), mesh.elements());
     let n = mesh.num_vertices();
     if product == "floor" {
@@ -54,7 +56,7 @@ fn case<const D: usize>(mesh: &Mesh<D>, product: &str) -> f64 {
             f: &f,
             product: &weights,
             tau,
-            bending: 0.0,
+            bending,
         };
         black_box(step.velocity(&sys).unwrap());
     })
@@ -74,10 +76,10 @@ const PRODUCTS: [&str; 4] = ["floor", "l2", "h1", "h_minus_1"];
 fn child(kind: &str, size: usize, product: &str) {
     let (secs, n) = if kind == "curve" {
         let m = circle([0.0, 0.0], 1.0, size).unwrap();
-        (case(&m, product), m.num_vertices())
+        (case(&m, product, 0.0), m.num_vertices())
     } else {
         let m = icosphere([0.0; 3], 1.0, size as u32).unwrap();
-        (case(&m, product), m.num_vertices())
+        (case(&m, product, 0.0), m.num_vertices())
     };
     println!("{kind} {n} {product} {secs} {}", peak_rss_mib());
 }
@@ -87,6 +89,16 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     if let Some(pos) = args.iter().position(|a| a == "--case") {
         child(&args[pos + 1], args[pos + 2].parse().unwrap(), &args[pos + 3]);
+        return;
+    }
+    if args.iter().any(|a| a == "bending") {
+        println!("| curve vertices | H^-1 (ms) | H^-1 with bending (ms) | ratio |");
+        println!("|---:|---:|---:|---:|");
+        for n in [1_000, 10_000, 100_000] {
+            let m = circle([0.0, 0.0], 1.0, n).unwrap();
+            let (plain, bent) = (case(&m, "h_minus_1", 0.0), case(&m, "h_minus_1", 2e-4));
+            println!("| {n} | {:.3} | {:.3} | {:.2} |", plain * 1e3, bent * 1e3, bent / plain);
+        }
         return;
     }
     let quick = args.iter().any(|a| a == "quick");
