@@ -36,7 +36,7 @@ fn spec_errors_name_the_field() {
         ),
         (
             r#"{"problem": {"type": "curvature_flow", "gama": 1}, "initial": {"shape": "circle", "radius": 1.0}}"#,
-            "problem",
+            "problem.gama",
         ),
         (r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 0}}"#, "initial.radius"),
         (

@@ -10,6 +10,7 @@ mod mesh_io;
 mod results;
 mod run;
 mod spec;
+mod spec_path;
 
 pub use build::{prepare, AnyMesh, PreparedJob, ProblemKind};
 pub use mesh_io::{read_mesh_file, MeshFileError};

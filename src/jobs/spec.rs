@@ -473,45 +473,16 @@ impl Default for OutputSpec {
     }
 }
 
-/// Deserializes the body of `problem` (without its tag) to name the failing field.
-fn check_body<T: serde::de::DeserializeOwned>(value: &serde_json::Value) -> Result<(), SpecError> {
-    let mut body = value["problem"].clone();
-    if let Some(o) = body.as_object_mut() {
-        o.remove("type");
-    }
-    if let Err(e) = serde_path_to_error::deserialize::<_, T>(body) {
-        let path = e.path().to_string();
-        let field = if path == "." || path.is_empty() { "problem".to_string() } else { format!("problem.{path}") };
-        return Err(SpecError::new(field, e.into_inner().to_string()));
-    }
-    Ok(())
-}
-
-/// Parse a spec from JSON text. Errors name the field path.
+/// Parse a spec from JSON text. Errors name the field path, also inside the tagged
+/// objects (`initial.parts[1].center`, see [`super::spec_path`]).
 pub fn parse_spec(text: &str) -> Result<JobSpec, SpecError> {
     let value: serde_json::Value =
         serde_json::from_str(text).map_err(|e| SpecError::new("(document)", format!("malformed JSON: {e}")))?;
-    // the fields of an internally tagged enum lose their paths in serde's buffering:
-    // check the shape-design body on its own to name them (`problem.control.inner.radius`)
-    let kind = value.pointer("/problem/type").and_then(|t| t.as_str());
-    if kind == Some("segmentation") {
-        check_body::<SegmentationSpec>(&value)?;
-    } else if kind == Some("shape_design") {
-        check_body::<ShapeDesignSpec>(&value)?;
-    } else if kind == Some("stressed_film") {
-        check_body::<StressedFilmSpec>(&value)?;
-    }
-    let spec: JobSpec = serde_path_to_error::deserialize(value).map_err(|e| {
-        let path = e.path().to_string();
-        let field = if path == "." || path.is_empty() { "(document)".to_string() } else { path };
-        let message = e.into_inner().to_string();
-        // fields of the internally tagged `problem` are reported at `problem`
-        match message.strip_prefix(IMAGE_MESSAGE) {
-            Some(rest) if field == "problem" => {
-                SpecError::new("problem.image", format!("must be \"input:NAME\" or a list of them{rest}"))
-            }
-            _ => SpecError::new(field, message),
+    if let Some(mut e) = super::spec_path::locate(&value) {
+        if let Some(rest) = e.message.strip_prefix(IMAGE_MESSAGE) {
+            e = SpecError::new("problem.image", format!("must be \"input:NAME\" or a list of them{rest}"));
         }
-    })?;
-    Ok(spec)
+        return Err(e);
+    }
+    serde_json::from_value(value).map_err(|e| SpecError::new("(document)", e.to_string()))
 }

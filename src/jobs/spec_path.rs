@@ -1,0 +1,235 @@
+//! Naming the failing field of a spec whose error serde reports at a tagged object.
+//!
+//! `problem`, `initial` (and its `parts`), `problem.control.inner`, `problem.target`
+//! … are internally tagged enums. serde buffers such an object before it picks the
+//! variant, so [`serde_path_to_error`] sees the error at the object (`initial`), not
+//! at the field inside it (`initial.parts[1].center`). This module finds that field:
+//! removing the culprit from the document makes the error go away or change (a
+//! required culprit turns into `missing field`), while removing any other entry
+//! leaves the very same error, since serde reports the first failure it meets.
+//! The search descends one level at a time, into objects and into arrays of
+//! objects or arrays.
+
+use super::spec::{JobSpec, SpecError};
+use serde_json::Value;
+
+/// One step of a path into the document.
+#[derive(Debug, Clone, PartialEq)]
+enum Step {
+    Key(String),
+    Index(usize),
+}
+
+/// The keys that carry an enum's tag: removing them always changes the error.
+const TAG_KEYS: [&str; 2] = ["type", "shape"];
+
+/// The error of deserializing `value` as a [`JobSpec`]: its path and message.
+fn first_error(value: &Value) -> Option<(Vec<Step>, String)> {
+    let e = serde_path_to_error::deserialize::<_, JobSpec>(value.clone()).err()?;
+    let path = e
+        .path()
+        .iter()
+        .filter_map(|s| match s {
+            serde_path_to_error::Segment::Map { key } => Some(Step::Key(key.clone())),
+            serde_path_to_error::Segment::Seq { index } => Some(Step::Index(*index)),
+            _ => None,
+        })
+        .collect();
+    Some((path, readable(&e.into_inner().to_string())))
+}
+
+/// serde's message with the Rust type names replaced by what the user writes.
+fn readable(message: &str) -> String {
+    [
+        ("internally tagged enum ProblemSpec", "an object with a `type`"),
+        ("internally tagged enum TargetSpec", "an object with a `type`"),
+        ("internally tagged enum FilmBoundarySpec", "an object with a `type`"),
+        ("internally tagged enum InitialSpec", "an object with a `shape`"),
+        ("internally tagged enum BoundarySpec", "an object with a `shape`"),
+        ("struct JobSpec", "a job spec object"),
+    ]
+    .iter()
+    .fold(message.to_string(), |m, (from, to)| m.replace(from, to))
+}
+
+fn node<'a>(value: &'a Value, path: &[Step]) -> Option<&'a Value> {
+    path.iter().try_fold(value, |v, s| match s {
+        Step::Key(k) => v.get(k),
+        Step::Index(i) => v.get(i),
+    })
+}
+
+fn node_mut<'a>(value: &'a mut Value, path: &[Step]) -> Option<&'a mut Value> {
+    path.iter().try_fold(value, |v, s| match s {
+        Step::Key(k) => v.get_mut(k),
+        Step::Index(i) => v.get_mut(i),
+    })
+}
+
+/// The document without the entry at `path` (which must exist).
+fn without(value: &Value, path: &[Step]) -> Value {
+    let mut copy = value.clone();
+    let (last, parent) = path.split_last().expect("a non-empty path");
+    match (node_mut(&mut copy, parent), last) {
+        (Some(Value::Object(o)), Step::Key(k)) => {
+            o.remove(k);
+        }
+        (Some(Value::Array(a)), Step::Index(i)) => {
+            a.remove(*i);
+        }
+        _ => {}
+    }
+    copy
+}
+
+/// The name in backticks of serde's `unknown field `x``/`missing field `x`` messages.
+fn named_field(message: &str) -> Option<&str> {
+    let rest = message.strip_prefix("unknown field `").or_else(|| message.strip_prefix("missing field `"))?;
+    rest.split('`').next()
+}
+
+fn render(path: &[Step]) -> String {
+    let mut s = String::new();
+    for step in path {
+        match step {
+            Step::Key(k) if s.is_empty() => s.push_str(k),
+            Step::Key(k) => {
+                s.push('.');
+                s.push_str(k);
+            }
+            Step::Index(i) => s.push_str(&format!("[{i}]")),
+        }
+    }
+    if s.is_empty() {
+        "(document)".to_string()
+    } else {
+        s
+    }
+}
+
+/// The spec error of `value`, if any, with its field named as precisely as the
+/// document allows.
+pub(super) fn locate(value: &Value) -> Option<SpecError> {
+    if !value.is_object() {
+        // serde would read a struct from an array too, field by field
+        let kind = match value {
+            Value::Array(_) => "an array",
+            Value::String(_) => "a string",
+            Value::Number(_) => "a number",
+            Value::Bool(_) => "a boolean",
+            _ => "null",
+        };
+        return Some(SpecError::new("(document)", format!("a job spec must be a JSON object, got {kind}")));
+    }
+    let (mut path, message) = first_error(value)?;
+    if let Some(name) = named_field(&message) {
+        // serde_path_to_error already points at an unknown key; a missing one is named
+        if path.last() != Some(&Step::Key(name.to_string())) {
+            path.push(Step::Key(name.to_string()));
+        }
+        return Some(SpecError::new(render(&path), message));
+    }
+    if message.starts_with("unknown variant") {
+        if let Some(Value::Object(o)) = node(value, &path) {
+            if let Some(tag) = TAG_KEYS.iter().find(|t| o.contains_key(**t)) {
+                path.push(Step::Key(tag.to_string()));
+            }
+        }
+        return Some(SpecError::new(render(&path), message));
+    }
+    // descend while one entry of the current node carries the error
+    'descend: loop {
+        let children: Vec<Step> = match node(value, &path) {
+            Some(Value::Object(o)) => {
+                o.keys().filter(|k| !TAG_KEYS.contains(&k.as_str())).map(|k| Step::Key(k.clone())).collect()
+            }
+            Some(Value::Array(a)) if a.iter().all(|v| v.is_object() || v.is_array()) => {
+                (0..a.len()).map(Step::Index).collect()
+            }
+            _ => break,
+        };
+        for child in children {
+            let mut trial = path.clone();
+            trial.push(child);
+            match first_error(&without(value, &trial)) {
+                Some((_, m)) if m == message => continue,
+                _ => {
+                    path = trial;
+                    continue 'descend;
+                }
+            }
+        }
+        break;
+    }
+    Some(SpecError::new(render(&path), message))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn field(json: &str) -> String {
+        locate(&serde_json::from_str(json).unwrap()).expect("an error").field
+    }
+
+    #[test]
+    fn fields_inside_tagged_objects_are_named() {
+        let circle = r#""initial": {"shape": "circle", "radius": 1}"#;
+        assert_eq!(
+            field(
+                r#"{"problem": {"type": "curvature_flow", "gamma": "1"}, "initial": {"shape": "circle", "radius": 1}}"#
+            ),
+            "problem.gamma"
+        );
+        assert_eq!(
+            field(&format!(r#"{{"problem": {{"type": "curvature_flow", "sigma": 1}}, {circle}}}"#)),
+            "problem.sigma"
+        );
+        assert_eq!(
+            field(
+                r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1, "center": [0]}}"#
+            ),
+            "initial.center"
+        );
+        assert_eq!(
+            field(r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle"}}"#),
+            "initial.radius"
+        );
+        assert_eq!(
+            field(
+                r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "union", "parts": [
+                    {"shape": "circle", "radius": 1}, {"shape": "circle", "radius": "big"}]}}"#
+            ),
+            "initial.parts[1].radius"
+        );
+        assert_eq!(
+            field(
+                r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "polygon", "points": [[0, 0], [1], [1, 1]]}}"#
+            ),
+            "initial.points[1]"
+        );
+        assert_eq!(field(&format!(r#"{{"problem": {{"type": "flow"}}, {circle}}}"#)), "problem.type");
+        assert_eq!(
+            field(&format!(
+                r#"{{"problem": {{"type": "shape_design", "outer": {{"shape": "circle", "radius": 3}},
+                   "control": {{"inner": {{"shape": "circle", "radius": "2"}}, "outer": {{"shape": "circle", "radius": 2.5}}}},
+                   "target": {{"type": "constant", "value": 0.45}}}}, {circle}}}"#
+            )),
+            "problem.control.inner.radius"
+        );
+        assert_eq!(
+            field(&format!(r#"{{"problem": {{"type": "curvature_flow"}}, {circle}, "flow": {{"tau": "x"}}}}"#)),
+            "flow.tau"
+        );
+    }
+
+    #[test]
+    fn messages_speak_of_the_spec_not_of_rust_types() {
+        let e = locate(&serde_json::json!({"problem": 1, "initial": {"shape": "circle", "radius": 1}})).unwrap();
+        assert_eq!(e.field, "problem");
+        assert!(e.message.contains("an object with a `type`") && !e.message.contains("Spec"), "{e}");
+        let e = locate(&serde_json::json!([1, 2])).unwrap();
+        assert_eq!(e.field, "(document)");
+        assert!(e.message.contains("must be a JSON object"), "{e}");
+    }
+}
