@@ -7,7 +7,9 @@ mod common;
 use common::validate_gltf;
 use serde_json::Value;
 use shapeflow::flow::Checkpoint;
-use shapeflow::jobs::{parse_spec, prepare, run_prepared, state_glb, states_glb, PreparedJob, RunEvents};
+use shapeflow::jobs::{
+    parse_spec, prepare, read_mesh_file, run_prepared, state_glb, states_glb, AnyMesh, PreparedJob, RunEvents,
+};
 use std::collections::HashMap;
 use std::sync::atomic::AtomicBool;
 
@@ -84,6 +86,11 @@ fn curves_surfaces_and_segmentations_validate_with_the_right_fields() {
     assert!(k.iter().all(|x| (x - 2.0).abs() < 1e-2), "{k:?}");
     assert!(v.iter().all(|x| (x + 2.0).abs() < 2e-2), "{v:?}");
     write("circle.glb", &glb);
+    // a result can start a new job: shape.glb read back as an uploaded initial mesh
+    let AnyMesh::Curve(c) = read_mesh_file("circle.glb", &glb).unwrap() else { panic!("a curve") };
+    assert_eq!(c.num_vertices(), 64);
+    let area = 0.5 * 0.25 * 64.0 * (2.0 * std::f64::consts::PI / 64.0).sin(); // the inscribed 64-gon
+    assert!((c.enclosed_measure() - area).abs() < 1e-5, "{}", c.enclosed_measure());
 
     // a sphere of radius 1 under mean curvature flow: κ = 2 (sum of principal curvatures)
     let (job, cps) = run(
@@ -100,6 +107,9 @@ fn curves_surfaces_and_segmentations_validate_with_the_right_fields() {
     let mean = k.iter().sum::<f32>() / k.len() as f32;
     assert!((mean - 2.0).abs() < 0.05 && k.iter().all(|x| (x - 2.0).abs() < 0.35), "mean {mean}");
     write("sphere.glb", &glb);
+    let AnyMesh::Surface(m) = read_mesh_file("sphere.glb", &glb).unwrap() else { panic!("a surface") };
+    assert_eq!(m.num_vertices(), 642);
+    assert!((m.enclosed_measure() - 4.0 / 3.0 * std::f64::consts::PI).abs() < 0.05, "{}", m.enclosed_measure());
     write("sphere_evolution.glb", &states_glb(&job, &cps).unwrap());
 
     // segmentation in 2D and 3D

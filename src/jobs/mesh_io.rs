@@ -1,6 +1,6 @@
 //! Readers for uploaded meshes (bytes in, validated mesh out): Wavefront OBJ
-//! (`v`/`f` surfaces, or `v`/`l` closed polylines in the plane z = 0), OFF, and
-//! STL (ASCII or binary; coincident vertices merged).
+//! (`v`/`f` surfaces, or `v`/`l` closed polylines in the plane z = 0), OFF, STL
+//! (ASCII or binary; coincident vertices merged), and glTF (`super::gltf_in`).
 
 use super::build::{AnyMesh, MAX_VERTICES};
 use crate::geometry::{Mesh, MeshError, Point};
@@ -9,7 +9,7 @@ use std::collections::HashMap;
 /// A mesh file that could not be read; names the input and, for text formats, the line.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MeshFileError {
-    #[error("input {name:?}: not a recognised mesh file (OBJ, OFF or STL)")]
+    #[error("input {name:?}: not a recognised mesh file (OBJ, OFF, STL or glTF)")]
     UnknownFormat { name: String },
     #[error("input {name:?}, line {line}: {message}")]
     Parse { name: String, line: usize, message: String },
@@ -25,6 +25,9 @@ pub fn read_mesh_file(name: &str, bytes: &[u8]) -> Result<AnyMesh, MeshFileError
         let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
         bytes.len() == 84 + 50 * n
     };
+    if bytes.starts_with(b"glTF") {
+        return super::gltf_in::read_gltf(name, bytes);
+    }
     if is_binary_stl && !bytes.starts_with(b"solid") {
         return read_binary_stl(name, bytes);
     }
@@ -32,11 +35,16 @@ pub fn read_mesh_file(name: &str, bytes: &[u8]) -> Result<AnyMesh, MeshFileError
         if is_binary_stl {
             MeshFileError::UnknownFormat { name: name.into() }
         } else {
-            MeshFileError::Content { name: name.into(), message: "not UTF-8 text and not binary STL".into() }
+            MeshFileError::Content {
+                name: name.into(),
+                message: "not UTF-8 text, not binary STL and not binary glTF".into(),
+            }
         }
     })?;
     let head = text.trim_start();
-    if head.starts_with("OFF") {
+    if head.starts_with('{') {
+        super::gltf_in::read_gltf(name, bytes)
+    } else if head.starts_with("OFF") {
         read_off(name, text)
     } else if head.starts_with("solid") && text.contains("facet") {
         read_ascii_stl(name, text)
@@ -204,7 +212,7 @@ fn read_off(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
 }
 
 /// Triangles given by coordinates; merge bit-identical vertices.
-fn from_soup(name: &str, soup: Vec<[Point<3>; 3]>) -> Result<AnyMesh, MeshFileError> {
+pub(super) fn from_soup(name: &str, soup: Vec<[Point<3>; 3]>) -> Result<AnyMesh, MeshFileError> {
     let mut map: HashMap<[u64; 3], usize> = HashMap::new();
     let mut positions = Vec::new();
     let mut tris = Vec::with_capacity(soup.len());

@@ -6,6 +6,7 @@
 mod build;
 mod design;
 mod film;
+mod gltf_in;
 mod mesh_io;
 mod results;
 mod run;

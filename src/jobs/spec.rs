@@ -389,8 +389,8 @@ pub enum InitialSpec {
         #[serde(default = "torus_resolution")]
         resolution: usize,
     },
-    /// An uploaded mesh: `"input:NAME"` (OBJ, OFF or STL; closed curves as OBJ `l`
-    /// polylines in the plane).
+    /// An uploaded mesh: `"input:NAME"` (OBJ, OFF, STL or glTF; closed curves as
+    /// OBJ `l` polylines or glTF `LINE_LOOP`s in the plane z = 0).
     Mesh {
         file: String,
     },
