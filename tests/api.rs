@@ -208,6 +208,10 @@ fn submit_poll_download_delete() {
         let r = v[0].as_f64().unwrap().hypot(v[1].as_f64().unwrap());
         assert!((r - exact).abs() < 5e-3, "radius {r}");
     }
+    let (s, _, b) = srv.request("GET", &format!("/v1/jobs/{id}/results/foo.txt"), None);
+    assert!(s == 404 && b.contains("no result \\\"foo.txt\\\"") && b.contains("/results lists"), "{b}");
+    let (s, _, b) = srv.request("GET", &format!("/v1/jobs/{id}/results/mask.png"), None);
+    assert!(s == 404 && b.contains("not an image job"), "{b}");
     let (s, head, svg) = srv.request("GET", &format!("/v1/jobs/{id}/energy.svg"), None);
     assert_eq!(s, 200);
     assert!(head.to_ascii_lowercase().contains("image/svg+xml"));
@@ -302,6 +306,15 @@ fn bad_inputs_are_problem_json_naming_the_field_and_the_server_keeps_serving() {
             "initial",
         ),
         (r#"{"problem": {"type": "nonsense"}, "initial": {"shape": "circle", "radius": 1}}"#, "problem.type"),
+        // wrong types inside the tagged objects are named too
+        (
+            r#"{"problem": {"type": "curvature_flow", "gamma": "1"}, "initial": {"shape": "circle", "radius": 1}}"#,
+            "problem.gamma",
+        ),
+        (
+            r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "union", "parts": [{"shape": "circle", "radius": 1}, {"shape": "circle", "radius": 1, "center": [0]}]}}"#,
+            "initial.parts[1].center",
+        ),
         // NaN is not JSON: the document is malformed
         (r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": NaN}}"#, "(document)"),
         (
@@ -319,6 +332,29 @@ fn bad_inputs_are_problem_json_naming_the_field_and_the_server_keeps_serving() {
     }
     assert_eq!(srv.request("POST", "/v1/jobs", Some(("text/plain", CIRCLE))).0, 415);
     assert_eq!(srv.request("GET", "/v1/jobs/does-not-exist", None).0, 404);
+    // query parameters: 422 naming the parameter; unknown routes and methods: problem+json too
+    for (path, parameter) in [
+        ("/v1/jobs?limit=abc", "limit"),
+        ("/v1/jobs?limit=0", "limit"),
+        ("/v1/jobs?page_token=p-1", "page_token"),
+        ("/v1/jobs?status=done", "status"),
+    ] {
+        let (status, head, b) = srv.request("GET", path, None);
+        assert_eq!(status, 422, "{path}: {b}");
+        assert!(head.to_ascii_lowercase().contains("application/problem+json"), "{head}");
+        let p: Value = serde_json::from_str(&b).unwrap();
+        assert_eq!(
+            (p["errors"][0]["field"].as_str(), p["title"].as_str()),
+            (Some(parameter), Some("Invalid query parameter"))
+        );
+    }
+    let (status, head, b) = srv.request("GET", "/v1/nope", None);
+    assert_eq!(status, 404);
+    assert!(head.to_ascii_lowercase().contains("application/problem+json") && b.contains("/v1/nope"), "{head}{b}");
+    let (status, head, b) = srv.request("PUT", "/v1/jobs", Some(("application/json", CIRCLE)));
+    assert_eq!(status, 405);
+    let head = head.to_ascii_lowercase();
+    assert!(head.contains("application/problem+json") && head.contains("allow: ") && head.contains("post,get"), "{head}{b}");
     assert_eq!(srv.request("GET", "/healthz", None).0, 200);
     let (_, list) = srv.json("GET", "/v1/jobs", None);
     assert_eq!(list["jobs"].as_array().unwrap().len(), 0, "nothing was stored");
@@ -529,8 +565,9 @@ fn oversized_bodies_get_413_with_the_limit_and_tokens_are_enforced() {
 
     let srv = Server::start_with(&dir.path().join("secure.db"), 1, Some("s3cret"));
     assert_eq!(srv.request("GET", "/healthz", None).0, 200);
-    let (status, _, body) = srv.request("GET", "/v1/jobs", None);
+    let (status, head, body) = srv.request("GET", "/v1/jobs", None);
     assert_eq!(status, 401, "{body}");
+    assert!(head.to_ascii_lowercase().contains("www-authenticate: bearer"), "{head}");
     assert_eq!(http(srv.addr, "GET", "/v1/jobs", None, "Authorization: Bearer s3cret\r\n").0, 200);
     srv.stop();
 }
@@ -661,6 +698,15 @@ fn multipart_segmentation_and_bad_uploads() {
     let (s, _, text) = post_bytes(srv.addr, "/v1/jobs", &ctype, &body);
     assert_eq!(s, 422);
     assert!(text.contains("no input named"), "{text}");
+    // a part the spec does not use, and the spec given twice
+    let (ctype, body) = multipart(&[("spec", None, spec), ("image", Some("star.png"), &png), ("extra", None, b"x")]);
+    let (s, _, text) = post_bytes(srv.addr, "/v1/jobs", &ctype, &body);
+    assert_eq!(s, 422, "{text}");
+    assert_eq!(serde_json::from_str::<Value>(&text).unwrap()["errors"][0]["field"], "extra", "{text}");
+    let (ctype, body) = multipart(&[("spec", None, spec), ("spec", None, spec), ("image", Some("star.png"), &png)]);
+    let (s, _, text) = post_bytes(srv.addr, "/v1/jobs", &ctype, &body);
+    assert_eq!(s, 422, "{text}");
+    assert!(text.contains("twice"), "{text}");
     // oversized upload: 413 with the limit
     let big = vec![0u8; shapeflow::service::MAX_UPLOAD_BYTES + 1024];
     let (ctype, body) = multipart(&[("spec", None, spec), ("image", Some("big.png"), &big)]);

@@ -150,8 +150,13 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             if !(lambda.is_finite() && *lambda >= 0.0) {
                 return Err(SpecError::new("problem.lambda", format!("must be a nonnegative number, got {lambda}")));
             }
-            let field = EdgeField::new(&grid, *sigma)
-                .ok_or_else(|| SpecError::new("problem.image", "the image is constant: there is nothing to segment"))?;
+            let field = EdgeField::new(&grid, *sigma).ok_or_else(|| {
+                let names = match source {
+                    ImageSource::One(s) => s.clone(),
+                    ImageSource::Slices(v) => v.join(", "),
+                };
+                SpecError::new("problem.image", format!("the image {names} is constant: there is nothing to segment"))
+            })?;
             let lambda_final = lambda_final.unwrap_or(super::spec::default_lambda_final(grid.dimension, *lambda));
             if !(lambda_final.is_finite() && lambda_final >= 0.0) {
                 return Err(SpecError::new(

@@ -7,9 +7,14 @@ use serde_json::json;
 
 #[derive(Debug)]
 pub enum ApiError {
-    /// 422 with the offending field.
+    /// 422 with the offending field of the spec (or multipart part).
     Invalid {
         field: String,
+        detail: String,
+    },
+    /// 422 with the offending query parameter.
+    InvalidParameter {
+        parameter: String,
         detail: String,
     },
     NotFound(String),
@@ -38,6 +43,12 @@ impl IntoResponse for ApiError {
                 "Invalid job spec",
                 format!("{field}: {detail}"),
                 Some(json!([{ "field": field, "detail": detail }])),
+            ),
+            ApiError::InvalidParameter { parameter, detail } => (
+                StatusCode::UNPROCESSABLE_ENTITY,
+                "Invalid query parameter",
+                format!("{parameter}: {detail}"),
+                Some(json!([{ "field": parameter, "detail": detail }])),
             ),
             ApiError::NotFound(d) => (StatusCode::NOT_FOUND, "Not found", d, None),
             ApiError::Conflict(d) => (StatusCode::CONFLICT, "Conflict", d, None),
@@ -69,6 +80,30 @@ impl IntoResponse for ApiError {
         if let Some(e) = errors {
             body["errors"] = e;
         }
-        (status, [(header::CONTENT_TYPE, "application/problem+json")], body.to_string()).into_response()
+        let mut response =
+            (status, [(header::CONTENT_TYPE, "application/problem+json")], body.to_string()).into_response();
+        if status == StatusCode::UNAUTHORIZED {
+            response.headers_mut().insert(header::WWW_AUTHENTICATE, header::HeaderValue::from_static("Bearer"));
+        }
+        response
     }
+}
+
+/// Gives axum's bare `405 Method Not Allowed` (its `Allow` header kept) a problem
+/// body like every other error.
+pub(super) async fn method_not_allowed(req: axum::extract::Request, next: axum::middleware::Next) -> Response {
+    let what = format!("{} {}", req.method(), req.uri().path());
+    let response = next.run(req).await;
+    if response.status() != StatusCode::METHOD_NOT_ALLOWED || response.headers().contains_key(header::CONTENT_TYPE) {
+        return response;
+    }
+    let (mut parts, _) = response.into_parts();
+    let body = json!({
+        "type": "about:blank",
+        "title": "Method not allowed",
+        "status": 405,
+        "detail": format!("{what}: the method is not allowed on this path (see the Allow header)"),
+    });
+    parts.headers.insert(header::CONTENT_TYPE, header::HeaderValue::from_static("application/problem+json"));
+    Response::from_parts(parts, axum::body::Body::from(body.to_string()))
 }

@@ -13,6 +13,7 @@ mod submit;
 pub mod worker;
 
 use crate::export::{energy_csv, energy_svg, shape_json};
+use axum::extract::rejection::QueryRejection;
 use axum::extract::{DefaultBodyLimit, Path, Query, Request, State};
 use axum::http::{header, HeaderMap, StatusCode};
 use axum::middleware::{self, Next};
@@ -89,9 +90,21 @@ pub fn router(state: AppState) -> Router {
         .route("/v1/jobs/{id}/results/{image}", get(results::image_result))
         .route("/v1/jobs/{id}/checkpoints", get(results::checkpoint_list))
         .route("/v1/jobs/{id}/checkpoints/{file}", get(results::checkpoint_glb))
+        .fallback(no_route)
         .layer(DefaultBodyLimit::disable())
         .layer(middleware::from_fn_with_state(state.clone(), authorize))
+        .layer(middleware::from_fn(error::method_not_allowed))
         .with_state(state)
+}
+
+async fn no_route(req: Request) -> ApiError {
+    ApiError::NotFound(format!("no route {} {}", req.method(), req.uri().path()))
+}
+
+/// The parameters of a query string, or 400 naming what could not be read (a
+/// parameter given twice).
+fn query<T>(q: Result<Query<T>, QueryRejection>) -> Result<T, ApiError> {
+    q.map(|Query(t)| t).map_err(|e| ApiError::BadRequest(e.body_text()))
 }
 
 async fn authorize(State(state): State<AppState>, req: Request, next: Next) -> Result<Response, ApiError> {
@@ -139,7 +152,7 @@ async fn find(state: &AppState, id: &str) -> Result<JobRow, ApiError> {
 #[derive(Deserialize)]
 struct ListQuery {
     status: Option<String>,
-    limit: Option<i64>,
+    limit: Option<String>,
     page_token: Option<String>,
 }
 
@@ -148,25 +161,36 @@ const STATUSES: [&str; 5] = ["accepted", "running", "successful", "failed", "dis
 
 /// `GET /v1/jobs?status=&limit=&page_token=`: newest first, `limit` (1–1000, default
 /// 100) per page; `next_page_token` is present when more jobs follow.
-async fn list_jobs(State(state): State<AppState>, Query(q): Query<ListQuery>) -> Result<Json<Value>, ApiError> {
+async fn list_jobs(
+    State(state): State<AppState>,
+    q: Result<Query<ListQuery>, QueryRejection>,
+) -> Result<Json<Value>, ApiError> {
+    let q = query(q)?;
     if let Some(s) = q.status.as_deref() {
         if !STATUSES.contains(&s) {
             let detail = format!("unknown status {s:?}; one of {}", STATUSES.join(", "));
-            return Err(ApiError::Invalid { field: "status".into(), detail });
+            return Err(ApiError::InvalidParameter { parameter: "status".into(), detail });
         }
     }
-    let limit = match q.limit {
+    let limit = match q.limit.as_deref().map(|l| (l, l.parse::<i64>())) {
         None => 100,
-        Some(l @ 1..=1000) => l,
-        Some(l) => {
-            return Err(ApiError::Invalid { field: "limit".into(), detail: format!("must be 1 to 1000, got {l}") })
+        Some((_, Ok(l @ 1..=1000))) => l,
+        Some((l, _)) => {
+            let detail = format!("must be an integer from 1 to 1000, got {l:?}");
+            return Err(ApiError::InvalidParameter { parameter: "limit".into(), detail });
         }
     };
     let before = match q.page_token.as_deref() {
         None | Some("") => None,
-        Some(t) => Some(t.strip_prefix("p").and_then(|h| i64::from_str_radix(h, 16).ok()).ok_or_else(|| {
-            ApiError::Invalid { field: "page_token".into(), detail: format!("not a page token: {t:?}") }
-        })?),
+        Some(t) => Some(
+            t.strip_prefix("p")
+                .filter(|h| !h.is_empty() && h.len() <= 15 && h.bytes().all(|b| b.is_ascii_hexdigit()))
+                .and_then(|h| i64::from_str_radix(h, 16).ok())
+                .ok_or_else(|| ApiError::InvalidParameter {
+                    parameter: "page_token".into(),
+                    detail: format!("not a page token of this list: {t:?}"),
+                })?,
+        ),
     };
     let mut jobs = state.store.list(q.status.as_deref(), before, limit + 1).await?;
     let more = jobs.len() as i64 > limit;
@@ -268,16 +292,18 @@ struct FormatQuery {
 async fn energy(
     State(state): State<AppState>,
     Path(id): Path<String>,
-    Query(q): Query<FormatQuery>,
+    q: Result<Query<FormatQuery>, QueryRejection>,
 ) -> Result<Response, ApiError> {
+    let q = query(q)?;
     find(&state, &id).await?;
     let rows = state.store.history(&id).await?;
     match q.format.as_deref() {
         Some("csv") => Ok(([(header::CONTENT_TYPE, "text/csv")], energy_csv(&rows)).into_response()),
         None | Some("json") => Ok(Json(json!({ "history": rows })).into_response()),
-        Some(other) => {
-            Err(ApiError::Invalid { field: "format".into(), detail: format!("unknown format {other:?} (json or csv)") })
-        }
+        Some(other) => Err(ApiError::InvalidParameter {
+            parameter: "format".into(),
+            detail: format!("unknown format {other:?} (json or csv)"),
+        }),
     }
 }
 

@@ -106,6 +106,12 @@ pub(super) async fn image_result(
     State(state): State<AppState>,
     Path((id, file)): Path<(String, String)>,
 ) -> Result<Response, ApiError> {
+    if !["mask.png", "overlay.png", "mask.nrrd"].contains(&file.as_str()) {
+        state.store.job(&id).await?.ok_or_else(|| ApiError::NotFound(format!("no job {id}")))?;
+        return Err(ApiError::NotFound(format!(
+            "no result {file:?}; GET /v1/jobs/{id}/results lists this job's files"
+        )));
+    }
     let (job, cp) = image_job(&state, &id).await?;
     let dimension = job.image.as_ref().map_or(0, |g| g.dimension);
     let (media, bytes) = match (file.as_str(), dimension) {

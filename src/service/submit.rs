@@ -43,6 +43,12 @@ async fn read_multipart(req: Request, state: &AppState) -> Result<(String, HashM
             data.extend_from_slice(&chunk);
         }
         if name == "spec" {
+            if spec.is_some() {
+                return Err(ApiError::Invalid {
+                    field: "spec".into(),
+                    detail: "the part `spec` is given twice".into(),
+                });
+            }
             let text = String::from_utf8(data)
                 .map_err(|_| ApiError::Invalid { field: "spec".into(), detail: "the spec part is not UTF-8".into() })?;
             spec = Some(text);
@@ -55,6 +61,30 @@ async fn read_multipart(req: Request, state: &AppState) -> Result<(String, HashM
         detail: "the multipart body has no part named `spec` (the JSON job spec)".into(),
     })?;
     Ok((spec, inputs))
+}
+
+/// Every uploaded part must be named by an `"input:NAME"` of the spec: nothing
+/// unused is stored.
+fn unreferenced_input(spec: &serde_json::Value, inputs: &HashMap<String, Vec<u8>>) -> Result<(), ApiError> {
+    fn refs(v: &serde_json::Value, out: &mut Vec<String>) {
+        match v {
+            serde_json::Value::String(s) => out.extend(s.strip_prefix("input:").map(str::to_string)),
+            serde_json::Value::Array(a) => a.iter().for_each(|x| refs(x, out)),
+            serde_json::Value::Object(o) => o.values().for_each(|x| refs(x, out)),
+            _ => {}
+        }
+    }
+    let mut named = Vec::new();
+    refs(spec, &mut named);
+    let mut unused: Vec<&String> = inputs.keys().filter(|k| !named.contains(k)).collect();
+    unused.sort();
+    match unused.first() {
+        Some(name) => Err(ApiError::Invalid {
+            field: name.to_string(),
+            detail: format!("the part `{name}` is not used by the spec (no \"input:{name}\" in it)"),
+        }),
+        None => Ok(()),
+    }
 }
 
 pub(super) async fn create_job(State(state): State<AppState>, req: Request) -> Result<Response, ApiError> {
@@ -79,6 +109,7 @@ pub(super) async fn create_job(State(state): State<AppState>, req: Request) -> R
         .await
         .map_err(|e| ApiError::Internal(e.to_string()))?
         .map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
+    unreferenced_input(&serde_json::from_str(&normalized).expect("normalized spec"), &inputs)?;
     let id = uuid::Uuid::new_v4().to_string();
     let job = state.store.insert_job(&id, &normalized, &inputs).await?;
     state.wake.notify_one();
