@@ -339,7 +339,10 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         conservation,
         tolerance_per_time: problem.physical(),
     };
-    let checkpoint_every = in_range("output.checkpoint_every", spec.output.checkpoint_every, 1, usize::MAX)?;
+    let checkpoint_every = match spec.output.checkpoint_every {
+        0 => return Err(SpecError::new("output.checkpoint_every", "must be at least 1, got 0")),
+        n => n,
+    };
     Ok(PreparedJob {
         spec,
         mesh,
