@@ -22,7 +22,7 @@ struct Cli {
 enum Command {
     /// Run a job spec offline and write its results to a directory.
     Run {
-        /// The job spec (JSON, DESIGN.md §3).
+        /// The job spec (JSON; see README.md, "Job spec").
         spec: PathBuf,
         /// Output directory (created if missing).
         #[arg(long)]
@@ -181,15 +181,15 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
     rep.bar.finish_and_clear();
     let (last, code) = match result {
         Ok(o) => {
-            println!(
+            say(format_args!(
                 "stopped: {} after {} iterations (time {:.6e}, energy {:.9e})",
                 o.stop.as_str(),
                 o.last.iteration,
                 o.last.time,
                 o.last.energy
-            );
+            ));
             if let Some(note) = o.note {
-                println!("  {note}");
+                say(format_args!("  {note}"));
             }
             (o.last, ExitCode::SUCCESS)
         }
@@ -230,6 +230,13 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
             written.push("mask.nrrd");
         }
     }
-    println!("wrote {} in {}", written.join(", "), out.display());
+    say(format_args!("wrote {} in {}", written.join(", "), out.display()));
     Ok(code)
+}
+
+/// A line on stdout; a closed pipe (`shapeflow run … | head -1`) is not an error
+/// (the results are written whatever happens to the report).
+fn say(line: std::fmt::Arguments) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stdout(), "{line}");
 }

@@ -354,7 +354,10 @@ fn bad_inputs_are_problem_json_naming_the_field_and_the_server_keeps_serving() {
     let (status, head, b) = srv.request("PUT", "/v1/jobs", Some(("application/json", CIRCLE)));
     assert_eq!(status, 405);
     let head = head.to_ascii_lowercase();
-    assert!(head.contains("application/problem+json") && head.contains("allow: ") && head.contains("post,get"), "{head}{b}");
+    assert!(
+        head.contains("application/problem+json") && head.contains("allow: ") && head.contains("post,get"),
+        "{head}{b}"
+    );
     assert_eq!(srv.request("GET", "/healthz", None).0, 200);
     let (_, list) = srv.json("GET", "/v1/jobs", None);
     assert_eq!(list["jobs"].as_array().unwrap().len(), 0, "nothing was stored");

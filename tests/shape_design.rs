@@ -240,7 +240,7 @@ fn bad_shape_design_specs_name_the_field() {
         ("/problem/control/inner/radius", (-2.0).into(), "problem.control.inner.radius"),
         ("/problem/control/inner/radius", 2.7.into(), "problem.control.inner"),
         ("/problem/target/center", serde_json::json!([2.2, 0.0]), "problem.target.center"),
-        ("/problem/target/color", "red".into(), "problem.target"),
+        ("/problem/target/color", "red".into(), "problem.target.color"),
         ("/problem/gamma", (-1.0).into(), "problem.gamma"),
         ("/initial/semi_axes", serde_json::json!([2.2, 0.3]), "initial"),
         ("/initial", serde_json::json!({"shape": "sphere", "radius": 1.0}), "initial"),

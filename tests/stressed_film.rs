@@ -368,7 +368,7 @@ fn spec_errors_name_the_field() {
         err(&base.replace("\"gamma\": 0.2", "\"gamma\": 0.2, \"boundary\": {\"type\": \"y\"}")),
         "problem.boundary.type"
     );
-    assert_eq!(err(&base.replace("\"length\": 1.0, ", "")), "problem");
+    assert_eq!(err(&base.replace("\"length\": 1.0, ", "")), "problem.length");
     assert_eq!(err(&base.replace("\"amplitude\": 0.02", "\"amplitude\": 0.7")), "initial.amplitude");
     let wet = |d: &str| base.replace("\"gamma\": 0.2", &format!("\"gamma\": 0.2, \"wetting_layer\": {d}"));
     assert!(prepare(parse_spec(&wet("0.02")).unwrap(), &HashMap::new()).is_ok());

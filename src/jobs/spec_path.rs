@@ -122,21 +122,6 @@ pub(super) fn locate(value: &Value) -> Option<SpecError> {
         return Some(SpecError::new("(document)", format!("a job spec must be a JSON object, got {kind}")));
     }
     let (mut path, message) = first_error(value)?;
-    if let Some(name) = named_field(&message) {
-        // serde_path_to_error already points at an unknown key; a missing one is named
-        if path.last() != Some(&Step::Key(name.to_string())) {
-            path.push(Step::Key(name.to_string()));
-        }
-        return Some(SpecError::new(render(&path), message));
-    }
-    if message.starts_with("unknown variant") {
-        if let Some(Value::Object(o)) = node(value, &path) {
-            if let Some(tag) = TAG_KEYS.iter().find(|t| o.contains_key(**t)) {
-                path.push(Step::Key(tag.to_string()));
-            }
-        }
-        return Some(SpecError::new(render(&path), message));
-    }
     // descend while one entry of the current node carries the error
     'descend: loop {
         let children: Vec<Step> = match node(value, &path) {
@@ -160,6 +145,18 @@ pub(super) fn locate(value: &Value) -> Option<SpecError> {
             }
         }
         break;
+    }
+    if let Some(name) = named_field(&message) {
+        // an unknown key is where the search ends; a missing one is named after it
+        if path.last() != Some(&Step::Key(name.to_string())) {
+            path.push(Step::Key(name.to_string()));
+        }
+    } else if message.starts_with("unknown variant") {
+        if let Some(Value::Object(o)) = node(value, &path) {
+            if let Some(tag) = TAG_KEYS.iter().find(|t| o.contains_key(**t)) {
+                path.push(Step::Key(tag.to_string()));
+            }
+        }
     }
     Some(SpecError::new(render(&path), message))
 }
@@ -209,6 +206,31 @@ mod tests {
             "initial.points[1]"
         );
         assert_eq!(field(&format!(r#"{{"problem": {{"type": "flow"}}, {circle}}}"#)), "problem.type");
+        let design = |inner: &str, target: &str| {
+            format!(
+                r#"{{"problem": {{"type": "shape_design", "outer": {{"shape": "circle", "radius": 3}},
+                   "control": {{"inner": {inner}, "outer": {{"shape": "circle", "radius": 2.5}}}},
+                   "target": {target}}}, {circle}}}"#
+            )
+        };
+        let ring = r#"{"shape": "circle", "radius": 2}"#;
+        let color = r#"{"type": "constant", "value": 1, "color": "red"}"#;
+        assert_eq!(field(&design(ring, color)), "problem.target.color");
+        let constant = r#"{"type": "constant", "value": 1}"#;
+        assert_eq!(field(&design(r#"{"shape": "circle"}"#, constant)), "problem.control.inner.radius");
+        assert_eq!(field(r#"{"initial": {"shape": "circle", "radius": 1}}"#), "problem");
+        assert_eq!(
+            field(&format!(
+                r#"{{"problem": {{"type": "stressed_film", "length": 1, "boundary": {{"type": "y"}}}}, {circle}}}"#
+            )),
+            "problem.boundary.type"
+        );
+        assert_eq!(
+            field(
+                r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "union", "parts": [{"shape": "blob"}]}}"#
+            ),
+            "initial.parts[0].shape"
+        );
         assert_eq!(
             field(&format!(
                 r#"{{"problem": {{"type": "shape_design", "outer": {{"shape": "circle", "radius": 3}},
