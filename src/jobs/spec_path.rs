@@ -7,8 +7,11 @@
 //! removing the culprit from the document makes the error go away or change (a
 //! required culprit turns into `missing field`), while removing any other entry
 //! leaves the very same error, since serde reports the first failure it meets.
-//! The search descends one level at a time, into objects and into arrays of
-//! objects or arrays.
+//! The search descends one level at a time, into objects (trying each key) and
+//! into arrays of objects or arrays (bisecting on the length of a truncated copy:
+//! the error stays the same exactly when the first failing element is kept). Each
+//! trial deserializes the whole document, so the trials are capped
+//! ([`MAX_TRIALS`]): a long polygon costs a few dozen, not one per point.
 
 use super::spec::{JobSpec, SpecError};
 use serde_json::Value;
@@ -22,6 +25,10 @@ enum Step {
 
 /// The keys that carry an enum's tag: removing them always changes the error.
 const TAG_KEYS: [&str; 2] = ["type", "shape"];
+
+/// Most trial deserializations per error (spec objects have at most about a dozen
+/// keys; an array of a million entries bisects in 20).
+const MAX_TRIALS: usize = 96;
 
 /// The error of deserializing `value` as a [`JobSpec`]: its path and message.
 fn first_error(value: &Value) -> Option<(Vec<Step>, String)> {
@@ -64,6 +71,15 @@ fn node_mut<'a>(value: &'a mut Value, path: &[Step]) -> Option<&'a mut Value> {
         Step::Key(k) => v.get_mut(k),
         Step::Index(i) => v.get_mut(i),
     })
+}
+
+/// The document with the array at `path` cut to its first `len` entries.
+fn truncated(value: &Value, path: &[Step], len: usize) -> Value {
+    let mut copy = value.clone();
+    if let Some(Value::Array(a)) = node_mut(&mut copy, path) {
+        a.truncate(len);
+    }
+    copy
 }
 
 /// The document without the entry at `path` (which must exist).
@@ -123,28 +139,49 @@ pub(super) fn locate(value: &Value) -> Option<SpecError> {
     }
     let (mut path, message) = first_error(value)?;
     // descend while one entry of the current node carries the error
+    let trials = std::cell::Cell::new(0);
+    let same = |doc: Value| {
+        trials.set(trials.get() + 1);
+        first_error(&doc).is_some_and(|(_, m)| m == message)
+    };
     'descend: loop {
-        let children: Vec<Step> = match node(value, &path) {
+        match node(value, &path) {
             Some(Value::Object(o)) => {
-                o.keys().filter(|k| !TAG_KEYS.contains(&k.as_str())).map(|k| Step::Key(k.clone())).collect()
+                let keys: Vec<String> = o.keys().filter(|k| !TAG_KEYS.contains(&k.as_str())).cloned().collect();
+                for key in keys {
+                    if trials.get() >= MAX_TRIALS {
+                        break 'descend;
+                    }
+                    let mut trial = path.clone();
+                    trial.push(Step::Key(key));
+                    if !same(without(value, &trial)) {
+                        path = trial;
+                        continue 'descend;
+                    }
+                }
+                break;
             }
-            Some(Value::Array(a)) if a.iter().all(|v| v.is_object() || v.is_array()) => {
-                (0..a.len()).map(Step::Index).collect()
+            Some(Value::Array(a)) if !a.is_empty() && a.iter().all(|v| v.is_object() || v.is_array()) => {
+                // the smallest kept length with the same error: `lo` entries lose it, `hi` keep it
+                let (mut lo, mut hi) = (0, a.len());
+                if same(truncated(value, &path, lo)) {
+                    break;
+                }
+                while hi - lo > 1 {
+                    if trials.get() >= MAX_TRIALS {
+                        break 'descend;
+                    }
+                    let mid = (lo + hi) / 2;
+                    if same(truncated(value, &path, mid)) {
+                        hi = mid;
+                    } else {
+                        lo = mid;
+                    }
+                }
+                path.push(Step::Index(hi - 1));
             }
             _ => break,
-        };
-        for child in children {
-            let mut trial = path.clone();
-            trial.push(child);
-            match first_error(&without(value, &trial)) {
-                Some((_, m)) if m == message => continue,
-                _ => {
-                    path = trial;
-                    continue 'descend;
-                }
-            }
         }
-        break;
     }
     if let Some(name) = named_field(&message) {
         // an unknown key is where the search ends; a missing one is named after it
@@ -243,6 +280,20 @@ mod tests {
             field(&format!(r#"{{"problem": {{"type": "curvature_flow"}}, {circle}, "flow": {{"tau": "x"}}}}"#)),
             "flow.tau"
         );
+    }
+
+    #[test]
+    fn a_bad_point_of_a_long_polygon_is_found_by_bisection() {
+        let mut points: Vec<serde_json::Value> =
+            (0..100_000).map(|i| serde_json::json!([(i as f64).cos(), (i as f64).sin()])).collect();
+        points[77_777] = serde_json::json!([1.0]);
+        points[90_000] = serde_json::json!(["x", 0.0]);
+        let doc = serde_json::json!({"problem": {"type": "curvature_flow"},
+                                     "initial": {"shape": "polygon", "points": points}});
+        let start = std::time::Instant::now();
+        assert_eq!(locate(&doc).unwrap().field, "initial.points[77777]");
+        // a few dozen trials, each a deserialization of 100k points
+        assert!(start.elapsed().as_secs_f64() < 30.0);
     }
 
     #[test]
