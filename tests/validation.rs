@@ -352,3 +352,37 @@ fn gltf_uploads_give_surfaces_and_curves_with_node_transforms() {
     let e = read_mesh_file("trunc.glb", &glb(&doc, &bin)[..40]).unwrap_err().to_string();
     assert!(e.contains("trunc.glb") && e.contains("glTF"), "{e}");
 }
+
+#[test]
+fn crafted_gltf_files_are_errors_not_panics_or_endless_work() {
+    let sq = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+    let (doc, bin) = gltf_doc(&sq, &[0, 1, 2, 3], 2, serde_json::json!({}), None);
+    let bad = |edit: &dyn Fn(&mut serde_json::Value)| -> String {
+        let mut d = doc.clone();
+        edit(&mut d);
+        read_mesh_file("crafted.glb", &glb(&d, &bin)).expect_err("should be rejected").to_string()
+    };
+    let cases: Vec<(&dyn Fn(&mut serde_json::Value), &str)> = vec![
+        // a node reached twice (2^64 visits if followed blindly)
+        (
+            &|d| {
+                d["nodes"] = serde_json::json!([{"children": [1, 1]}, {"mesh": 0}]);
+            },
+            "reached twice",
+        ),
+        (&|d| d["bufferViews"][0]["byteStride"] = serde_json::json!(4), "stride"),
+        (&|d| d["accessors"][1]["componentType"] = serde_json::json!(5126), "unsigned integer"),
+        (&|d| d["accessors"][0]["count"] = serde_json::json!(1_000_000_000u64), "position and index records"),
+        (&|d| d["accessors"][0]["count"] = serde_json::json!(5), "past the end"),
+        (
+            &|d| d["accessors"][1]["sparse"] = serde_json::json!({"count": 1, "indices": {"bufferView": 1, "componentType": 5123}, "values": {"bufferView": 1}}),
+            "sparse",
+        ),
+        (&|d| d["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = serde_json::json!(5), "glTF"),
+        (&|d| d["accessors"][0]["type"] = serde_json::json!("VEC2"), "float VEC3"),
+    ];
+    for (edit, needle) in cases {
+        let e = bad(edit);
+        assert!(e.contains("crafted.glb") && e.contains(needle), "{needle}: {e}");
+    }
+}

@@ -6,29 +6,39 @@
 //! exporters split vertices at seams, so positions that are bit-identical after
 //! the transform are merged, as for STL. `LINE_LOOP` primitives make closed curves
 //! in the plane `z = 0` (the layout of our own `shape.glb`, so a result can start
-//! a new job). Other modes, external buffers and sparse or non-float positions are
-//! rejected with a message naming the input.
+//! a new job). Other modes, external buffers, sparse accessors, positions that are
+//! not float `VEC3`, indices that are not unsigned integers, strides or ranges that
+//! leave their buffer view, and node graphs that are not trees are rejected with a
+//! message naming the input. The gltf crate parses and validates the JSON; the
+//! accessors are read here, bounds-checked, under a budget of vertex records that
+//! counts every instance of a mesh.
 
 use super::build::{AnyMesh, MAX_VERTICES};
 use super::mesh_io::{from_soup, MeshFileError};
 use crate::geometry::{Mesh, Point};
 use base64::Engine;
+use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use nalgebra::{Matrix4, Point3};
+use std::borrow::Cow;
+
+/// Most position and index records read, over every instance of every mesh.
+const MAX_RECORDS: usize = 3 * MAX_VERTICES;
 
 fn content(name: &str, message: impl Into<String>) -> MeshFileError {
     MeshFileError::Content { name: name.into(), message: message.into() }
 }
 
-/// The bytes of every buffer of the document, in order.
-fn buffers(name: &str, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, MeshFileError> {
+/// The bytes of every buffer of the document, in order (the BIN chunk borrowed).
+fn buffers<'a>(name: &str, gltf: &'a gltf::Gltf) -> Result<Vec<Cow<'a, [u8]>>, MeshFileError> {
     gltf.buffers()
         .map(|b| {
             let data = match b.source() {
-                gltf::buffer::Source::Bin => gltf
-                    .blob
-                    .clone()
-                    .ok_or_else(|| content(name, format!("buffer {} refers to a missing BIN chunk", b.index())))?,
+                gltf::buffer::Source::Bin => Cow::Borrowed(
+                    gltf.blob
+                        .as_deref()
+                        .ok_or_else(|| content(name, format!("buffer {} refers to a missing BIN chunk", b.index())))?,
+                ),
                 gltf::buffer::Source::Uri(uri) => {
                     let Some(encoded) = uri.strip_prefix("data:").and_then(|r| r.split_once(";base64,")).map(|(_, d)| d)
                     else {
@@ -40,9 +50,11 @@ fn buffers(name: &str, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, MeshFileError>
                             ),
                         ));
                     };
-                    base64::engine::general_purpose::STANDARD
-                        .decode(encoded)
-                        .map_err(|e| content(name, format!("buffer {}: bad base64 data URI: {e}", b.index())))?
+                    Cow::Owned(
+                        base64::engine::general_purpose::STANDARD
+                            .decode(encoded)
+                            .map_err(|e| content(name, format!("buffer {}: bad base64 data URI: {e}", b.index())))?,
+                    )
                 }
             };
             if data.len() < b.length() {
@@ -53,19 +65,64 @@ fn buffers(name: &str, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, MeshFileError>
         .collect()
 }
 
+/// The records of an accessor: `count` slices of `size` bytes, checked to lie in
+/// its buffer view and buffer.
+fn records<'d>(
+    name: &str,
+    what: &str,
+    acc: &gltf::Accessor,
+    size: usize,
+    data: &'d [Cow<[u8]>],
+) -> Result<impl Iterator<Item = &'d [u8]>, MeshFileError> {
+    let fail = |m: String| content(name, format!("{what}: accessor {}: {m}", acc.index()));
+    if acc.sparse().is_some() {
+        return Err(fail("sparse accessors are not supported".into()));
+    }
+    let view = acc.view().ok_or_else(|| fail("it has no buffer view".into()))?;
+    let stride = view.stride().unwrap_or(size);
+    if stride < size {
+        return Err(fail(format!("byte stride {stride} is smaller than an element ({size} bytes)")));
+    }
+    let buffer = data.get(view.buffer().index()).ok_or_else(|| fail("its buffer is missing".into()))?;
+    let view_end = view.offset().checked_add(view.length()).filter(|&e| e <= buffer.len());
+    let start = view.offset().checked_add(acc.offset());
+    let end = match acc.count().checked_sub(1) {
+        None => start,
+        Some(last) => start.and_then(|s| last.checked_mul(stride)?.checked_add(size)?.checked_add(s)),
+    };
+    let (Some(view_end), Some(start), Some(end)) = (view_end, start, end) else {
+        return Err(fail("its range overflows".into()));
+    };
+    if end > view_end {
+        return Err(fail(format!("its {} elements run past the end of buffer view {}", acc.count(), view.index())));
+    }
+    Ok((0..acc.count()).map(move |i| &buffer[start + i * stride..start + i * stride + size]))
+}
+
 /// What the primitives give: triangles (as coordinates) or closed loops.
 #[derive(Default)]
 struct Collected {
     soup: Vec<[Point<3>; 3]>,
     loops: Vec<Vec<Point<3>>>,
-    count: usize,
+    /// Position and index records read so far.
+    records: usize,
+}
+
+impl Collected {
+    fn spend(&mut self, name: &str, n: usize) -> Result<(), MeshFileError> {
+        self.records = self.records.saturating_add(n);
+        if self.records > MAX_RECORDS {
+            return Err(content(name, format!("more than {MAX_RECORDS} position and index records")));
+        }
+        Ok(())
+    }
 }
 
 fn collect(
     name: &str,
     mesh: gltf::Mesh,
     transform: &Matrix4<f64>,
-    data: &[Vec<u8>],
+    data: &[Cow<[u8]>],
     out: &mut Collected,
 ) -> Result<(), MeshFileError> {
     for (k, prim) in mesh.primitives().enumerate() {
@@ -80,24 +137,34 @@ fn collect(
         let Some(acc) = prim.get(&gltf::Semantic::Positions) else {
             return Err(content(name, format!("{what} has no POSITION attribute")));
         };
-        if acc.sparse().is_some() || acc.view().is_none() {
-            return Err(content(name, format!("{what}: sparse POSITION accessors are not supported")));
+        if acc.data_type() != DataType::F32 || acc.dimensions() != Dimensions::Vec3 || acc.normalized() {
+            return Err(content(name, format!("{what}: POSITION must be a float VEC3 accessor")));
         }
-        out.count += acc.count();
-        if out.count > 3 * MAX_VERTICES {
-            return Err(content(name, format!("more than {} vertex records", 3 * MAX_VERTICES)));
-        }
-        let reader = prim.reader(|b| data.get(b.index()).map(|d| d.as_slice()));
-        let positions: Vec<Point<3>> = reader
-            .read_positions()
-            .ok_or_else(|| content(name, format!("{what}: POSITION must be float VEC3")))?
-            .map(|p| {
-                let q = transform.transform_point(&Point3::new(p[0] as f64, p[1] as f64, p[2] as f64));
+        out.spend(name, acc.count())?;
+        let positions = records(name, &what, &acc, 12, data)?
+            .map(|r| {
+                let c = |j: usize| f32::from_le_bytes([r[j], r[j + 1], r[j + 2], r[j + 3]]) as f64;
+                let q = transform.transform_point(&Point3::new(c(0), c(4), c(8)));
                 Point::<3>::new(q.x, q.y, q.z)
             })
-            .collect();
-        let indices: Vec<usize> = match reader.read_indices() {
-            Some(ix) => ix.into_u32().map(|i| i as usize).collect(),
+            .collect::<Vec<_>>();
+        let indices: Vec<usize> = match prim.indices() {
+            Some(ix) => {
+                let size = match (ix.data_type(), ix.dimensions()) {
+                    (DataType::U8, Dimensions::Scalar) => 1,
+                    (DataType::U16, Dimensions::Scalar) => 2,
+                    (DataType::U32, Dimensions::Scalar) => 4,
+                    _ => return Err(content(name, format!("{what}: indices must be unsigned integer scalars"))),
+                };
+                out.spend(name, ix.count())?;
+                records(name, &what, &ix, size, data)?
+                    .map(|r| match r.len() {
+                        1 => r[0] as usize,
+                        2 => u16::from_le_bytes([r[0], r[1]]) as usize,
+                        _ => u32::from_le_bytes([r[0], r[1], r[2], r[3]]) as usize,
+                    })
+                    .collect()
+            }
             None => (0..positions.len()).collect(),
         };
         if let Some(bad) = indices.iter().find(|&&i| i >= positions.len()) {
@@ -126,37 +193,46 @@ fn matrix(node: &gltf::Node) -> Matrix4<f64> {
     Matrix4::from_fn(|r, c| m[c][r] as f64)
 }
 
+/// Visits `node` and its descendants; every node at most once (glTF's nodes form
+/// trees, so a node met twice is an error, not a reason to loop).
 fn walk(
     name: &str,
     node: gltf::Node,
     parent: &Matrix4<f64>,
-    depth: usize,
-    data: &[Vec<u8>],
+    seen: &mut [bool],
+    data: &[Cow<[u8]>],
     out: &mut Collected,
 ) -> Result<(), MeshFileError> {
-    if depth > 64 {
-        return Err(content(name, "the node hierarchy is deeper than 64 levels"));
+    if std::mem::replace(&mut seen[node.index()], true) {
+        return Err(content(
+            name,
+            format!("node {} is reached twice: the node hierarchy must be a tree", node.index()),
+        ));
     }
     let transform = parent * matrix(&node);
     if let Some(mesh) = node.mesh() {
         collect(name, mesh, &transform, data, out)?;
     }
     for child in node.children() {
-        walk(name, child, &transform, depth + 1, data, out)?;
+        walk(name, child, &transform, seen, data, out)?;
     }
     Ok(())
 }
 
 /// Read a glTF file (GLB or JSON) into a surface or a set of closed curves.
 pub(super) fn read_gltf(name: &str, bytes: &[u8]) -> Result<AnyMesh, MeshFileError> {
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| content(name, format!("not a valid glTF file: {e}")))?;
+    // the crate's validation indexes some arrays before checking the indices
+    let parsed = std::panic::catch_unwind(|| gltf::Gltf::from_slice(bytes))
+        .map_err(|_| content(name, "not a valid glTF file: an index in it is out of range"))?;
+    let gltf = parsed.map_err(|e| content(name, format!("not a valid glTF file: {e}")))?;
     let data = buffers(name, &gltf)?;
     let mut out = Collected::default();
     let identity = Matrix4::identity();
     match gltf.default_scene().or_else(|| gltf.scenes().next()) {
         Some(scene) => {
+            let mut seen = vec![false; gltf.nodes().len()];
             for node in scene.nodes() {
-                walk(name, node, &identity, 0, &data, &mut out)?;
+                walk(name, node, &identity, &mut seen, &data, &mut out)?;
             }
         }
         None => {

@@ -99,9 +99,50 @@ fn without(value: &Value, path: &[Step]) -> Value {
 }
 
 /// The name in backticks of serde's `unknown field `x``/`missing field `x`` messages.
-fn named_field(message: &str) -> Option<&str> {
-    let rest = message.strip_prefix("unknown field `").or_else(|| message.strip_prefix("missing field `"))?;
-    rest.split('`').next()
+fn named_field<'m>(message: &'m str, prefix: &str) -> Option<&'m str> {
+    message.strip_prefix(prefix)?.split('`').next()
+}
+
+/// The object that lacks the required key `name`: removing entries cannot find it
+/// (removing any present required key also gives a `missing field` error), but
+/// adding `name: null` to it changes the error into one about that value, while
+/// adding it where it does not belong gives `unknown field`, and adding it where it
+/// is not the missing one leaves the error as it is. Objects are tried breadth first
+/// from `path` (serde's path, the buffered object that holds the culprit).
+fn missing_at(value: &Value, path: Vec<Step>, name: &str, message: &str) -> Vec<Step> {
+    let unknown = format!("unknown field `{name}`");
+    let mut queue = std::collections::VecDeque::from([path.clone()]);
+    let mut trials = 0;
+    while let Some(at) = queue.pop_front() {
+        match node(value, &at) {
+            Some(Value::Object(o)) => {
+                if !o.contains_key(name) && trials < MAX_TRIALS {
+                    trials += 1;
+                    let mut doc = value.clone();
+                    if let Some(Value::Object(m)) = node_mut(&mut doc, &at) {
+                        m.insert(name.to_string(), Value::Null);
+                    }
+                    match first_error(&doc) {
+                        Some((_, m)) if m == message || m.starts_with(&unknown) => {}
+                        _ => return at,
+                    }
+                }
+                queue.extend(o.keys().map(|k| [at.as_slice(), &[Step::Key(k.clone())]].concat()));
+            }
+            Some(Value::Array(a)) => {
+                queue.extend(
+                    (0..a.len())
+                        .filter(|&i| a[i].is_object() || a[i].is_array())
+                        .map(|i| [at.as_slice(), &[Step::Index(i)]].concat()),
+                );
+            }
+            _ => {}
+        }
+        if trials >= MAX_TRIALS {
+            break;
+        }
+    }
+    path
 }
 
 fn render(path: &[Step]) -> String {
@@ -138,6 +179,11 @@ pub(super) fn locate(value: &Value) -> Option<SpecError> {
         return Some(SpecError::new("(document)", format!("a job spec must be a JSON object, got {kind}")));
     }
     let (mut path, message) = first_error(value)?;
+    if let Some(name) = named_field(&message, "missing field `") {
+        let mut path = missing_at(value, path, name, &message);
+        path.push(Step::Key(name.to_string()));
+        return Some(SpecError::new(render(&path), message));
+    }
     // descend while one entry of the current node carries the error
     let trials = std::cell::Cell::new(0);
     let same = |doc: Value| {
@@ -183,8 +229,8 @@ pub(super) fn locate(value: &Value) -> Option<SpecError> {
             _ => break,
         }
     }
-    if let Some(name) = named_field(&message) {
-        // an unknown key is where the search ends; a missing one is named after it
+    if let Some(name) = named_field(&message, "unknown field `") {
+        // an unknown key is where the search ends
         if path.last() != Some(&Step::Key(name.to_string())) {
             path.push(Step::Key(name.to_string()));
         }
@@ -256,6 +302,18 @@ mod tests {
         let constant = r#"{"type": "constant", "value": 1}"#;
         assert_eq!(field(&design(r#"{"shape": "circle"}"#, constant)), "problem.control.inner.radius");
         assert_eq!(field(r#"{"initial": {"shape": "circle", "radius": 1}}"#), "problem");
+        // a missing key after present required ones (removing those gives `missing field` too)
+        let torus = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "torus", "major_radius": 2}}"#;
+        assert_eq!(field(torus), "initial.minor_radius");
+        let polar = r#"{"type": "polar", "a": 1, "b": 2}"#;
+        assert_eq!(field(&design(ring, polar)), "problem.target.k");
+        let no_target = r#"{"problem": {"type": "shape_design", "outer": {"shape": "circle", "radius": 3},
+            "control": {"inner": {"shape": "circle", "radius": 2}, "outer": {"shape": "circle", "radius": 2.5}}},
+            "initial": {"shape": "circle", "radius": 1}}"#;
+        assert_eq!(field(no_target), "problem.target");
+        let parts = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "union", "parts": [
+            {"shape": "circle", "radius": 1}, {"shape": "circle"}, {"shape": "ellipse"}]}}"#;
+        assert_eq!(field(parts), "initial.parts[1].radius");
         assert_eq!(
             field(&format!(
                 r#"{{"problem": {{"type": "stressed_film", "length": 1, "boundary": {{"type": "y"}}}}, {circle}}}"#

@@ -101,10 +101,14 @@ async fn no_route(req: Request) -> ApiError {
     ApiError::NotFound(format!("no route {} {}", req.method(), req.uri().path()))
 }
 
-/// The parameters of a query string, or 400 naming what could not be read (a
-/// parameter given twice).
+/// The parameters of a query string, or 422 naming the one that could not be read
+/// (given twice).
 fn query<T>(q: Result<Query<T>, QueryRejection>) -> Result<T, ApiError> {
-    q.map(|Query(t)| t).map_err(|e| ApiError::BadRequest(e.body_text()))
+    q.map(|Query(t)| t).map_err(|e| {
+        let detail = e.body_text();
+        let parameter = detail.split('`').nth(1).unwrap_or("(query)").to_string();
+        ApiError::InvalidParameter { parameter, detail }
+    })
 }
 
 async fn authorize(State(state): State<AppState>, req: Request, next: Next) -> Result<Response, ApiError> {

@@ -102,7 +102,11 @@ pub(super) async fn create_job(State(state): State<AppState>, req: Request) -> R
             "expected Content-Type application/json or multipart/form-data, got {ctype:?}"
         )));
     };
-    let spec = parse_spec(&text).map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
+    // naming the field of a bad spec may deserialize it a few dozen times: off the async threads
+    let spec = tokio::task::spawn_blocking(move || parse_spec(&text))
+        .await
+        .map_err(|e| ApiError::Internal(e.to_string()))?
+        .map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
     let normalized = serde_json::to_string(&spec).expect("spec serializes");
     // validation decodes images and reads meshes: keep it off the async threads
     let inputs = tokio::task::spawn_blocking(move || prepare(spec, &inputs).map(|_| inputs))
