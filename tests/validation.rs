@@ -380,9 +380,28 @@ fn crafted_gltf_files_are_errors_not_panics_or_endless_work() {
         ),
         (&|d| d["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = serde_json::json!(5), "glTF"),
         (&|d| d["accessors"][0]["type"] = serde_json::json!("VEC2"), "float VEC3"),
+        (&|d| d["accessors"][0]["min"] = serde_json::json!(vec![0.0; 17]), "more than 16"),
+        (
+            &|d| {
+                d["nodes"] = serde_json::json!(vec![serde_json::json!({}); 400_000]);
+            },
+            "outside its strings",
+        ),
     ];
     for (edit, needle) in cases {
         let e = bad(edit);
         assert!(e.contains("crafted.glb") && e.contains(needle), "{needle}: {e}");
     }
+}
+
+#[test]
+fn a_long_chain_of_gltf_nodes_is_walked_without_recursion() {
+    let sq = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+    let (mut doc, bin) = gltf_doc(&sq, &[0, 1, 2, 3], 2, serde_json::json!({}), None);
+    let n = 30_000;
+    let mut nodes: Vec<serde_json::Value> = (1..n).map(|i| serde_json::json!({"children": [i]})).collect();
+    nodes.push(serde_json::json!({"mesh": 0, "translation": [0.5, 0.0, 0.0]}));
+    doc["nodes"] = serde_json::json!(nodes);
+    let AnyMesh::Curve(c) = read_mesh_file("chain.glb", &glb(&doc, &bin)).unwrap() else { panic!("a curve") };
+    assert!(c.positions().iter().all(|p| p.x >= 0.5), "the leaf's transform applies");
 }

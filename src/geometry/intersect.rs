@@ -280,9 +280,13 @@ fn find_on_grid(
             }
         }
     }
+    let mut is_long = vec![false; segments.len()];
+    for &l in &grid.long {
+        is_long[l] = true;
+    }
     for &l in &grid.long {
         for other in 0..segments.len() {
-            if other != l && !(grid.long.contains(&other) && other < l) {
+            if other != l && !(is_long[other] && other < l) {
                 test(l, other, &mut hits);
             }
         }

@@ -14,7 +14,7 @@ pub fn film_cell(spec: &StressedFilmSpec) -> Result<FilmCell, SpecError> {
     let length = positive("problem.length", spec.length)?;
     positive("problem.gamma", spec.gamma)?;
     let boundary = match spec.boundary {
-        FilmBoundarySpec::X => BoundaryData::x(),
+        FilmBoundarySpec::X {} => BoundaryData::x(),
         FilmBoundarySpec::Constant { value } => {
             finite("problem.boundary.value", &[value])?;
             BoundaryData::constant(value)

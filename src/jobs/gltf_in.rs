@@ -126,6 +126,7 @@ fn collect(
     out: &mut Collected,
 ) -> Result<(), MeshFileError> {
     for (k, prim) in mesh.primitives().enumerate() {
+        out.spend(name, 1)?;
         let what = format!("mesh {} primitive {k}", mesh.index());
         let mode = prim.mode();
         if !matches!(mode, Mode::Triangles | Mode::LineLoop) {
@@ -193,51 +194,100 @@ fn matrix(node: &gltf::Node) -> Matrix4<f64> {
     Matrix4::from_fn(|r, c| m[c][r] as f64)
 }
 
-/// Visits `node` and its descendants; every node at most once (glTF's nodes form
-/// trees, so a node met twice is an error, not a reason to loop).
+/// Visits the scene's nodes and their descendants, each at most once (glTF's nodes
+/// form trees, so a node met twice is an error, not a reason to loop), with an
+/// explicit stack (a chain of 100k nodes must not overflow the thread's).
 fn walk(
     name: &str,
-    node: gltf::Node,
-    parent: &Matrix4<f64>,
-    seen: &mut [bool],
+    scene: gltf::Scene,
+    nodes: usize,
     data: &[Cow<[u8]>],
     out: &mut Collected,
 ) -> Result<(), MeshFileError> {
-    if std::mem::replace(&mut seen[node.index()], true) {
-        return Err(content(
-            name,
-            format!("node {} is reached twice: the node hierarchy must be a tree", node.index()),
-        ));
-    }
-    let transform = parent * matrix(&node);
-    if let Some(mesh) = node.mesh() {
-        collect(name, mesh, &transform, data, out)?;
-    }
-    for child in node.children() {
-        walk(name, child, &transform, seen, data, out)?;
+    let mut seen = vec![false; nodes];
+    let mut stack: Vec<(gltf::Node, Matrix4<f64>)> = scene.nodes().map(|n| (n, Matrix4::identity())).collect();
+    while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut seen[node.index()], true) {
+            let i = node.index();
+            return Err(content(name, format!("node {i} is reached twice: the node hierarchy must be a tree")));
+        }
+        out.spend(name, 1)?;
+        let transform = parent * matrix(&node);
+        if let Some(mesh) = node.mesh() {
+            collect(name, mesh, &transform, data, out)?;
+        }
+        stack.extend(node.children().map(|c| (c, transform)));
     }
     Ok(())
 }
 
+/// Most bytes of a glTF JSON outside its strings (a mesh's document is a few
+/// kilobytes; the data lives in buffers or in base64 strings).
+const MAX_STRUCTURE: usize = 1 << 20;
+
+/// Cheap checks of the JSON before the gltf crate parses and validates it, whose
+/// memory and time grow with the number of objects and, per primitive, with the
+/// length of the accessors' `min`/`max`.
+fn precheck(name: &str, bytes: &[u8]) -> Result<(), MeshFileError> {
+    let glb;
+    let json: &[u8] = if bytes.starts_with(b"glTF") {
+        glb = gltf::binary::Glb::from_slice(bytes)
+            .map_err(|e| content(name, format!("not a valid glTF binary (.glb) file: {e}")))?;
+        &glb.json
+    } else {
+        bytes
+    };
+    let (mut in_string, mut escaped, mut structure) = (false, false, 0usize);
+    for &b in json {
+        if in_string {
+            match (escaped, b) {
+                (true, _) => escaped = false,
+                (false, b'\\') => escaped = true,
+                (false, b'"') => in_string = false,
+                _ => {}
+            }
+        } else {
+            structure += 1;
+            in_string = b == b'"';
+        }
+    }
+    if structure > MAX_STRUCTURE {
+        return Err(content(name, format!("the glTF JSON has more than {MAX_STRUCTURE} bytes outside its strings")));
+    }
+    let doc: serde_json::Value =
+        serde_json::from_slice(json).map_err(|e| content(name, format!("not a valid glTF file: {e}")))?;
+    let long_bounds = doc["accessors"].as_array().into_iter().flatten().position(|a| {
+        ["min", "max"].iter().any(|k| a.get(*k).and_then(|v| v.as_array()).is_some_and(|v| v.len() > 16))
+    });
+    if let Some(i) = long_bounds {
+        return Err(content(name, format!("accessor {i}: `min`/`max` have more than 16 entries")));
+    }
+    Ok(())
+}
+
+/// The start of a long message (gltf lists every validation error).
+fn shortened(message: String) -> String {
+    const MAX: usize = 400;
+    match message.char_indices().nth(MAX) {
+        Some((cut, _)) => format!("{} … ({} more bytes)", &message[..cut], message.len() - cut),
+        None => message,
+    }
+}
+
 /// Read a glTF file (GLB or JSON) into a surface or a set of closed curves.
 pub(super) fn read_gltf(name: &str, bytes: &[u8]) -> Result<AnyMesh, MeshFileError> {
+    precheck(name, bytes)?;
     // the crate's validation indexes some arrays before checking the indices
     let parsed = std::panic::catch_unwind(|| gltf::Gltf::from_slice(bytes))
         .map_err(|_| content(name, "not a valid glTF file: an index in it is out of range"))?;
-    let gltf = parsed.map_err(|e| content(name, format!("not a valid glTF file: {e}")))?;
+    let gltf = parsed.map_err(|e| content(name, shortened(format!("not a valid glTF file: {e}"))))?;
     let data = buffers(name, &gltf)?;
     let mut out = Collected::default();
-    let identity = Matrix4::identity();
     match gltf.default_scene().or_else(|| gltf.scenes().next()) {
-        Some(scene) => {
-            let mut seen = vec![false; gltf.nodes().len()];
-            for node in scene.nodes() {
-                walk(name, node, &identity, &mut seen, &data, &mut out)?;
-            }
-        }
+        Some(scene) => walk(name, scene, gltf.nodes().len(), &data, &mut out)?,
         None => {
             for mesh in gltf.meshes() {
-                collect(name, mesh, &identity, &data, &mut out)?;
+                collect(name, mesh, &Matrix4::identity(), &data, &mut out)?;
             }
         }
     }

@@ -217,6 +217,9 @@ pub(super) fn from_soup(name: &str, soup: Vec<[Point<3>; 3]>) -> Result<AnyMesh,
     let mut positions = Vec::new();
     let mut tris = Vec::with_capacity(soup.len());
     for t in soup {
+        if positions.len() > MAX_VERTICES {
+            break; // `surface` reports it
+        }
         let ids = t.map(|p| {
             let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
             *map.entry(key).or_insert_with(|| {

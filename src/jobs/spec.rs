@@ -98,12 +98,12 @@ pub struct StressedFilmSpec {
 }
 
 /// `problem.boundary` of `stressed_film`: `g`.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum FilmBoundarySpec {
-    /// `g = x` (the paper's misfit).
-    #[default]
-    X,
+    /// `g = x` (the paper's misfit). A struct variant, so that unknown fields are
+    /// rejected (serde ignores them on unit variants).
+    X {},
     /// `g ≡ value`: no stress, plain surface diffusion.
     Constant { value: f64 },
     /// `g = a + b x + c y`.
@@ -115,6 +115,12 @@ pub enum FilmBoundarySpec {
         #[serde(default)]
         c: f64,
     },
+}
+
+impl Default for FilmBoundarySpec {
+    fn default() -> Self {
+        FilmBoundarySpec::X {}
+    }
 }
 
 /// `problem` of `shape_design` (paper §1.2, §4.3).

@@ -26,6 +26,28 @@ enum Step {
 /// The keys that carry an enum's tag: removing them always changes the error.
 const TAG_KEYS: [&str; 2] = ["type", "shape"];
 
+/// Most nodes a breadth-first search visits.
+const MAX_VISITS: usize = 10_000;
+
+/// The first object at or below `path`, breadth first, that has the key `name`.
+fn holder(value: &Value, path: &[Step], name: &str) -> Option<Vec<Step>> {
+    let mut queue = std::collections::VecDeque::from([path.to_vec()]);
+    let mut visits = 0;
+    while let Some(at) = queue.pop_front() {
+        visits += 1;
+        if visits > MAX_VISITS {
+            return None;
+        }
+        match node(value, &at)? {
+            Value::Object(o) if o.contains_key(name) => return Some(at),
+            Value::Object(o) => queue.extend(o.keys().map(|k| [at.as_slice(), &[Step::Key(k.clone())]].concat())),
+            Value::Array(a) => queue.extend((0..a.len()).map(|i| [at.as_slice(), &[Step::Index(i)]].concat())),
+            _ => {}
+        }
+    }
+    None
+}
+
 /// Most trial deserializations per error (spec objects have at most about a dozen
 /// keys; an array of a million entries bisects in 20).
 const MAX_TRIALS: usize = 96;
@@ -112,8 +134,12 @@ fn named_field<'m>(message: &'m str, prefix: &str) -> Option<&'m str> {
 fn missing_at(value: &Value, path: Vec<Step>, name: &str, message: &str) -> Vec<Step> {
     let unknown = format!("unknown field `{name}`");
     let mut queue = std::collections::VecDeque::from([path.clone()]);
-    let mut trials = 0;
+    let (mut trials, mut visits) = (0, 0);
     while let Some(at) = queue.pop_front() {
+        visits += 1;
+        if visits > MAX_VISITS {
+            break;
+        }
         match node(value, &at) {
             Some(Value::Object(o)) => {
                 if !o.contains_key(name) && trials < MAX_TRIALS {
@@ -230,8 +256,12 @@ pub(super) fn locate(value: &Value) -> Option<SpecError> {
         }
     }
     if let Some(name) = named_field(&message, "unknown field `") {
-        // an unknown key is where the search ends
+        // an unknown key is where the search ends; if the same key is wrong in two
+        // places the search stops above both: name the first
         if path.last() != Some(&Step::Key(name.to_string())) {
+            if let Some(at) = holder(value, &path, name) {
+                path = at;
+            }
             path.push(Step::Key(name.to_string()));
         }
     } else if message.starts_with("unknown variant") {
@@ -299,6 +329,10 @@ mod tests {
         let ring = r#"{"shape": "circle", "radius": 2}"#;
         let color = r#"{"type": "constant", "value": 1, "color": "red"}"#;
         assert_eq!(field(&design(ring, color)), "problem.target.color");
+        let centre = r#"{"shape": "circle", "radius": 2, "centre": [0, 0]}"#;
+        let twice = design(centre, r#"{"type": "constant", "value": 1}"#)
+            .replace(r#""radius": 2.5}"#, r#""radius": 2.5, "centre": [0, 0]}"#);
+        assert_eq!(field(&twice), "problem.control.inner.centre");
         let constant = r#"{"type": "constant", "value": 1}"#;
         assert_eq!(field(&design(r#"{"shape": "circle"}"#, constant)), "problem.control.inner.radius");
         assert_eq!(field(r#"{"initial": {"shape": "circle", "radius": 1}}"#), "problem");
@@ -314,6 +348,12 @@ mod tests {
         let parts = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "union", "parts": [
             {"shape": "circle", "radius": 1}, {"shape": "circle"}, {"shape": "ellipse"}]}}"#;
         assert_eq!(field(parts), "initial.parts[1].radius");
+        assert_eq!(
+            field(&format!(
+                r#"{{"problem": {{"type": "stressed_film", "length": 1, "boundary": {{"type": "x", "value": 0}}}}, {circle}}}"#
+            )),
+            "problem.boundary.value"
+        );
         assert_eq!(
             field(&format!(
                 r#"{{"problem": {{"type": "stressed_film", "length": 1, "boundary": {{"type": "y"}}}}, {circle}}}"#
