@@ -285,8 +285,8 @@ fn find_on_grid(
         is_long[l] = true;
     }
     for &l in &grid.long {
-        for other in 0..segments.len() {
-            if other != l && !(is_long[other] && other < l) {
+        for (other, &long) in is_long.iter().enumerate() {
+            if other != l && !(long && other < l) {
                 test(l, other, &mut hits);
             }
         }
