@@ -387,3 +387,47 @@ fn curves_driven_into_contact_merge_instead_of_stalling() {
     let (j0, j1) = (t.0[0].energy, t.0.last().unwrap().energy);
     assert!(j1 < 1e-3 * j0, "J {j0:e} → {j1:e}");
 }
+
+/// Paper §4.3.3 (Figure 8) with a fixed τ = 1 (`examples/design_square.json`): the
+/// small circle grows into one smoothed square, aligned with the square ring `D`, and
+/// J falls slowly (measured in release: 0.10773 at k = 200, 0.10480 at k = 600; the
+/// paper, in our ½ convention: 0.1022 and 0.1000; see README, Shape design, for why
+/// the last 3 % are out of reach of a single curve). Re-meshings raise J a little
+/// (27 times in 600 iterations, each below 3.5e-5).
+#[test]
+fn square_ring_grows_one_smoothed_square_with_a_fixed_step() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/design_square.json")).unwrap();
+    let mut spec: serde_json::Value = serde_json::from_str(&text).unwrap();
+    spec["flow"]["max_iterations"] = 600.into();
+    spec["flow"]["tau"] = 1.0.into();
+    let job = prepared(&spec.to_string());
+    let mut t = Trace(Vec::new());
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut t).unwrap();
+    let j: Vec<f64> = t.0.iter().map(|p| p.energy).collect();
+    assert_eq!(j.len(), 601, "stopped early: {:?}", out.stop);
+    assert!(t.0.iter().all(|p| p.components == 1), "the curve split");
+    assert!((j[0] - 0.97481 / 2.0).abs() < 5e-3 * j[0], "start {}", j[0]);
+    let rises: Vec<f64> = (1..j.len()).filter(|&k| j[k] > j[k - 1]).map(|k| j[k] - j[k - 1]).collect();
+    assert!(rises.len() <= 40 && rises.iter().all(|&r| r < 1e-4), "J rose: {rises:?}");
+    for k in (100..=600).step_by(100) {
+        assert!(j[k] < j[k - 100], "J did not decrease from iteration {} to {k}", k - 100);
+    }
+    assert!(j[200] > 0.1060 && j[200] < 0.1090, "J(200) = {}", j[200]);
+    assert!(j[600] > 0.1040 && j[600] < 0.1056, "J(600) = {}", j[600]);
+    // a square aligned with D: r(θ) largest on the diagonals (cos 4θ = −1 there)
+    let last: CurveMesh = out.last.mesh.to_mesh::<2>().unwrap();
+    let x = last.positions();
+    let mode = |k: f64| -> f64 {
+        let (mut c, mut total) = (0.0, 0.0);
+        for &[a, b] in last.elements() {
+            let (ta, tb) = (x[a].y.atan2(x[a].x), x[b].y.atan2(x[b].x));
+            let dt = (tb - ta + 3.0 * PI).rem_euclid(2.0 * PI) - PI;
+            c += 0.5 * (x[a].norm() + x[b].norm()) * (k * (ta + 0.5 * dt)).cos() * dt;
+            total += dt;
+        }
+        c / total
+    };
+    let (mean, c4) = (mode(0.0), mode(4.0));
+    assert!(mean > 1.0 && mean < 1.8, "mean radius {mean}");
+    assert!(c4 < -0.05 * mean, "no square: cos 4θ mode {c4:.4} at mean radius {mean:.4}");
+}
