@@ -240,11 +240,50 @@ pub(super) fn find_with_grid(points: &[Point<2>], segments: &[[usize; 2]]) -> (V
     (hits, grid)
 }
 
+/// A cell holding more segments than this is searched on a finer grid of its own
+/// (cells scaled to those segments' mean length), so that many short segments in
+/// one cell (a strongly graded curve, or a zigzag of tiny segments beside long
+/// ones) cost about linear time, not quadratic.
+const DENSE: usize = 128;
+/// Levels of such refinement; below them a dense cell is tested pair by pair
+/// (segments that stay together at every scale mostly meet anyway).
+const MAX_DEPTH: u32 = 4;
+
 fn find_on_grid(
     points: &[Point<2>],
     segments: &[[usize; 2]],
     ids: Option<&[usize]>,
     grid: &RunGrid,
+) -> Vec<SegmentHit> {
+    find_at_depth(points, segments, ids, grid, 0)
+}
+
+/// The pairs among the segments of a dense cell, on a grid of their own.
+fn find_in_cell(
+    points: &[Point<2>],
+    segments: &[[usize; 2]],
+    ids: Option<&[usize]>,
+    mut subset: Vec<usize>,
+    depth: u32,
+) -> Vec<SegmentHit> {
+    subset.sort_unstable();
+    subset.dedup();
+    let local: Vec<[usize; 2]> = subset.iter().map(|&e| segments[e]).collect();
+    let grid = RunGrid::build(points, &local, ids);
+    let mut hits = find_at_depth(points, &local, ids, &grid, depth + 1);
+    for h in &mut hits {
+        // `subset` is increasing, so local a < b stays global a < b
+        (h.a, h.b) = (subset[h.a], subset[h.b]);
+    }
+    hits
+}
+
+fn find_at_depth(
+    points: &[Point<2>],
+    segments: &[[usize; 2]],
+    ids: Option<&[usize]>,
+    grid: &RunGrid,
+    depth: u32,
 ) -> Vec<SegmentHit> {
     let id = |v: usize| ids.map_or(v, |ids| ids[v]);
     let seg = |e: usize| {
@@ -258,7 +297,26 @@ fn find_on_grid(
             hits.push(h);
         }
     };
+    let len = |o: usize| (grid.runs[o].last - grid.runs[o].first + 1) as usize;
+    // cells that turned out dense and went to a grid of their own (few, usually none)
+    let mut dense: Vec<u64> = Vec::new();
+    let mut earlier: Vec<usize> = Vec::new();
     for (k, r) in grid.runs.iter().enumerate() {
+        if !dense.is_empty() && dense.contains(&r.cell) {
+            continue;
+        }
+        earlier.clear();
+        earlier.extend(grid.cell_runs(r.cell).filter(|&o| o < k));
+        if depth < MAX_DEPTH && len(k) + earlier.iter().map(|&o| len(o)).sum::<usize>() > DENSE {
+            // the whole cell, its later runs included (pairs found twice are deduplicated)
+            dense.push(r.cell);
+            let mut subset = Vec::new();
+            for o in grid.cell_runs(r.cell) {
+                subset.extend(grid.runs[o].first as usize..=grid.runs[o].last as usize);
+            }
+            hits.extend(find_in_cell(points, segments, ids, subset, depth));
+            continue;
+        }
         let (first, last) = (r.first as usize, r.last as usize);
         // within the run
         if last > first && !monotone(points, segments, first, last) {
@@ -269,7 +327,7 @@ fn find_on_grid(
             }
         }
         // against the runs of its cell entered before it
-        for o in grid.cell_runs(r.cell).filter(|&o| o < k) {
+        for &o in &earlier {
             let o = grid.runs[o];
             for a in o.first..=o.last {
                 for b in first..=last {
@@ -422,6 +480,44 @@ pub(super) mod tests {
             total_hits += slow.len();
         }
         assert!(total_hits > 100, "the cases cross: {total_hits}");
+    }
+
+    /// Many short segments in the cells of a few long ones (their mean sets the
+    /// cells): a comb of tiny teeth along a long edge and a tiny random walk that
+    /// crosses itself, on the refined grids of dense cells.
+    #[test]
+    fn dense_cells_find_exactly_the_pairs_of_the_brute_force() {
+        let mut state = 0x9E37_79B9_7F4A_7C15_u64;
+        for case in 0..4 {
+            let mut points = vec![Point::<2>::new(0.0, 0.0), Point::<2>::new(100.0, 0.0), Point::<2>::new(100.0, 50.0)];
+            // the comb, from (100, 50) back to (99, 50): 1,200 segments, teeth of height 0.01
+            let teeth = 600;
+            for j in 0..teeth {
+                let x = 100.0 - (j as f64 + 0.5) / teeth as f64;
+                let h = if case % 2 == 1 && j % 97 == 13 { -0.02 } else { 0.01 }; // some teeth cross
+                points.push(Point::<2>::new(x + 0.0008, 50.0));
+                points.push(Point::<2>::new(x, 50.0 + h));
+            }
+            // a random walk of tiny steps near (0, 25)
+            let mut p = Point::<2>::new(0.5, 25.0);
+            for _ in 0..(300 + 200 * case) {
+                p += Point::<2>::new(rng(&mut state) - 0.5, rng(&mut state) - 0.5) * 0.004;
+                points.push(p);
+            }
+            let n = points.len();
+            let segments: Vec<[usize; 2]> = (0..n).map(|j| [j, (j + 1) % n]).collect();
+            let grid = RunGrid::build(&points, &segments, None);
+            let mut per_cell = std::collections::HashMap::new();
+            for r in &grid.runs {
+                *per_cell.entry(r.cell).or_insert(0) += (r.last - r.first + 1) as usize;
+            }
+            assert!(per_cell.values().filter(|&&m| m > DENSE).count() >= 2, "case {case}: dense cells");
+            let fast: Vec<(usize, usize)> =
+                find_segment_intersections(&points, &segments).iter().map(|h| (h.a, h.b)).collect();
+            let slow = brute_force(&points, &segments);
+            assert_eq!(fast, slow, "case {case}");
+            assert!(!slow.is_empty() || case == 0, "case {case} crosses");
+        }
     }
 
     #[test]
