@@ -29,23 +29,39 @@ const TAG_KEYS: [&str; 2] = ["type", "shape"];
 /// Most nodes a breadth-first search visits.
 const MAX_VISITS: usize = 10_000;
 
-/// The first object at or below `path`, breadth first, that has the key `name`.
-fn holder(value: &Value, path: &[Step], name: &str) -> Option<Vec<Step>> {
+/// The paths of the objects at or below `path`, breadth first (containers only,
+/// at most [`MAX_VISITS`] of them visited).
+fn objects_below(value: &Value, path: &[Step]) -> Vec<Vec<Step>> {
     let mut queue = std::collections::VecDeque::from([path.to_vec()]);
+    let mut objects = Vec::new();
     let mut visits = 0;
     while let Some(at) = queue.pop_front() {
         visits += 1;
         if visits > MAX_VISITS {
-            return None;
+            break;
         }
-        match node(value, &at)? {
-            Value::Object(o) if o.contains_key(name) => return Some(at),
-            Value::Object(o) => queue.extend(o.keys().map(|k| [at.as_slice(), &[Step::Key(k.clone())]].concat())),
-            Value::Array(a) => queue.extend((0..a.len()).map(|i| [at.as_slice(), &[Step::Index(i)]].concat())),
+        let child = |step: Step| [at.as_slice(), &[step]].concat();
+        match node(value, &at) {
+            Some(Value::Object(o)) => {
+                queue.extend(
+                    o.iter().filter(|(_, v)| v.is_object() || v.is_array()).map(|(k, _)| child(Step::Key(k.clone()))),
+                );
+                objects.push(at);
+            }
+            Some(Value::Array(a)) => {
+                queue.extend(
+                    (0..a.len()).filter(|&i| a[i].is_object() || a[i].is_array()).map(|i| child(Step::Index(i))),
+                );
+            }
             _ => {}
         }
     }
-    None
+    objects
+}
+
+/// The first object at or below `path`, breadth first, that has the key `name`.
+fn holder(value: &Value, path: &[Step], name: &str) -> Option<Vec<Step>> {
+    objects_below(value, path).into_iter().find(|at| node(value, at).is_some_and(|o| o.get(name).is_some()))
 }
 
 /// Most trial deserializations per error (spec objects have at most about a dozen
@@ -133,39 +149,18 @@ fn named_field<'m>(message: &'m str, prefix: &str) -> Option<&'m str> {
 /// from `path` (serde's path, the buffered object that holds the culprit).
 fn missing_at(value: &Value, path: Vec<Step>, name: &str, message: &str) -> Vec<Step> {
     let unknown = format!("unknown field `{name}`");
-    let mut queue = std::collections::VecDeque::from([path.clone()]);
-    let (mut trials, mut visits) = (0, 0);
-    while let Some(at) = queue.pop_front() {
-        visits += 1;
-        if visits > MAX_VISITS {
-            break;
+    let lacking = objects_below(value, &path)
+        .into_iter()
+        .filter(|at| node(value, at).is_some_and(|o| o.get(name).is_none()))
+        .take(MAX_TRIALS);
+    for at in lacking {
+        let mut doc = value.clone();
+        if let Some(Value::Object(m)) = node_mut(&mut doc, &at) {
+            m.insert(name.to_string(), Value::Null);
         }
-        match node(value, &at) {
-            Some(Value::Object(o)) => {
-                if !o.contains_key(name) && trials < MAX_TRIALS {
-                    trials += 1;
-                    let mut doc = value.clone();
-                    if let Some(Value::Object(m)) = node_mut(&mut doc, &at) {
-                        m.insert(name.to_string(), Value::Null);
-                    }
-                    match first_error(&doc) {
-                        Some((_, m)) if m == message || m.starts_with(&unknown) => {}
-                        _ => return at,
-                    }
-                }
-                queue.extend(o.keys().map(|k| [at.as_slice(), &[Step::Key(k.clone())]].concat()));
-            }
-            Some(Value::Array(a)) => {
-                queue.extend(
-                    (0..a.len())
-                        .filter(|&i| a[i].is_object() || a[i].is_array())
-                        .map(|i| [at.as_slice(), &[Step::Index(i)]].concat()),
-                );
-            }
-            _ => {}
-        }
-        if trials >= MAX_TRIALS {
-            break;
+        match first_error(&doc) {
+            Some((_, m)) if m == message || m.starts_with(&unknown) => {}
+            _ => return at,
         }
     }
     path
