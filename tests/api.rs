@@ -339,6 +339,7 @@ fn bad_inputs_are_problem_json_naming_the_field_and_the_server_keeps_serving() {
         ("/v1/jobs?page_token=p-1", "page_token"),
         ("/v1/jobs?status=done", "status"),
         ("/v1/jobs?limit=5&limit=6", "limit"),
+        ("/v1/jobs?stauts=running", "stauts"),
     ] {
         let (status, head, b) = srv.request("GET", path, None);
         assert_eq!(status, 422, "{path}: {b}");

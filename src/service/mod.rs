@@ -102,7 +102,7 @@ async fn no_route(req: Request) -> ApiError {
 }
 
 /// The parameters of a query string, or 422 naming the one that could not be read
-/// (given twice).
+/// (unknown, e.g. misspelt, or given twice).
 fn query<T>(q: Result<Query<T>, QueryRejection>) -> Result<T, ApiError> {
     q.map(|Query(t)| t).map_err(|e| {
         let detail = e.body_text();
@@ -154,6 +154,7 @@ async fn find(state: &AppState, id: &str) -> Result<JobRow, ApiError> {
 }
 
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct ListQuery {
     status: Option<String>,
     limit: Option<String>,
@@ -289,6 +290,7 @@ async fn events(
 }
 
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct FormatQuery {
     format: Option<String>,
 }
