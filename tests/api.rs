@@ -315,6 +315,11 @@ fn bad_inputs_are_problem_json_naming_the_field_and_the_server_keeps_serving() {
             r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "union", "parts": [{"shape": "circle", "radius": 1}, {"shape": "circle", "radius": 1, "center": [0]}]}}"#,
             "initial.parts[1].center",
         ),
+        // a key given twice (serde_json would keep the last silently)
+        (
+            r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1}, "problem": {"type": "surface_diffusion"}}"#,
+            "problem",
+        ),
         // NaN is not JSON: the document is malformed
         (r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": NaN}}"#, "(document)"),
         (

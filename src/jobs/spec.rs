@@ -484,6 +484,9 @@ impl Default for OutputSpec {
 pub fn parse_spec(text: &str) -> Result<JobSpec, SpecError> {
     let value: serde_json::Value =
         serde_json::from_str(text).map_err(|e| SpecError::new("(document)", format!("malformed JSON: {e}")))?;
+    if let Some(e) = super::spec_path::duplicate_key(text) {
+        return Err(e);
+    }
     if let Some(mut e) = super::spec_path::locate(&value) {
         if let Some(rest) = e.message.strip_prefix(IMAGE_MESSAGE) {
             e = SpecError::new("problem.image", format!("must be \"input:NAME\" or a list of them{rest}"));
