@@ -487,11 +487,17 @@ pub fn parse_spec(text: &str) -> Result<JobSpec, SpecError> {
     if let Some(e) = super::spec_path::duplicate_key(text) {
         return Err(e);
     }
-    if let Some(mut e) = super::spec_path::locate(&value) {
-        if let Some(rest) = e.message.strip_prefix(IMAGE_MESSAGE) {
-            e = SpecError::new("problem.image", format!("must be \"input:NAME\" or a list of them{rest}"));
+    // one deserialization for a good spec (an object: serde also reads a struct from
+    // an array); a bad one is searched for the field to name
+    if value.is_object() {
+        if let Ok(spec) = JobSpec::deserialize(&value) {
+            return Ok(spec);
         }
-        return Err(e);
     }
-    serde_json::from_value(value).map_err(|e| SpecError::new("(document)", e.to_string()))
+    let mut e = super::spec_path::locate(&value)
+        .unwrap_or_else(|| SpecError::new("(document)", "not a valid job spec".to_string()));
+    if let Some(rest) = e.message.strip_prefix(IMAGE_MESSAGE) {
+        e = SpecError::new("problem.image", format!("must be \"input:NAME\" or a list of them{rest}"));
+    }
+    Err(e)
 }

@@ -81,7 +81,7 @@ fn steps(path: &serde_path_to_error::Path) -> Vec<Step> {
 
 /// The error of deserializing `value` as a [`JobSpec`]: its path and message.
 fn first_error(value: &Value) -> Option<(Vec<Step>, String)> {
-    let e = serde_path_to_error::deserialize::<_, JobSpec>(value.clone()).err()?;
+    let e = serde_path_to_error::deserialize::<_, JobSpec>(value).err()?;
     let path = steps(e.path());
     Some((path, readable(&e.into_inner().to_string())))
 }
