@@ -102,18 +102,18 @@ pub(super) async fn create_job(State(state): State<AppState>, req: Request) -> R
             "expected Content-Type application/json or multipart/form-data, got {ctype:?}"
         )));
     };
-    // naming the field of a bad spec may deserialize it a few dozen times: off the async threads
-    let spec = tokio::task::spawn_blocking(move || parse_spec(&text))
-        .await
-        .map_err(|e| ApiError::Internal(e.to_string()))?
-        .map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
-    let normalized = serde_json::to_string(&spec).expect("spec serializes");
-    // validation decodes images and reads meshes: keep it off the async threads
-    let inputs = tokio::task::spawn_blocking(move || prepare(spec, &inputs).map(|_| inputs))
-        .await
-        .map_err(|e| ApiError::Internal(e.to_string()))?
-        .map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
-    unreferenced_input(&serde_json::from_str(&normalized).expect("normalized spec"), &inputs)?;
+    // off the async threads: naming the field of a bad spec may deserialize it a few
+    // dozen times, and validation decodes images and reads meshes
+    let (normalized, tree, inputs) = tokio::task::spawn_blocking(move || {
+        let spec = parse_spec(&text)?;
+        let normalized = serde_json::to_string(&spec).expect("spec serializes");
+        let tree = serde_json::to_value(&spec).expect("spec serializes");
+        prepare(spec, &inputs).map(|_| (normalized, tree, inputs))
+    })
+    .await
+    .map_err(|e| ApiError::Internal(e.to_string()))?
+    .map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
+    unreferenced_input(&tree, &inputs)?;
     let id = uuid::Uuid::new_v4().to_string();
     let job = state.store.insert_job(&id, &normalized, &inputs).await?;
     state.wake.notify_one();
