@@ -299,7 +299,7 @@ fn find_at_depth(
     };
     let len = |o: usize| (grid.runs[o].last - grid.runs[o].first + 1) as usize;
     // cells that turned out dense and went to a grid of their own (few, usually none)
-    let mut dense: Vec<u64> = Vec::new();
+    let mut dense: std::collections::HashSet<u64> = std::collections::HashSet::new();
     let mut earlier: Vec<usize> = Vec::new();
     for (k, r) in grid.runs.iter().enumerate() {
         if !dense.is_empty() && dense.contains(&r.cell) {
@@ -309,7 +309,7 @@ fn find_at_depth(
         earlier.extend(grid.cell_runs(r.cell).filter(|&o| o < k));
         if depth < MAX_DEPTH && len(k) + earlier.iter().map(|&o| len(o)).sum::<usize>() > DENSE {
             // the whole cell, its later runs included (pairs found twice are deduplicated)
-            dense.push(r.cell);
+            dense.insert(r.cell);
             let mut subset = Vec::new();
             for o in grid.cell_runs(r.cell) {
                 subset.extend(grid.runs[o].first as usize..=grid.runs[o].last as usize);
@@ -338,7 +338,7 @@ fn find_at_depth(
             }
         }
     }
-    let mut is_long = vec![false; segments.len()];
+    let mut is_long = if grid.long.is_empty() { Vec::new() } else { vec![false; segments.len()] };
     for &l in &grid.long {
         is_long[l] = true;
     }
