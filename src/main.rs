@@ -54,6 +54,8 @@ enum Command {
         #[arg(long)]
         token: Option<String>,
     },
+    /// Print the JSON Schema of the job spec (api/job-spec.schema.json).
+    Schema,
 }
 
 fn main() -> ExitCode {
@@ -71,6 +73,11 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+        Command::Schema => {
+            let text = serde_json::to_string_pretty(&shapeflow::jobs::job_spec_schema()).expect("a schema is JSON");
+            say(format_args!("{text}"));
+            ExitCode::SUCCESS
+        }
         Command::Serve { bind, database, data_dir, workers, token } => {
             if let Err(e) = std::fs::create_dir_all(&data_dir) {
                 eprintln!("error: cannot create data directory {}: {e}", data_dir.display());

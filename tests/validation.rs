@@ -229,6 +229,14 @@ fn mesh_files_round_trip_and_errors_name_the_input() {
     assert!(matches!(m, AnyMesh::Surface(ref s) if (s.enclosed_measure() - 1.0 / 6.0).abs() < 1e-15));
     let off = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
     assert_eq!(read_mesh_file("tet.off", off.as_bytes()).unwrap(), m);
+    // counts in the header reserve nothing beyond the file (found by fuzzing: a face
+    // count of 2e11 aborted the process on allocation)
+    let huge = off.replace("4 4 0", "4 200000000000 0");
+    let e = read_mesh_file("huge.off", huge.as_bytes()).unwrap_err().to_string();
+    assert!(e.contains("huge.off") && e.contains("faces"), "{e}");
+    let many = off.replace("4 4 0", "4 7999999 0");
+    let e = read_mesh_file("many.off", many.as_bytes()).unwrap_err().to_string();
+    assert!(e.contains("many.off") && e.contains("ends inside the face list"), "{e}");
     let curve = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nl 1 2 3 4 1\n";
     assert!(
         matches!(read_mesh_file("sq", curve.as_bytes()).unwrap(), AnyMesh::Curve(ref c) if (c.enclosed_measure() - 1.0).abs() < 1e-15)
@@ -392,6 +400,16 @@ fn crafted_gltf_files_are_errors_not_panics_or_endless_work() {
         let e = bad(edit);
         assert!(e.contains("crafted.glb") && e.contains(needle), "{needle}: {e}");
     }
+    // a GLB header declaring fewer bytes than the header itself (found by fuzzing:
+    // the crate subtracts unchecked) and one cut short
+    for len in [0u32, 11] {
+        let mut b = glb(&doc, &bin);
+        b[8..12].copy_from_slice(&len.to_le_bytes());
+        let e = read_mesh_file("crafted.glb", &b).unwrap_err().to_string();
+        assert!(e.contains("crafted.glb") && e.contains("header"), "{e}");
+    }
+    let e = read_mesh_file("crafted.glb", b"glTF\x02\0\0\0").unwrap_err().to_string();
+    assert!(e.contains("crafted.glb") && e.contains("header"), "{e}");
 }
 
 #[test]

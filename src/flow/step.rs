@@ -7,7 +7,7 @@ use crate::geometry::Point;
 use serde::{Deserialize, Serialize};
 
 /// Which Schur path solves the step.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum SolverKind {
     /// Lumped masses, explicit sparse Schur complement, faer direct solve (default).

@@ -5,7 +5,7 @@ use crate::geometry::{Mesh, Point};
 use serde::{Deserialize, Serialize};
 
 /// The scalar product `b(·,·)` that turns the shape gradient `G` into a velocity.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ScalarProduct {
     /// `∫ V W`: `V = −G`.

@@ -231,6 +231,11 @@ const MAX_STRUCTURE: usize = 1 << 20;
 fn precheck(name: &str, bytes: &[u8]) -> Result<(), MeshFileError> {
     let glb;
     let json: &[u8] = if bytes.starts_with(b"glTF") {
+        // the crate subtracts the header's size from the declared length unchecked
+        let declared = bytes.get(8..12).map(|l| u32::from_le_bytes([l[0], l[1], l[2], l[3]]));
+        if declared.is_none_or(|l| l < 12) {
+            return Err(content(name, "not a valid glTF binary (.glb) file: its header is cut short"));
+        }
         glb = gltf::binary::Glb::from_slice(bytes)
             .map_err(|e| content(name, format!("not a valid glTF binary (.glb) file: {e}")))?;
         &glb.json

@@ -180,8 +180,16 @@ fn read_off(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
             message: format!("more than {MAX_VERTICES} vertices"),
         });
     }
-    let mut verts = Vec::with_capacity(nv);
-    let mut tris = Vec::with_capacity(nf);
+    // a closed surface has about twice as many triangles as vertices
+    if nf > 4 * MAX_VERTICES {
+        return Err(MeshFileError::Content {
+            name: name.into(),
+            message: format!("more than {} faces", 4 * MAX_VERTICES),
+        });
+    }
+    // every vertex and face takes a line: the counts cannot reserve more than the text
+    let mut verts = Vec::with_capacity(nv.min(text.len() / 6));
+    let mut tris = Vec::with_capacity(nf.min(text.len() / 6));
     for _ in 0..nv {
         let (k, l) = lines.next().ok_or_else(|| parse_err(name, 0, "file ends inside the vertex list"))?;
         let p: Vec<&str> = l.split_whitespace().collect();

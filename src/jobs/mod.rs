@@ -10,6 +10,7 @@ mod gltf_in;
 mod mesh_io;
 mod results;
 mod run;
+mod schema;
 mod spec;
 mod spec_path;
 
@@ -17,6 +18,7 @@ pub use build::{prepare, AnyMesh, PreparedJob, ProblemKind};
 pub use mesh_io::{read_mesh_file, MeshFileError};
 pub use results::{job_extras, result_state, state_glb, states_glb, MAX_FRAMES};
 pub use run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
+pub use schema::{job_spec_schema, openapi_schemas};
 pub use spec::{
     parse_spec, BoundarySpec, ControlSpec, FlowSpec, InitialSpec, JobSpec, MeshSpec, OutputSpec, ProblemSpec,
     SegmentationSpec, ShapeDesignSpec, SpecError, StressedFilmSpec, TargetSpec,

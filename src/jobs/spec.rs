@@ -3,6 +3,7 @@
 
 use crate::flow::{ScalarProduct, SolverKind};
 use crate::problems::GradientKind;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// A spec error: the offending field's path and what is wrong with it.
@@ -19,8 +20,9 @@ impl SpecError {
     }
 }
 
-/// A whole job.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// A shapeflow job: the functional, the starting shape and the settings of the flow,
+/// its mesh management and its output.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct JobSpec {
     pub problem: ProblemSpec,
@@ -48,7 +50,7 @@ fn film_resolution() -> usize {
 }
 
 /// `problem`: the functional to minimize.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ProblemSpec {
     /// `J = γ|Γ| + λ|Ω|`.
@@ -73,7 +75,7 @@ pub enum ProblemSpec {
 }
 
 /// `problem` of `stressed_film` (paper §1.3, §4.4.2).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct StressedFilmSpec {
     /// Width `L` of the periodic cell `0 < x < L`.
@@ -98,11 +100,12 @@ pub struct StressedFilmSpec {
 }
 
 /// `problem.boundary` of `stressed_film`: `g`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum FilmBoundarySpec {
-    /// `g = x` (the paper's misfit). A struct variant, so that unknown fields are
-    /// rejected (serde ignores them on unit variants).
+    /// `g = x` (the paper's misfit).
+    // a struct variant, so that unknown fields are rejected (serde ignores them on
+    // unit variants)
     X {},
     /// `g ≡ value`: no stress, plain surface diffusion.
     Constant { value: f64 },
@@ -124,7 +127,7 @@ impl Default for FilmBoundarySpec {
 }
 
 /// `problem` of `shape_design` (paper §1.2, §4.3).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ShapeDesignSpec {
     /// The fixed outer boundary `Σ` (`y = 0` there).
@@ -147,7 +150,7 @@ pub struct ShapeDesignSpec {
 }
 
 /// `problem.control`: `D` lies between `inner` and `outer`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ControlSpec {
     pub inner: BoundarySpec,
@@ -155,7 +158,7 @@ pub struct ControlSpec {
 }
 
 /// A fixed closed boundary of the shape-design domain.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "shape", rename_all = "snake_case", deny_unknown_fields)]
 pub enum BoundarySpec {
     Circle {
@@ -174,7 +177,7 @@ pub enum BoundarySpec {
 }
 
 /// `problem.target`: `z_g`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum TargetSpec {
     Constant {
@@ -197,7 +200,7 @@ pub enum TargetSpec {
 }
 
 /// One input file, or a stack of 2D slices.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 #[serde(untagged)]
 pub enum ImageSource {
     One(String),
@@ -205,17 +208,17 @@ pub enum ImageSource {
 }
 
 /// `problem` of `segmentation` (without its `type`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SegmentationSpec {
     /// `"input:NAME"` (PNG/JPEG/TIFF → 2D, NRRD → 3D) or a list of them (a stack
     /// of 2D slices → 3D, first slice at the bottom).
     pub image: ImageSource,
-    /// Gaussian smoothing in pixels; default 1.5 (`default_sigma`).
+    /// Gaussian smoothing in pixels; default 1.5.
     #[serde(default)]
     pub sigma: Option<f64>,
-    /// Weight of the region term (balloon force); default scales with the
-    /// image size (`default_lambda`).
+    /// Weight of the region term (balloon force); default `0.3 L` (2D) or `0.15 L`
+    /// (3D), `L` the number of samples along the image's longest side.
     #[serde(default)]
     pub lambda: Option<f64>,
     /// (Addition) once the flow has converged with `lambda`, it continues with
@@ -223,7 +226,7 @@ pub struct SegmentationSpec {
     #[serde(default)]
     pub lambda_final: Option<f64>,
     /// (Addition) the results show the contour moved onto the image's edges to
-    /// sub-pixel accuracy (`problems::refine_to_edges`); default true.
+    /// sub-pixel accuracy; default true.
     #[serde(default)]
     pub edge_refinement: Option<bool>,
     /// Threshold ε of the Newton weight β (paper §4.2.1); default `0.1 L²`.
@@ -314,7 +317,7 @@ fn torus_resolution() -> usize {
 /// `initial`: the starting shape. `resolution` means: curves, the number of
 /// vertices; sphere/ellipsoid, the icosphere subdivision level; box, grid cells per
 /// unit length; torus, segments around the axis.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "shape", rename_all = "snake_case", deny_unknown_fields)]
 pub enum InitialSpec {
     Circle {
@@ -403,41 +406,59 @@ pub enum InitialSpec {
 }
 
 /// `flow`: time stepping and the descent direction. Every field is optional.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FlowSpec {
     /// `l2`, `h1`, `h1_newton` or `h_minus_1`; default: the problem's own.
     pub scalar_product: Option<ScalarProduct>,
     /// `lumped` (default) or `consistent`.
     pub solver: Option<SolverKind>,
+    /// Nominal time step; default 1e-3, but 10 for `shape_design` and for `segmentation`
+    /// with `h1_newton`, 1e-5 for `stressed_film`.
     pub tau: Option<f64>,
+    /// The run stops with `tau_min` when a step would need a smaller τ; default 1e-10
+    /// (`stressed_film` 1e-15).
     pub tau_min: Option<f64>,
+    /// Default 1000.
     pub max_iterations: Option<usize>,
+    /// Stop at this time; the last step is shortened to end exactly there.
     pub end_time: Option<f64>,
+    /// Stop with `converged` when `|J_{n+1} − J_n| ≤ tolerance·|J_n|` (a rate for
+    /// physical evolutions); 0 disables; default 1e-6.
     pub tolerance: Option<f64>,
+    /// Halve τ until J decreases; default on, off for physical flows.
     pub backtracking: Option<bool>,
-    /// ε of the geometric time-step control; 0 switches it off.
+    /// ε of the geometric time-step control `τ max_T |V⃗(z_a) − V⃗(z_b)|/h_T ≤ ε`;
+    /// 0 switches it off; default 0.5.
     pub step_control: Option<f64>,
+    /// α of the plain `h1` product; default 0.01.
     pub alpha: Option<f64>,
+    /// β of the plain `h1` product; default 1.
     pub beta: Option<f64>,
     /// Largest relative change of the enclosed area/volume per step (`H^{-1}`
-    /// flows; 0 switches it off); default 1e-5 for `stressed_film`, off otherwise.
+    /// flows; 0 switches it off); default 1e-6 for `stressed_film`, off otherwise.
     pub conservation: Option<f64>,
 }
 
 /// `mesh`: mesh management (paper §4.1). Switches default on; the sizes default to
-/// values derived from the initial mesh (see `flow::CurveManager::defaults_for`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// values derived from the initial mesh.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MeshSpec {
+    /// Area/volume-preserving tangential redistribution after every step.
     pub regularize: bool,
+    /// Refine where `h_S β_S > epsilon`, coarsen where it is below `epsilon/8`, keep
+    /// edge lengths in `[h_min, h_max]`.
     pub adapt: bool,
+    /// Curves: merge and split where segments cross.
     pub topology_changes: bool,
     /// Regularization sweeps per step (default 1 for curves, 3 for surfaces).
     pub sweeps: Option<usize>,
-    /// Refinement threshold for `h_S β_S`.
+    /// Refinement threshold for `h_S β_S`; default 1.5 × the initial mesh's largest.
     pub epsilon: Option<f64>,
+    /// Smallest edge length; default ¼ of the initial mean edge.
     pub h_min: Option<f64>,
+    /// Largest edge length; default 3 × the initial mean edge.
     pub h_max: Option<f64>,
     /// Components with a smaller enclosed area are dropped after a topological change.
     pub min_area: Option<f64>,
@@ -466,7 +487,7 @@ impl Default for MeshSpec {
 }
 
 /// `output`: what is kept.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct OutputSpec {
     /// Keep a checkpoint every this many iterations (and at the end); at least 1.

@@ -62,10 +62,10 @@ impl Target {
 }
 
 /// How the shape gradient `G` is computed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum GradientKind {
-    /// The exact gradient of the discrete `J_h` ([`curve_sensitivity`]), its normal
+    /// The exact gradient of the discrete `J_h`, its normal
     /// part per vertex: `G_i = ∂J_h/∂X_i · N⃗_i / |N⃗_i|²`.
     #[default]
     Discrete,
