@@ -128,6 +128,8 @@ pub fn shape_design(
         None => perimeter(&spec.outer) / 200.0,
     };
     if !(h.is_finite() && h > 0.0) {
+        // name the bad radius, size or point when there is one
+        polygon("problem.outer", &spec.outer, 1.0)?;
         return Err(SpecError::new("problem.outer", "has no length"));
     }
     let outer = polygon("problem.outer", &spec.outer, h)?;

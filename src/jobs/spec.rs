@@ -56,6 +56,7 @@ pub enum ProblemSpec {
     /// `J = γ|Γ| + λ|Ω|`.
     CurvatureFlow {
         #[serde(default = "one")]
+        #[schemars(extend("exclusiveMinimum" = 0))]
         gamma: f64,
         #[serde(default)]
         lambda: f64,
@@ -63,6 +64,7 @@ pub enum ProblemSpec {
     /// `J = γ|Γ|` under the `H^{-1}` product.
     SurfaceDiffusion {
         #[serde(default = "one")]
+        #[schemars(extend("exclusiveMinimum" = 0))]
         gamma: f64,
     },
     /// Geodesic active contours `J = ∫_Γ H + λ∫_Ω H` on an image.
@@ -79,9 +81,11 @@ pub enum ProblemSpec {
 #[serde(deny_unknown_fields)]
 pub struct StressedFilmSpec {
     /// Width `L` of the periodic cell `0 < x < L`.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub length: f64,
     /// Surface tension `γ > 0`.
     #[serde(default = "one")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub gamma: f64,
     /// The Dirichlet data `g` on the substrate `y = 0` and the walls; default `x`.
     #[serde(default)]
@@ -91,11 +95,13 @@ pub struct StressedFilmSpec {
     /// so the gas never reaches the substrate. Without it a surface that meets the
     /// substrate is inadmissible.
     #[serde(default)]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub wetting_layer: Option<f64>,
     /// (Addition) `ε ≥ 0` of a bending energy `ε/2 ∫_Γ κ²` added to `J`: a
     /// curvature regularization that gives a crack tip a radius of about `√(ε/γ)`.
     /// Needs the `h_minus_1` product and the lumped solver (the defaults).
     #[serde(default)]
+    #[schemars(range(min = 0))]
     pub bending: f64,
 }
 
@@ -138,10 +144,12 @@ pub struct ShapeDesignSpec {
     pub target: TargetSpec,
     /// Weight `γ ≥ 0` of the length of `Γ`.
     #[serde(default)]
+    #[schemars(range(min = 0))]
     pub gamma: f64,
     /// Vertex spacing on `Σ` and `∂D`, which also sets the bulk element size; default
     /// 1/200 of the perimeter of `Σ`.
     #[serde(default)]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub spacing: Option<f64>,
     /// `discrete` (default: the exact gradient of the discrete functional) or
     /// `continuous` (the paper's formula for `G`).
@@ -164,12 +172,14 @@ pub enum BoundarySpec {
     Circle {
         #[serde(default = "origin2")]
         center: [f64; 2],
+        #[schemars(extend("exclusiveMinimum" = 0))]
         radius: f64,
     },
     /// Axis-aligned square `|x − c|_∞ ≤ size/2`.
     Square {
         #[serde(default = "origin2")]
         center: [f64; 2],
+        #[schemars(extend("exclusiveMinimum" = 0))]
         size: f64,
     },
     /// A simple polygon through the points (either orientation).
@@ -187,6 +197,7 @@ pub enum TargetSpec {
     LogRadial {
         #[serde(default = "origin2")]
         center: [f64; 2],
+        #[schemars(extend("exclusiveMinimum" = 0))]
         radius: f64,
     },
     /// `a + b cos(k θ)`, θ the polar angle around `center` (paper §4.3.3).
@@ -216,14 +227,17 @@ pub struct SegmentationSpec {
     pub image: ImageSource,
     /// Gaussian smoothing in pixels; default 1.5.
     #[serde(default)]
+    #[schemars(range(min = 0, max = 64))]
     pub sigma: Option<f64>,
     /// Weight of the region term (balloon force); default `0.3 L` (2D) or `0.15 L`
     /// (3D), `L` the number of samples along the image's longest side.
     #[serde(default)]
+    #[schemars(range(min = 0))]
     pub lambda: Option<f64>,
     /// (Addition) once the flow has converged with `lambda`, it continues with
     /// this weight until it converges again (default 0 in 2D, `lambda` in 3D).
     #[serde(default)]
+    #[schemars(range(min = 0))]
     pub lambda_final: Option<f64>,
     /// (Addition) the results show the contour moved onto the image's edges to
     /// sub-pixel accuracy; default true.
@@ -231,6 +245,7 @@ pub struct SegmentationSpec {
     pub edge_refinement: Option<bool>,
     /// Threshold ε of the Newton weight β (paper §4.2.1); default `0.1 L²`.
     #[serde(default)]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub epsilon: Option<f64>,
 }
 
@@ -323,47 +338,59 @@ pub enum InitialSpec {
     Circle {
         #[serde(default = "origin2")]
         center: [f64; 2],
+        #[schemars(extend("exclusiveMinimum" = 0))]
         radius: f64,
         #[serde(default = "curve_resolution")]
+        #[schemars(range(min = 3, max = 2_000_000))]
         resolution: usize,
     },
     Ellipse {
         #[serde(default = "origin2")]
         center: [f64; 2],
+        #[schemars(extend("items" = {"type": "number", "format": "double", "exclusiveMinimum": 0}))]
         semi_axes: [f64; 2],
         #[serde(default)]
         rotation: f64,
         #[serde(default = "curve_resolution")]
+        #[schemars(range(min = 3, max = 2_000_000))]
         resolution: usize,
     },
     Rectangle {
         #[serde(default = "origin2")]
         center: [f64; 2],
+        #[schemars(extend("items" = {"type": "number", "format": "double", "exclusiveMinimum": 0}))]
         size: [f64; 2],
         #[serde(default = "curve_resolution")]
+        #[schemars(range(min = 3, max = 2_000_000))]
         resolution: usize,
     },
     Polygon {
         points: Vec<[f64; 2]>,
         #[serde(default)]
+        #[schemars(range(min = 3, max = 2_000_000))]
         resolution: Option<usize>,
     },
     /// A film surface (stressed film): `y = height + amplitude·cos(2π mode x / L)`
     /// over one period, `resolution` vertices.
     Film {
+        #[schemars(extend("exclusiveMinimum" = 0))]
         height: f64,
         #[serde(default)]
         amplitude: f64,
         #[serde(default = "film_mode")]
+        #[schemars(range(min = 1))]
         mode: u32,
         #[serde(default = "film_resolution")]
+        #[schemars(range(min = 8, max = 100_000))]
         resolution: usize,
     },
     /// A film surface through the points (one period, `0 ≤ x < L`, in `+x`; it may
     /// overhang), resampled to `resolution` vertices if given.
     FilmPolyline {
+        #[schemars(length(min = 3))]
         points: Vec<[f64; 2]>,
         #[serde(default)]
+        #[schemars(range(min = 8, max = 100_000))]
         resolution: Option<usize>,
     },
     Union {
@@ -372,30 +399,39 @@ pub enum InitialSpec {
     Sphere {
         #[serde(default = "origin3")]
         center: [f64; 3],
+        #[schemars(extend("exclusiveMinimum" = 0))]
         radius: f64,
         #[serde(default = "sphere_resolution")]
+        #[schemars(range(max = 8))]
         resolution: u32,
     },
     Ellipsoid {
         #[serde(default = "origin3")]
         center: [f64; 3],
+        #[schemars(extend("items" = {"type": "number", "format": "double", "exclusiveMinimum": 0}))]
         semi_axes: [f64; 3],
         #[serde(default = "sphere_resolution")]
+        #[schemars(range(max = 8))]
         resolution: u32,
     },
     Box {
         #[serde(default = "origin3")]
         center: [f64; 3],
+        #[schemars(extend("items" = {"type": "number", "format": "double", "exclusiveMinimum": 0}))]
         size: [f64; 3],
         #[serde(default = "box_resolution")]
+        #[schemars(extend("exclusiveMinimum" = 0))]
         resolution: f64,
     },
     Torus {
         #[serde(default = "origin3")]
         center: [f64; 3],
+        #[schemars(extend("exclusiveMinimum" = 0))]
         major_radius: f64,
+        #[schemars(extend("exclusiveMinimum" = 0))]
         minor_radius: f64,
         #[serde(default = "torus_resolution")]
+        #[schemars(range(min = 3, max = 4096))]
         resolution: usize,
     },
     /// An uploaded mesh: `"input:NAME"` (OBJ, OFF, STL or glTF; closed curves as
@@ -415,28 +451,37 @@ pub struct FlowSpec {
     pub solver: Option<SolverKind>,
     /// Nominal time step; default 1e-3, but 10 for `shape_design` and for `segmentation`
     /// with `h1_newton`, 1e-5 for `stressed_film`.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub tau: Option<f64>,
     /// The run stops with `tau_min` when a step would need a smaller τ; default 1e-10
     /// (`stressed_film` 1e-15).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub tau_min: Option<f64>,
     /// Default 1000.
+    #[schemars(range(min = 1, max = 100_000_000))]
     pub max_iterations: Option<usize>,
     /// Stop at this time; the last step is shortened to end exactly there.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub end_time: Option<f64>,
     /// Stop with `converged` when `|J_{n+1} − J_n| ≤ tolerance·|J_n|` (a rate for
     /// physical evolutions); 0 disables; default 1e-6.
+    #[schemars(range(min = 0))]
     pub tolerance: Option<f64>,
     /// Halve τ until J decreases; default on, off for physical flows.
     pub backtracking: Option<bool>,
     /// ε of the geometric time-step control `τ max_T |V⃗(z_a) − V⃗(z_b)|/h_T ≤ ε`;
     /// 0 switches it off; default 0.5.
+    #[schemars(range(min = 0))]
     pub step_control: Option<f64>,
     /// α of the plain `h1` product; default 0.01.
+    #[schemars(range(min = 0))]
     pub alpha: Option<f64>,
     /// β of the plain `h1` product; default 1.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub beta: Option<f64>,
     /// Largest relative change of the enclosed area/volume per step (`H^{-1}`
     /// flows; 0 switches it off); default 1e-6 for `stressed_film`, off otherwise.
+    #[schemars(range(min = 0))]
     pub conservation: Option<f64>,
 }
 
@@ -491,6 +536,7 @@ impl Default for MeshSpec {
 #[serde(deny_unknown_fields, default)]
 pub struct OutputSpec {
     /// Keep a checkpoint every this many iterations (and at the end); at least 1.
+    #[schemars(range(min = 1))]
     pub checkpoint_every: usize,
 }
 
