@@ -84,10 +84,11 @@ fn square_png() -> Vec<u8> {
 }
 
 /// Every bound the schema states (`exclusiveMinimum`, `minimum`, `maximum`,
-/// `minItems`) is one the parser enforces: a value just outside it is rejected by
-/// both, naming the field, and the value on an inclusive bound is accepted by both.
+/// `minItems`) and every rule between fields (`initial` and `problem.type`) is one
+/// the parser enforces: a value just outside it is rejected by both, the parser
+/// naming the field, and the value on an inclusive bound is accepted by both.
 #[test]
-fn the_schema_bounds_are_the_parser_bounds() {
+fn the_schema_bounds_and_rules_are_the_parser_ones() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let curve =
         json!({"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 16}});
@@ -175,6 +176,13 @@ fn the_schema_bounds_are_the_parser_bounds() {
         (with(&segmentation, "/problem/epsilon", json!(0.0)), false, "problem.epsilon"),
         (with(&curve, "/output", json!({"checkpoint_every": 0})), false, "output.checkpoint_every"),
         (with(&curve, "/output", json!({"checkpoint_every": 1})), true, ""),
+        // rules between fields that the schema states: only segmentation may leave
+        // `initial` out, film shapes are for the stressed film and only for it
+        (json!({"problem": {"type": "curvature_flow"}}), false, "initial"),
+        (with(&design, "/initial", Value::Null), false, "initial"),
+        (with(&segmentation, "/initial", Value::Null), true, ""),
+        (shape(&film, json!({"shape": "circle", "radius": 0.1})), false, "initial.shape"),
+        (shape(&curve, json!({"shape": "film", "height": 0.5})), false, "initial.shape"),
     ];
     for (name, bad) in [
         ("flow.tau", json!(0.0)),

@@ -24,6 +24,25 @@ impl SpecError {
 /// its mesh management and its output.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
+// the rules that tie `initial` to `problem.type`, as `prepare` applies them: only
+// segmentation may leave `initial` out, and film shapes are for the stressed film
+// and only for it
+#[schemars(extend("allOf" = [
+    {
+        "if": {"type": "object", "properties": {"problem": {"type": "object", "properties": {"type": {"const": "segmentation"}}}}},
+        "else": {"type": "object", "required": ["initial"], "properties": {"initial": {"type": "object"}}}
+    },
+    {
+        "if": {"type": "object", "properties": {"problem": {"type": "object", "properties": {"type": {"const": "stressed_film"}}}}},
+        "then": {"type": "object", "required": ["initial"], "properties": {"initial": {
+            "type": "object", "properties": {"shape": {"enum": ["film", "film_polyline"]}}
+        }}},
+        "else": {"type": "object", "properties": {"initial": {"anyOf": [
+            {"type": "null"},
+            {"type": "object", "properties": {"shape": {"not": {"enum": ["film", "film_polyline"]}}}}
+        ]}}}
+    }
+]))]
 pub struct JobSpec {
     pub problem: ProblemSpec,
     /// Required, except for segmentation (default: a circle/sphere inscribed in the image box).
