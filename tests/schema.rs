@@ -183,6 +183,11 @@ fn the_schema_bounds_and_rules_are_the_parser_ones() {
         (with(&segmentation, "/initial", Value::Null), true, ""),
         (shape(&film, json!({"shape": "circle", "radius": 0.1})), false, "initial.shape"),
         (shape(&curve, json!({"shape": "film", "height": 0.5})), false, "initial.shape"),
+        // inputs are named `input:NAME`
+        (with(&segmentation, "/problem/image", json!("img")), false, "problem.image"),
+        (with(&segmentation, "/problem/image", json!([])), false, "problem.image"),
+        (with(&segmentation, "/problem/image", json!(["input:img", "img"])), false, "problem.image[1]"),
+        (shape(&curve, json!({"shape": "mesh", "file": "m.obj"})), false, "initial.file"),
     ];
     for (name, bad) in [
         ("flow.tau", json!(0.0)),

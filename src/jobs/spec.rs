@@ -233,8 +233,8 @@ pub enum TargetSpec {
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 #[serde(untagged)]
 pub enum ImageSource {
-    One(String),
-    Slices(Vec<String>),
+    One(#[schemars(regex(pattern = "^input:."))] String),
+    Slices(#[schemars(length(min = 1), inner(regex(pattern = "^input:.")))] Vec<String>),
 }
 
 /// `problem` of `segmentation` (without its `type`).
@@ -456,6 +456,7 @@ pub enum InitialSpec {
     /// An uploaded mesh: `"input:NAME"` (OBJ, OFF, STL or glTF; closed curves as
     /// OBJ `l` polylines or glTF `LINE_LOOP`s in the plane z = 0).
     Mesh {
+        #[schemars(regex(pattern = "^input:."))]
         file: String,
     },
 }
