@@ -114,6 +114,37 @@ fn the_schema_bounds_and_rules_are_the_parser_ones() {
         (with(&curve, "/initial/radius", json!(0.0)), false, "initial.radius"),
         (with(&curve, "/initial/resolution", json!(2)), false, "initial.resolution"),
         (with(&curve, "/initial/resolution", json!(3)), true, ""),
+        (with(&curve, "/initial/resolution", json!(2_000_001)), false, "initial.resolution"),
+        (
+            shape(&curve, json!({"shape": "ellipse", "semi_axes": [1.0, 0.5], "resolution": 2})),
+            false,
+            "initial.resolution",
+        ),
+        (
+            shape(&curve, json!({"shape": "rectangle", "size": [1.0, 0.5], "resolution": 2})),
+            false,
+            "initial.resolution",
+        ),
+        (
+            shape(&curve, json!({"shape": "ellipse", "semi_axes": [1.0, 0.5], "resolution": 2_000_001})),
+            false,
+            "initial.resolution",
+        ),
+        (
+            shape(&curve, json!({"shape": "rectangle", "size": [1.0, 0.5], "resolution": 2_000_001})),
+            false,
+            "initial.resolution",
+        ),
+        (
+            shape(&curve, json!({"shape": "polygon", "points": [[0, 0], [1, 0], [0, 1]], "resolution": 2_000_001})),
+            false,
+            "initial.resolution",
+        ),
+        (
+            shape(&diffusion, json!({"shape": "ellipsoid", "semi_axes": [1.0, 0.5, 0.5], "resolution": 9})),
+            false,
+            "initial.resolution",
+        ),
         (shape(&curve, json!({"shape": "ellipse", "semi_axes": [1.0, 0.0]})), false, "initial.semi_axes[1]"),
         (shape(&curve, json!({"shape": "rectangle", "size": [-1.0, 1.0]})), false, "initial.size[0]"),
         (
@@ -154,6 +185,7 @@ fn the_schema_bounds_and_rules_are_the_parser_ones() {
         (with(&design, "/problem/gamma", json!(0.0)), true, ""),
         (with(&design, "/problem/spacing", json!(0.0)), false, "problem.spacing"),
         (with(&design, "/problem/outer/radius", json!(0.0)), false, "problem.outer.radius"),
+        (with(&design, "/problem/control/inner/radius", json!(-1.5)), false, "problem.control.inner.radius"),
         (with(&design, "/problem/control/outer/size", json!(-3.6)), false, "problem.control.outer.size"),
         (with(&design, "/problem/target/radius", json!(0.0)), false, "problem.target.radius"),
         (with(&film, "/problem/length", json!(0.0)), false, "problem.length"),
@@ -168,6 +200,7 @@ fn the_schema_bounds_and_rules_are_the_parser_ones() {
         (with(&film, "/initial/resolution", json!(100_001)), false, "initial.resolution"),
         (with(&polyline, "/initial/points", json!([[0.0, 0.5], [0.5, 0.5]])), false, "initial.points"),
         (with(&polyline, "/initial/resolution", json!(7)), false, "initial.resolution"),
+        (with(&polyline, "/initial/resolution", json!(100_001)), false, "initial.resolution"),
         (with(&segmentation, "/problem/sigma", json!(64.5)), false, "problem.sigma"),
         (with(&segmentation, "/problem/sigma", json!(-0.5)), false, "problem.sigma"),
         (with(&segmentation, "/problem/sigma", json!(0.0)), true, ""),

@@ -234,6 +234,17 @@ fn mesh_files_round_trip_and_errors_name_the_input() {
     let huge = off.replace("4 4 0", "4 200000000000 0");
     let e = read_mesh_file("huge.off", huge.as_bytes()).unwrap_err().to_string();
     assert!(e.contains("huge.off") && e.contains("faces"), "{e}");
+    let wide = off.replace("3 1 2 3\n", "5 1 2 3 0 1\n");
+    let e = read_mesh_file("wide.off", wide.as_bytes()).unwrap_err().to_string();
+    assert!(e.contains("wide.off") && e.contains("5 corners"), "{e}");
+    // colours after a face's indices are ignored
+    let coloured = off.replace("3 1 2 3\n", "3 1 2 3 0.5 0.25 1.0\n");
+    assert_eq!(read_mesh_file("coloured.off", coloured.as_bytes()).unwrap(), m);
+    // a face or polyline line cannot make the reader hold more indices than a mesh
+    // may have vertices
+    let long = format!("v 0 0 0\nf {}\n", "1 ".repeat(2_000_002));
+    let e = read_mesh_file("long.obj", long.as_bytes()).unwrap_err().to_string();
+    assert!(e.contains("long.obj") && e.contains("corners"), "{e}");
     let many = off.replace("4 4 0", "4 7999999 0");
     let e = read_mesh_file("many.off", many.as_bytes()).unwrap_err().to_string();
     assert!(e.contains("many.off") && e.contains("ends inside the face list"), "{e}");

@@ -128,9 +128,13 @@ pub fn shape_design(
         None => perimeter(&spec.outer) / 200.0,
     };
     if !(h.is_finite() && h > 0.0) {
-        // name the bad radius, size or point when there is one
-        polygon("problem.outer", &spec.outer, 1.0)?;
-        return Err(SpecError::new("problem.outer", "has no length"));
+        // name the bad radius or size when there is one
+        match &spec.outer {
+            BoundarySpec::Circle { radius, .. } => positive("problem.outer.radius", *radius)?,
+            BoundarySpec::Square { size, .. } => positive("problem.outer.size", *size)?,
+            BoundarySpec::Polygon { .. } => 0.0,
+        };
+        return Err(SpecError::new("problem.outer", "has no length, or one too large to sample"));
     }
     let outer = polygon("problem.outer", &spec.outer, h)?;
     let inner_d = polygon("problem.control.inner", &spec.control.inner, h)?;

@@ -57,6 +57,30 @@ pub fn read_mesh_file(name: &str, bytes: &[u8]) -> Result<AnyMesh, MeshFileError
     }
 }
 
+/// Largest number of triangles a mesh file may give (a closed surface has about
+/// twice as many triangles as vertices).
+const MAX_TRIANGLES: usize = 4 * MAX_VERTICES;
+
+/// The error of a file with more triangles than [`MAX_TRIANGLES`], checked as they
+/// are read so that a crafted file cannot make the reader hold many more.
+fn too_many_triangles(name: &str, tris: &[[usize; 3]]) -> Result<(), MeshFileError> {
+    if tris.len() > MAX_TRIANGLES {
+        return Err(MeshFileError::Content {
+            name: name.into(),
+            message: format!("more than {MAX_TRIANGLES} triangles"),
+        });
+    }
+    Ok(())
+}
+
+/// The error of a face or polyline with more corners than a mesh may have vertices.
+fn too_many_corners(name: &str, line: usize, n: usize) -> Result<(), MeshFileError> {
+    if n > MAX_VERTICES + 1 {
+        return Err(parse_err(name, line, format!("more than {MAX_VERTICES} corners")));
+    }
+    Ok(())
+}
+
 fn parse_err(name: &str, line: usize, message: impl Into<String>) -> MeshFileError {
     MeshFileError::Parse { name: name.into(), line, message: message.into() }
 }
@@ -84,8 +108,8 @@ fn read_obj(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
     let mut loops: Vec<Vec<usize>> = Vec::new();
     for (k, raw) in text.lines().enumerate() {
         let line = k + 1;
-        let parts: Vec<&str> = raw.split_whitespace().collect();
-        let Some((&tag, rest)) = parts.split_first() else {
+        let mut tokens = raw.split_whitespace();
+        let Some(tag) = tokens.next() else {
             continue;
         };
         let index = |tok: &str| -> Result<usize, MeshFileError> {
@@ -100,23 +124,33 @@ fn read_obj(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
         };
         match tag {
             "v" => {
-                if rest.len() < 3 {
+                let c: Vec<&str> = tokens.take(3).collect();
+                if c.len() < 3 {
                     return Err(parse_err(name, line, "vertex needs x y z"));
                 }
-                let c: Vec<f64> = nums(name, line, &rest[..3])?;
+                let c: Vec<f64> = nums(name, line, &c)?;
                 verts.push(Point::<3>::new(c[0], c[1], c[2]));
+                if verts.len() > MAX_VERTICES {
+                    return Err(MeshFileError::Content {
+                        name: name.into(),
+                        message: format!("more than {MAX_VERTICES} vertices"),
+                    });
+                }
             }
             "f" => {
-                let ids = rest.iter().map(|t| index(t)).collect::<Result<Vec<_>, _>>()?;
+                let ids = tokens.map(index).take(MAX_VERTICES + 2).collect::<Result<Vec<_>, _>>()?;
+                too_many_corners(name, line, ids.len())?;
                 if ids.len() < 3 {
                     return Err(parse_err(name, line, "face needs at least 3 vertices"));
                 }
                 for j in 1..ids.len() - 1 {
                     tris.push([ids[0], ids[j], ids[j + 1]]);
                 }
+                too_many_triangles(name, &tris)?;
             }
             "l" => {
-                let mut ids = rest.iter().map(|t| index(t)).collect::<Result<Vec<_>, _>>()?;
+                let mut ids = tokens.map(index).take(MAX_VERTICES + 2).collect::<Result<Vec<_>, _>>()?;
+                too_many_corners(name, line, ids.len())?;
                 if ids.len() > 1 && ids.first() == ids.last() {
                     ids.pop();
                 }
@@ -180,19 +214,15 @@ fn read_off(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
             message: format!("more than {MAX_VERTICES} vertices"),
         });
     }
-    // a closed surface has about twice as many triangles as vertices
-    if nf > 4 * MAX_VERTICES {
-        return Err(MeshFileError::Content {
-            name: name.into(),
-            message: format!("more than {} faces", 4 * MAX_VERTICES),
-        });
+    if nf > MAX_TRIANGLES {
+        return Err(MeshFileError::Content { name: name.into(), message: format!("more than {MAX_TRIANGLES} faces") });
     }
     // every vertex and face takes a line: the counts cannot reserve more than the text
     let mut verts = Vec::with_capacity(nv.min(text.len() / 6));
     let mut tris = Vec::with_capacity(nf.min(text.len() / 6));
     for _ in 0..nv {
         let (k, l) = lines.next().ok_or_else(|| parse_err(name, 0, "file ends inside the vertex list"))?;
-        let p: Vec<&str> = l.split_whitespace().collect();
+        let p: Vec<&str> = l.split_whitespace().take(3).collect();
         if p.len() < 3 {
             return Err(parse_err(name, k + 1, "vertex needs x y z"));
         }
@@ -201,11 +231,17 @@ fn read_off(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
     }
     for _ in 0..nf {
         let (k, l) = lines.next().ok_or_else(|| parse_err(name, 0, "file ends inside the face list"))?;
-        let p: Vec<&str> = l.split_whitespace().collect();
-        let ids: Vec<usize> = nums(name, k + 1, &p)?;
-        let Some((&cnt, rest)) = ids.split_first() else {
+        let mut p = l.split_whitespace();
+        let Some(cnt) = p.next() else {
             continue;
         };
+        let cnt: usize = nums(name, k + 1, &[cnt])?[0];
+        // a face with more corners than the mesh has vertices repeats one
+        if cnt > nv {
+            return Err(parse_err(name, k + 1, format!("a face of {cnt} corners in a mesh of {nv} vertices")));
+        }
+        // indices after the count's (colours) are ignored
+        let rest: Vec<usize> = nums(name, k + 1, &p.take(cnt).collect::<Vec<_>>())?;
         if cnt < 3 || rest.len() < cnt {
             return Err(parse_err(name, k + 1, "face needs a count and that many indices (at least 3)"));
         }
@@ -215,6 +251,7 @@ fn read_off(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
         for j in 1..cnt - 1 {
             tris.push([rest[0], rest[j], rest[j + 1]]);
         }
+        too_many_triangles(name, &tris)?;
     }
     surface(name, verts, tris)
 }

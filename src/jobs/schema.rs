@@ -1,9 +1,12 @@
 //! The job spec as JSON Schema (draft 2020-12), derived from the types of
-//! [`super::spec`] so that it cannot drift from what the parser accepts: the same
-//! field names, tags, defaults and `additionalProperties: false` (unknown fields are
-//! rejected). It describes the shape of a spec, not every rule of [`super::prepare`]
-//! (a radius must be positive, a curve must lie inside `Σ`, ...): a spec the schema
-//! accepts can still get a 422 naming its field.
+//! [`super::spec`]: the same field names, tags, defaults and
+//! `additionalProperties: false` (unknown fields are rejected) as the parser, by
+//! construction. The bounds of single values, the rules tying `initial` to
+//! `problem.type` and the `input:NAME` form are written next to the fields
+//! (`#[schemars(...)]`) to match the checks of [`super::prepare`]; `tests/schema.rs`
+//! holds the two to agreement. Rules relating geometry (a curve inside `Σ`,
+//! `tau_min ≤ tau`) are not stated: a spec the schema accepts can still get a 422
+//! naming its field.
 //!
 //! `api/job-spec.schema.json` is [`job_spec_schema`] (a test keeps it current;
 //! `shapeflow schema` prints it), and `/v1/openapi.json` carries

@@ -233,8 +233,8 @@ pub enum TargetSpec {
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 #[serde(untagged)]
 pub enum ImageSource {
-    One(#[schemars(regex(pattern = "^input:."))] String),
-    Slices(#[schemars(length(min = 1), inner(regex(pattern = "^input:.")))] Vec<String>),
+    One(#[schemars(regex(pattern = "^input:"))] String),
+    Slices(#[schemars(length(min = 1), inner(regex(pattern = "^input:")))] Vec<String>),
 }
 
 /// `problem` of `segmentation` (without its `type`).
@@ -456,7 +456,7 @@ pub enum InitialSpec {
     /// An uploaded mesh: `"input:NAME"` (OBJ, OFF, STL or glTF; closed curves as
     /// OBJ `l` polylines or glTF `LINE_LOOP`s in the plane z = 0).
     Mesh {
-        #[schemars(regex(pattern = "^input:."))]
+        #[schemars(regex(pattern = "^input:"))]
         file: String,
     },
 }
@@ -474,7 +474,7 @@ pub struct FlowSpec {
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub tau: Option<f64>,
     /// The run stops with `tau_min` when a step would need a smaller τ; default 1e-10
-    /// (`stressed_film` 1e-15).
+    /// (`stressed_film` 1e-15), or `tau` when that is smaller.
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub tau_min: Option<f64>,
     /// Default 1000.
