@@ -521,10 +521,25 @@ fn build_initial(field: &str, s: &InitialSpec, inputs: &HashMap<String, Vec<u8>>
             }
             let mut curves = Vec::new();
             let mut surfaces = Vec::new();
+            let mut vertices = 0;
             for (i, part) in parts.iter().enumerate() {
-                match build_initial(&format!("{field}.parts[{i}]"), part, inputs)? {
-                    AnyMesh::Curve(c) => curves.push(c),
-                    AnyMesh::Surface(s) => surfaces.push(s),
+                let at_part = format!("{field}.parts[{i}]");
+                vertices += match build_initial(&at_part, part, inputs)? {
+                    AnyMesh::Curve(c) => {
+                        curves.push(c);
+                        curves.last().map_or(0, |c| c.num_vertices())
+                    }
+                    AnyMesh::Surface(s) => {
+                        surfaces.push(s);
+                        surfaces.last().map_or(0, |s| s.num_vertices())
+                    }
+                };
+                // each part is within the limit; so must all of them be together
+                if vertices > MAX_VERTICES {
+                    return Err(SpecError::new(
+                        at_part,
+                        format!("the parts up to this one have more than {MAX_VERTICES} vertices in all"),
+                    ));
                 }
             }
             if !surfaces.is_empty() && !curves.is_empty() {
@@ -553,11 +568,14 @@ fn build_initial(field: &str, s: &InitialSpec, inputs: &HashMap<String, Vec<u8>>
                 positive(&format!("{field}.size[{i}]"), *a)?;
             }
             let div = positive(&at("resolution"), *resolution)?;
-            let cells: f64 = size.iter().map(|s| (s * div).max(1.0)).product::<f64>().powf(2.0 / 3.0) * 6.0;
-            if cells > MAX_VERTICES as f64 {
+            // the vertices of the faces' grids (`box_surface`): those of the (n+1)³
+            // lattice box less its interior, counted in f64 against overflow
+            let n: Vec<f64> = size.iter().map(|s| (s * div).round().max(1.0)).collect();
+            let vertices = (n[0] + 1.0) * (n[1] + 1.0) * (n[2] + 1.0) - (n[0] - 1.0) * (n[1] - 1.0) * (n[2] - 1.0);
+            if !(vertices <= MAX_VERTICES as f64) {
                 return Err(SpecError::new(
                     at("resolution"),
-                    format!("gives about {cells:.0} vertices, more than {MAX_VERTICES}"),
+                    format!("gives {vertices:.0} vertices, more than {MAX_VERTICES}"),
                 ));
             }
             surface(field, geometry::box_surface(*center, *size, div))
@@ -571,6 +589,15 @@ fn build_initial(field: &str, s: &InitialSpec, inputs: &HashMap<String, Vec<u8>>
             }
             let n = in_range(&at("resolution"), *resolution, 3, 4096)?;
             let n_minor = ((n as f64 * small / big).round() as usize).max(8);
+            if n * n_minor > MAX_VERTICES {
+                return Err(SpecError::new(
+                    at("resolution"),
+                    format!(
+                        "gives {} vertices ({n} around the axis, {n_minor} around the tube), more than {MAX_VERTICES}",
+                        n * n_minor
+                    ),
+                ));
+            }
             surface(field, geometry::torus(*center, big, small, n, n_minor))
         }
         InitialSpec::Film { .. } | InitialSpec::FilmPolyline { .. } => {
