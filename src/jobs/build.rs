@@ -524,16 +524,16 @@ fn build_initial(field: &str, s: &InitialSpec, inputs: &HashMap<String, Vec<u8>>
             let mut vertices = 0;
             for (i, part) in parts.iter().enumerate() {
                 let at_part = format!("{field}.parts[{i}]");
-                vertices += match build_initial(&at_part, part, inputs)? {
+                match build_initial(&at_part, part, inputs)? {
                     AnyMesh::Curve(c) => {
+                        vertices += c.num_vertices();
                         curves.push(c);
-                        curves.last().map_or(0, |c| c.num_vertices())
                     }
                     AnyMesh::Surface(s) => {
+                        vertices += s.num_vertices();
                         surfaces.push(s);
-                        surfaces.last().map_or(0, |s| s.num_vertices())
                     }
-                };
+                }
                 // each part is within the limit; so must all of them be together
                 if vertices > MAX_VERTICES {
                     return Err(SpecError::new(
