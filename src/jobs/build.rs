@@ -572,7 +572,7 @@ fn build_initial(field: &str, s: &InitialSpec, inputs: &HashMap<String, Vec<u8>>
             // lattice box less its interior, counted in f64 against overflow
             let n: Vec<f64> = size.iter().map(|s| (s * div).round().max(1.0)).collect();
             let vertices = (n[0] + 1.0) * (n[1] + 1.0) * (n[2] + 1.0) - (n[0] - 1.0) * (n[1] - 1.0) * (n[2] - 1.0);
-            if !(vertices <= MAX_VERTICES as f64) {
+            if vertices.is_nan() || vertices > MAX_VERTICES as f64 {
                 return Err(SpecError::new(
                     at("resolution"),
                     format!("gives {vertices:.0} vertices, more than {MAX_VERTICES}"),
