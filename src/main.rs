@@ -3,9 +3,11 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use shapeflow::export::{energy_csv, energy_svg, mask_nrrd, mask_png, overlay_png, shape_json};
+use shapeflow::export::{energy_csv, energy_svg};
 use shapeflow::flow::{Checkpoint, Progress};
-use shapeflow::jobs::{parse_spec, prepare, result_state, run_prepared, state_glb, states_glb, RunEvents};
+use shapeflow::jobs::{
+    image_results, parse_spec, prepare, result_state, run_prepared, shape_document, state_glb, states_glb, RunEvents,
+};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -209,11 +211,10 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
         let p = out.join(name);
         std::fs::write(&p, data).with_context(|| format!("cannot write {}", p.display()))
     };
-    let image = job.image.as_deref();
     // what the results show (a segmentation's contour refined onto the edges);
     // checkpoint.json keeps the flow's state for --resume
     let shown = result_state(&job, &last);
-    write("shape.json", serde_json::to_string_pretty(&shape_json(&shown.mesh, shown.energy, shown.iteration, image))?)?;
+    write("shape.json", serde_json::to_string_pretty(&shape_document(&job, &shown))?)?;
     write("energy.csv", energy_csv(&rep.history))?;
     write("energy.svg", energy_svg(&rep.history, &spec_path.display().to_string()))?;
     write("checkpoint.json", serde_json::to_string(&last)?)?;
@@ -227,15 +228,9 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
         write_bytes("evolution.glb", glb)?;
         written.push("evolution.glb");
     }
-    if let Some(img) = image {
-        if img.dimension == 2 {
-            write_bytes("mask.png", mask_png(img, &shown.mesh))?;
-            write_bytes("overlay.png", overlay_png(img, &shown.mesh))?;
-            written.extend(["mask.png", "overlay.png"]);
-        } else {
-            write_bytes("mask.nrrd", mask_nrrd(img, &shown.mesh))?;
-            written.push("mask.nrrd");
-        }
+    for (name, _, bytes) in image_results(&job, &shown) {
+        write_bytes(name, bytes)?;
+        written.push(name);
     }
     say(format_args!("wrote {} in {}", written.join(", "), out.display()));
     Ok(code)

@@ -154,7 +154,7 @@ fn star(cx: f64, cy: f64, r0: f64, amp: f64, arms: f64) -> impl Fn(f64, f64) -> 
 #[test]
 fn star_shaped_object_newton_h1() {
     let p = picture(128, 128, 12.0, 7, star(64.0, 64.0, 34.0, 0.3, 5.0));
-    let spec = r#"{"problem": {"type": "segmentation", "image": "input:image"}, "flow": {"max_iterations": 400}}"#;
+    let spec = r#"{"initial": {"shape": "inscribed"}, "problem": {"type": "segmentation", "image": "input:image", "model": "geodesic"}, "flow": {"max_iterations": 400}}"#;
     let (job, out) = run(spec, &[("image", png_gray8(&p))]);
     let shown = result_state(&job, &out.last);
     let (d, d_flow) = (dice(&job, &shown.mesh, &p.truth, 128, 128), dice(&job, &out.last.mesh, &p.truth, 128, 128));
@@ -185,9 +185,11 @@ fn star_shaped_object_newton_h1() {
 fn a_second_stage_without_balloon_force_sharpens_the_contour() {
     let p = picture(128, 128, 12.0, 7, star(64.0, 64.0, 34.0, 0.3, 5.0));
     let img = png_gray8(&p);
-    let (job, out, history) =
-        run_with_history(r#"{"problem": {"type": "segmentation", "image": "input:image"}}"#, &[("image", img.clone())]);
-    let one = r#"{"problem": {"type": "segmentation", "image": "input:image", "lambda_final": 38.4}}"#;
+    let (job, out, history) = run_with_history(
+        r#"{"initial": {"shape": "inscribed"}, "problem": {"type": "segmentation", "image": "input:image", "model": "geodesic"}}"#,
+        &[("image", img.clone())],
+    );
+    let one = r#"{"initial": {"shape": "inscribed"}, "problem": {"type": "segmentation", "image": "input:image", "model": "geodesic", "lambda_final": 38.4}}"#;
     let (job1, out1) = run(one, &[("image", img.clone())]);
     assert!(job1.second_stage.is_none(), "lambda_final = lambda: one stage");
     let (d2, d1) = (dice(&job, &out.last.mesh, &p.truth, 128, 128), dice(&job1, &out1.last.mesh, &p.truth, 128, 128));
@@ -211,7 +213,7 @@ fn a_second_stage_without_balloon_force_sharpens_the_contour() {
     let mut cps = Checkpoints::default();
     let job = prepare(
         parse_spec(
-            r#"{"problem": {"type": "segmentation", "image": "input:image"}, "output": {"checkpoint_every": 1}}"#,
+            r#"{"initial": {"shape": "inscribed"}, "problem": {"type": "segmentation", "image": "input:image", "model": "geodesic"}, "output": {"checkpoint_every": 1}}"#,
         )
         .unwrap(),
         &[("image".to_string(), img)].into(),
@@ -248,7 +250,7 @@ fn newton_h1_and_l2_on_a_c_shape() {
     let img = png_gray8(&p);
     let spec = |prod: &str| {
         format!(
-            r#"{{"problem": {{"type": "segmentation", "image": "input:image", "lambda_final": 38.4}}, "flow": {{"scalar_product": "{prod}", "max_iterations": 1500, "tolerance": 1e-10}}}}"#
+            r#"{{"initial": {{"shape": "inscribed"}}, "problem": {{"type": "segmentation", "image": "input:image", "model": "geodesic", "lambda_final": 38.4}}, "flow": {{"scalar_product": "{prod}", "max_iterations": 1500, "tolerance": 1e-10}}}}"#
         )
     };
     let (ja, a, ha) = run_with_history(&spec("h1_newton"), &[("image", img.clone())]);
@@ -295,7 +297,7 @@ fn four_objects_from_one_circle() {
         }
     };
     let p = picture(128, 128, 10.0, 11, inside);
-    let spec = r#"{"problem": {"type": "segmentation", "image": "input:image", "lambda": 40}, "flow": {"max_iterations": 600}}"#;
+    let spec = r#"{"initial": {"shape": "inscribed"}, "problem": {"type": "segmentation", "image": "input:image", "model": "geodesic", "lambda": 40}, "flow": {"max_iterations": 600}}"#;
     let (job, out) = run(spec, &[("image", png_gray8(&p))]);
     let m = mask(job.image.as_deref().unwrap(), &result_state(&job, &out.last).mesh);
     let cycles = out.last.mesh.to_mesh::<2>().unwrap().num_components();
@@ -325,7 +327,7 @@ fn four_objects_from_one_circle() {
 #[test]
 fn bit_depth_and_colour_do_not_change_the_result() {
     let p = picture(96, 80, 10.0, 3, star(48.0, 40.0, 24.0, 0.25, 4.0));
-    let spec = r#"{"problem": {"type": "segmentation", "image": "input:image"}, "flow": {"max_iterations": 300}}"#;
+    let spec = r#"{"initial": {"shape": "inscribed"}, "problem": {"type": "segmentation", "image": "input:image", "model": "geodesic"}, "flow": {"max_iterations": 300}}"#;
     let (_, a) = run(spec, &[("image", png_gray8(&p))]);
     for bytes in [png_gray16(&p), png_rgb8(&p)] {
         let (_, b) = run(spec, &[("image", bytes)]);

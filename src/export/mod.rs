@@ -5,12 +5,14 @@ mod energy_csv;
 mod energy_svg;
 mod gltf;
 mod image_results;
+mod objects;
 mod shape_json;
 
 pub use energy_csv::energy_csv;
 pub use energy_svg::energy_svg;
 pub use gltf::{evolution_glb, shape_glb, GltfFrame, FRAME_SECONDS};
 pub use image_results::{mask, mask_nrrd, mask_png, overlay_png, to_pixel};
+pub use objects::{labels_png, objects, objects_csv, ObjectRow};
 pub use shape_json::shape_json;
 
 use crate::flow::MeshData;

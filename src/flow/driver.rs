@@ -488,7 +488,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             }
             // the problem's constraints (an obstacle), then the step's O(τ²) change of
             // each component's measure (and what the constraint added) removed
-            candidate = self.problem.constrain(candidate);
+            candidate = self.problem.constrain_step(&self.mesh, candidate);
             if s.conservation.is_some() {
                 candidate = candidate.with_component_measures(&components);
             }
@@ -512,6 +512,14 @@ impl<'p, const D: usize> Flow<'p, D> {
                     Some(if energy == f64::INFINITY { Rejection::Inadmissible } else { Rejection::EnergyIncrease });
                 continue;
             }
+            tracing::debug!(
+                iteration = self.iteration + 1,
+                tau,
+                backtracks = report.backtracks,
+                reductions = report.reductions,
+                last_rejection = ?report.rejected,
+                "step accepted"
+            );
             let previous = self.energy;
             let before = std::mem::replace(&mut self.mesh, candidate);
             let (time, last_tau) = (self.time, self.tau);

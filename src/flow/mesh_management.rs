@@ -127,6 +127,12 @@ fn manage_curves(
         if let Some(m) = resolve_crossings(cur, &hits, s.params.min_area, s.params.fill_pockets).map_err(fail)? {
             (remeshed, moved) = (Some(m), None);
         }
+        // a component that shrank below min_area vanishes (its shrinking would
+        // otherwise hold every step to a fraction of its size)
+        let cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
+        if let Some(m) = crate::geometry::drop_small_loops(cur, s.params.min_area) {
+            (remeshed, moved) = (Some(m), None);
+        }
     }
     Ok(outcome(remeshed, moved))
 }

@@ -84,6 +84,12 @@ pub trait Problem<const D: usize>: Send {
     fn constrain(&self, candidate: Mesh<D>) -> Mesh<D> {
         candidate
     }
+    /// [`Problem::constrain`] with the shape the step starts from (the same
+    /// connectivity), for constraints between parts of the shape (segmentation:
+    /// objects that meet stop where they meet); by default `constrain(candidate)`.
+    fn constrain_step(&self, _current: &Mesh<D>, candidate: Mesh<D>) -> Mesh<D> {
+        self.constrain(candidate)
+    }
 }
 
 /// The discrete curvature `κ_i = N⃗_i·(A X)_i / |N⃗_i|²` and the unit vertex normals

@@ -12,6 +12,29 @@ pub(crate) fn from_polylines(parts: Vec<Vec<Point<2>>>) -> Result<CurveMesh, Mes
     Mesh::new(positions, elements)
 }
 
+/// Closed polygons as one mesh, each keeping its orientation (counter-clockwise
+/// for an outer boundary, clockwise for a hole); validated like any mesh.
+pub fn curves_from_loops(loops: Vec<Vec<Point<2>>>) -> Result<CurveMesh, MeshError> {
+    from_polylines(loops)
+}
+
+/// `mesh` without its closed components of `|area| < min_area` (a contour that
+/// shrank to nothing), or `None` if there is none, or if they are all there is
+/// (the last one is kept), or for a periodic mesh.
+pub fn drop_small_loops(mesh: &CurveMesh, min_area: f64) -> Option<CurveMesh> {
+    if mesh.period().is_some() {
+        return None;
+    }
+    let loops: Vec<Vec<Point<2>>> =
+        mesh.cycles().into_iter().map(|c| c.iter().map(|&v| mesh.positions()[v]).collect()).collect();
+    let keep: Vec<bool> = loops.iter().map(|l| super::curve_loop::loop_area(l).abs() >= min_area).collect();
+    if keep.iter().all(|&k| k) || keep.iter().all(|&k| !k) {
+        return None;
+    }
+    let kept = loops.into_iter().zip(keep).filter_map(|(l, k)| k.then_some(l)).collect();
+    from_polylines_trusted(kept).ok()
+}
+
 /// Like [`from_polylines`] for the remeshing kernels, which keep every component
 /// closed with at least three distinct vertices: no validation pass (an
 /// intersection created by a remeshing step is resolved by the topology step of

@@ -18,7 +18,7 @@ mod validate;
 pub use crossing_watch::CrossingWatch;
 pub use curve_remesh::{adapt_curve, manage_curve, regularize_curve, CurveRemeshSettings};
 pub use curve_topology::{mesh_winding_number, resolve_crossings, resolve_intersections, winding_number};
-pub use curves::{circle, ellipse, polygon, rectangle, union};
+pub use curves::{circle, curves_from_loops, drop_small_loops, ellipse, polygon, rectangle, union};
 pub use intersect::{find_periodic_intersections, find_segment_intersections, SegmentHit};
 pub use measures::MeshQuality;
 pub use mesh::{segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};

@@ -9,19 +9,23 @@
 //! (`j = 0` is the bottom row of the picture), so that y points up.
 
 mod bspline;
+pub mod contours;
 mod decode;
 mod edge;
 mod grid;
+pub mod labels;
 mod nrrd;
 mod raster;
 mod smooth;
+mod threshold;
 
 pub use decode::{decode_image, decode_slices, decode_volume, ImageLimits};
 pub use edge::{EdgeField, EdgeSample};
 pub use grid::{Grid, SampleKind};
-pub use nrrd::{encode_nrrd_mask, parse_nrrd};
+pub use nrrd::{encode_nrrd_labels, encode_nrrd_mask, parse_nrrd};
 pub use raster::{draw_overlay, rasterize_curve, rasterize_surface};
 pub use smooth::gaussian_smooth;
+pub use threshold::{noise_level, otsu, percentile, percentiles, smoothing_for_noise, Normalization, PERCENTILES};
 
 /// A bad or unsupported input file; `input` names it (the multipart part or file).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -141,6 +141,20 @@ pub fn encode_nrrd_mask(dims: [usize; 3], mask: &[bool]) -> Vec<u8> {
     out
 }
 
+/// A label volume as uint16 (little endian), gzip-encoded NRRD of size `dims`.
+pub fn encode_nrrd_labels(dims: [usize; 3], labels: &[u16]) -> Vec<u8> {
+    let mut out = format!(
+        "NRRD0004\n# shapeflow segmentation labels\ntype: uint16\ndimension: 3\nsizes: {} {} {}\nendian: little\nencoding: gzip\n\n",
+        dims[0], dims[1], dims[2]
+    )
+    .into_bytes();
+    let mut gz = GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    let raw: Vec<u8> = labels.iter().flat_map(|l| l.to_le_bytes()).collect();
+    gz.write_all(&raw).expect("writing to memory");
+    out.extend(gz.finish().expect("writing to memory"));
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

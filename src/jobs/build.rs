@@ -2,11 +2,12 @@
 //! initial mesh, the problem and the flow settings.
 
 use super::mesh_io::read_mesh_file;
-use super::spec::{ImageSource, InitialSpec, JobSpec, ProblemSpec, SegmentationSpec, SpecError};
+use super::segment::SegmentationSetup;
+use super::spec::{ImageSource, InitialSpec, JobSpec, ProblemSpec, SpecError};
 use crate::flow::{CurveManager, FlowSettings, Problem, ScalarProduct, SolverKind, SurfaceManager};
 use crate::geometry::{self, CurveMesh, Mesh, MeshError, Point, SurfaceMesh};
 use crate::imaging::{decode_image, decode_slices, decode_volume, EdgeField, Grid, ImageLimits};
-use crate::problems::{CurvatureFlow, Segmentation, ShapeDesign, StressedFilm, SurfaceDiffusion};
+use crate::problems::{ChanVese, CurvatureFlow, Segmentation, ShapeDesign, StressedFilm, SurfaceDiffusion};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -35,6 +36,8 @@ pub enum ProblemKind {
     CurvatureFlow(CurvatureFlow),
     SurfaceDiffusion(SurfaceDiffusion),
     Segmentation(Segmentation),
+    /// Region-based segmentation (Chan–Vese), possibly with the geodesic term.
+    ChanVese(ChanVese),
     ShapeDesign(ShapeDesign),
     StressedFilm(StressedFilm),
 }
@@ -55,6 +58,7 @@ impl ProblemKind {
             ProblemKind::CurvatureFlow(p) => p,
             ProblemKind::SurfaceDiffusion(p) => p,
             ProblemKind::Segmentation(p) => p,
+            ProblemKind::ChanVese(p) => p,
             ProblemKind::ShapeDesign(p) => p,
             ProblemKind::StressedFilm(p) => p,
         }
@@ -85,6 +89,8 @@ pub struct PreparedJob {
     /// (Addition) the edge field the results are refined onto: segmentation with
     /// `problem.edge_refinement` (default on); see [`result_state`](super::result_state).
     pub edges: Option<Arc<EdgeField>>,
+    /// (Addition) the settings of a segmentation, automatic or given.
+    pub segmentation: Option<SegmentationSetup>,
 }
 
 pub(super) fn positive(field: &str, v: f64) -> Result<f64, SpecError> {
@@ -120,6 +126,8 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     let mut image = None;
     let mut second_stage = None;
     let mut edges = None;
+    let mut image_mesh = None;
+    let mut segmentation = None;
     let early = match &spec.problem {
         ProblemSpec::CurvatureFlow { gamma, lambda } => {
             positive("problem.gamma", *gamma)?;
@@ -131,49 +139,12 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             positive("problem.gamma", *gamma)?;
             ProblemKind::SurfaceDiffusion(SurfaceDiffusion { gamma: *gamma })
         }
-        ProblemSpec::Segmentation(SegmentationSpec {
-            image: source,
-            sigma,
-            lambda,
-            lambda_final,
-            epsilon,
-            edge_refinement,
-        }) => {
-            let grid = load_image(source, inputs)?;
-            let epsilon = &epsilon.unwrap_or(super::spec::default_beta_epsilon(grid.scale()));
-            positive("problem.epsilon", *epsilon)?;
-            let sigma = &sigma.unwrap_or(super::spec::default_sigma(grid.dimension));
-            if !(sigma.is_finite() && *sigma >= 0.0 && *sigma <= 64.0) {
-                return Err(SpecError::new("problem.sigma", format!("must be between 0 and 64 pixels, got {sigma}")));
-            }
-            let lambda = &lambda.unwrap_or(super::spec::default_lambda(grid.dimension, grid.scale()));
-            if !(lambda.is_finite() && *lambda >= 0.0) {
-                return Err(SpecError::new("problem.lambda", format!("must be a nonnegative number, got {lambda}")));
-            }
-            let field = EdgeField::new(&grid, *sigma).ok_or_else(|| {
-                let names = match source {
-                    ImageSource::One(s) => s.clone(),
-                    ImageSource::Slices(v) => v.join(", "),
-                };
-                SpecError::new("problem.image", format!("the image {names} is constant: there is nothing to segment"))
-            })?;
-            let lambda_final = lambda_final.unwrap_or(super::spec::default_lambda_final(grid.dimension, *lambda));
-            if !(lambda_final.is_finite() && lambda_final >= 0.0) {
-                return Err(SpecError::new(
-                    "problem.lambda_final",
-                    format!("must be a nonnegative number, got {lambda_final}"),
-                ));
-            }
-            image = Some(Arc::new(grid));
-            let problem = Segmentation { field: Arc::new(field), lambda: *lambda, epsilon: *epsilon };
-            if edge_refinement.unwrap_or(true) {
-                edges = Some(problem.field.clone());
-            }
-            if lambda_final != *lambda {
-                second_stage =
-                    Some(ProblemKind::Segmentation(Segmentation { lambda: lambda_final, ..problem.clone() }));
-            }
-            ProblemKind::Segmentation(problem)
+        ProblemSpec::Segmentation(seg) => {
+            let prepared = super::segment::prepare_segmentation(seg, spec.initial.as_ref(), inputs)?;
+            image = Some(Arc::new(prepared.grid));
+            (second_stage, edges, image_mesh, segmentation) =
+                (prepared.second_stage, prepared.edges, prepared.mesh, Some(prepared.setup));
+            prepared.problem
         }
         // needs the initial curve: built below
         ProblemSpec::ShapeDesign(_) | ProblemSpec::StressedFilm(_) => {
@@ -185,13 +156,19 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         _ => None,
     };
     let mesh = match (&spec.initial, &image, &film_cell) {
+        _ if image_mesh.is_some() => image_mesh.take().expect("an image's initial shape"),
+        (Some(InitialSpec::Threshold {} | InitialSpec::Seeds { .. } | InitialSpec::Inscribed {}), _, _) => {
+            return Err(SpecError::new(
+                "initial.shape",
+                "this shape comes from an image: it needs problem.type `segmentation`",
+            ));
+        }
         (initial, _, Some(cell)) => AnyMesh::Curve(super::film::initial_film(cell, initial.as_ref())?),
         (Some(InitialSpec::Film { .. } | InitialSpec::FilmPolyline { .. }), _, None) => {
             return Err(SpecError::new("initial.shape", "film shapes are for problem.type `stressed_film`"));
         }
         (Some(initial), _, None) => build_initial("initial", initial, inputs)?,
-        (None, Some(grid), None) => inscribed(grid)?,
-        (None, None, None) => return Err(SpecError::new("initial", "missing field `initial`")),
+        (None, _, None) => return Err(SpecError::new("initial", "missing field `initial`")),
     };
     if let Some(grid) = &image {
         if grid.dimension != mesh.dimension() {
@@ -208,10 +185,21 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     let (mut curve_manager, surface_manager) = match &mesh {
         AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
         AnyMesh::Surface(m) => {
-            let pinch_off = spec.mesh.pinch_off.unwrap_or(!matches!(early, ProblemKind::Segmentation(_)));
+            let pinch_off = spec
+                .mesh
+                .pinch_off
+                .unwrap_or(!matches!(early, ProblemKind::Segmentation(_) | ProblemKind::ChanVese(_)));
             (None, surface_manager(&spec.mesh, m, pinch_off)?)
         }
     };
+    if let (Some(m), Some(setup), Some(grid), None) =
+        (curve_manager.as_mut(), &segmentation, &image, spec.mesh.min_area)
+    {
+        // a contour that shrinks below a quarter of the smallest object kept at the
+        // start is gone
+        let l = grid.scale();
+        m.params.min_area = m.params.min_area.max(0.25 * setup.min_size / (l * l));
+    }
     let problem = match (&spec.problem, &mesh) {
         (ProblemSpec::ShapeDesign(sd), AnyMesh::Curve(c)) => {
             let min_area = curve_manager.map_or(CurveManager::defaults_for(c).min_area, |m| m.params.min_area);
@@ -265,6 +253,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         ProblemKind::CurvatureFlow(p) => Problem::<2>::default_scalar_product(p),
         ProblemKind::SurfaceDiffusion(p) => Problem::<2>::default_scalar_product(p),
         ProblemKind::Segmentation(p) => Problem::<2>::default_scalar_product(p),
+        ProblemKind::ChanVese(p) => Problem::<2>::default_scalar_product(p),
         ProblemKind::ShapeDesign(p) => Problem::<2>::default_scalar_product(p),
         ProblemKind::StressedFilm(p) => Problem::<2>::default_scalar_product(p),
     };
@@ -288,6 +277,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         // β is clipped at ε and V = -G/ε, so a larger cap lets the step control decide
         (ProblemKind::Segmentation(_), ScalarProduct::H1Newton) => SEGMENTATION_NEWTON_TAU,
         (ProblemKind::Segmentation(_), _) => SEGMENTATION_L2_TAU,
+        (ProblemKind::ChanVese(p), _) => CHAN_VESE_TAU_PIXELS / p.intensity.scale(),
         // the step control and backtracking pick the step; τ only caps it
         (ProblemKind::ShapeDesign(_), _) => SHAPE_DESIGN_TAU,
         (ProblemKind::StressedFilm(_), _) => STRESSED_FILM_TAU,
@@ -354,6 +344,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         surface_manager,
         image,
         edges,
+        segmentation,
     })
 }
 
@@ -372,6 +363,12 @@ pub const SEGMENTATION_NEWTON_TAU: f64 = 10.0;
 /// Default `flow.tau` (the cap of the adaptive step) of shape design.
 pub const SHAPE_DESIGN_TAU: f64 = 10.0;
 
+/// Default `flow.tau` of Chan–Vese segmentation, times `L`: the data term's speed
+/// is at most `max(λ_in, λ_out)` (normalized intensities), so a step moves the
+/// contour at most about this many pixels; the step control and backtracking
+/// shorten it where needed.
+pub const CHAN_VESE_TAU_PIXELS: f64 = 8.0;
+
 /// Default `flow.tau` of segmentation with the L2 (and plain H1) product.
 pub const SEGMENTATION_L2_TAU: f64 = 1e-3;
 
@@ -386,7 +383,7 @@ fn input<'a>(field: &str, name: &str, inputs: &'a HashMap<String, Vec<u8>>) -> R
 }
 
 /// Decode the image of a segmentation job: 2D raster, NRRD volume or slice stack.
-fn load_image(source: &ImageSource, inputs: &HashMap<String, Vec<u8>>) -> Result<Grid, SpecError> {
+pub(super) fn load_image(source: &ImageSource, inputs: &HashMap<String, Vec<u8>>) -> Result<Grid, SpecError> {
     let limits = ImageLimits::default();
     match source {
         ImageSource::One(name) => {
@@ -406,25 +403,6 @@ fn load_image(source: &ImageSource, inputs: &HashMap<String, Vec<u8>>) -> Result
                 .collect::<Result<Vec<_>, _>>()?;
             decode_slices(&slices, &limits).map_err(|e| SpecError::new("problem.image", e.to_string()))
         }
-    }
-}
-
-/// The default initial shape of segmentation: a circle (sphere) inscribed in the
-/// image box, two pixels inside it, with vertices `max(4, L/128)` pixels apart (an
-/// icosphere with edges of about three pixels); adaptivity refines it where the
-/// contour bends.
-fn inscribed(grid: &Grid) -> Result<AnyMesh, SpecError> {
-    let ext = grid.extent();
-    let l = grid.scale();
-    if grid.dimension == 2 {
-        let r = 0.5 * ext[0].min(ext[1]) - 2.0 / l;
-        let spacing = (l / 128.0).max(4.0);
-        let n = ((std::f64::consts::TAU * r * l / spacing).round() as usize).clamp(32, 4096);
-        curve("initial", geometry::circle([0.5 * ext[0], 0.5 * ext[1]], r, n))
-    } else {
-        let r = 0.5 * ext[0].min(ext[1]).min(ext[2]) - 2.0 / l;
-        let level = (1.05 * r * l / 3.0).log2().round().clamp(1.0, 6.0) as u32;
-        surface("initial", geometry::icosphere([0.5 * ext[0], 0.5 * ext[1], 0.5 * ext[2]], r, level))
     }
 }
 
@@ -474,11 +452,11 @@ fn curve_manager(m: &super::spec::MeshSpec, initial: &CurveMesh) -> Result<Optio
     }))
 }
 
-fn curve(field: &str, m: Result<CurveMesh, MeshError>) -> Result<AnyMesh, SpecError> {
+pub(super) fn curve(field: &str, m: Result<CurveMesh, MeshError>) -> Result<AnyMesh, SpecError> {
     m.map(AnyMesh::Curve).map_err(|e| mesh_err(field, e))
 }
 
-fn surface(field: &str, m: Result<SurfaceMesh, MeshError>) -> Result<AnyMesh, SpecError> {
+pub(super) fn surface(field: &str, m: Result<SurfaceMesh, MeshError>) -> Result<AnyMesh, SpecError> {
     m.map(AnyMesh::Surface).map_err(|e| mesh_err(field, e))
 }
 
@@ -603,6 +581,9 @@ fn build_initial(field: &str, s: &InitialSpec, inputs: &HashMap<String, Vec<u8>>
         InitialSpec::Film { .. } | InitialSpec::FilmPolyline { .. } => {
             Err(SpecError::new(at("shape"), "film shapes are for problem.type `stressed_film`"))
         }
+        InitialSpec::Threshold {} | InitialSpec::Seeds { .. } | InitialSpec::Inscribed {} => {
+            Err(SpecError::new(at("shape"), "this shape comes from an image: it needs problem.type `segmentation`"))
+        }
         InitialSpec::Mesh { file } => {
             let (name, bytes) = input(&at("file"), file, inputs)?;
             read_mesh_file(name, bytes).map_err(|e| SpecError::new(at("file"), e.to_string()))
@@ -610,7 +591,7 @@ fn build_initial(field: &str, s: &InitialSpec, inputs: &HashMap<String, Vec<u8>>
     }
 }
 
-fn surface_union(parts: &[SurfaceMesh]) -> Result<SurfaceMesh, MeshError> {
+pub(super) fn surface_union(parts: &[SurfaceMesh]) -> Result<SurfaceMesh, MeshError> {
     let mut positions = Vec::new();
     let mut elements = Vec::new();
     for p in parts {

@@ -3,8 +3,11 @@
 
 use super::build::PreparedJob;
 use super::run::vertex_fields;
-use crate::export::{evolution_glb, shape_glb, GltfFrame};
+use crate::export::{
+    evolution_glb, labels_png, mask_nrrd, mask_png, objects, objects_csv, overlay_png, shape_glb, shape_json, GltfFrame,
+};
 use crate::flow::{Checkpoint, MeshData};
+use crate::imaging::encode_nrrd_labels;
 use crate::problems::refine_to_edges;
 use serde_json::{json, Value};
 
@@ -31,6 +34,61 @@ pub fn result_state(job: &PreparedJob, state: &Checkpoint) -> Checkpoint {
     match mesh {
         Some(mesh) => Checkpoint { mesh, ..state.clone() },
         None => state.clone(),
+    }
+}
+
+/// shape.json of the state `shown` (see [`result_state`]): the shape, and for
+/// image jobs the pixel coordinates, the settings of the segmentation
+/// (`"segmentation"`, automatic or given) and the table of objects (`"objects"`).
+pub fn shape_document(job: &PreparedJob, shown: &Checkpoint) -> Value {
+    let image = job.image.as_deref();
+    let mut doc = shape_json(&shown.mesh, shown.energy, shown.iteration, image);
+    if let Some(setup) = &job.segmentation {
+        doc["segmentation"] = serde_json::to_value(setup).unwrap_or(Value::Null);
+    }
+    if let Some(img) = image {
+        doc["objects"] = serde_json::to_value(objects(img, &shown.mesh).1).unwrap_or(Value::Null);
+    }
+    doc
+}
+
+/// The image results of a segmentation: `(file name, media type, bytes)` of the
+/// mask, the overlay (2D), the label image and the table of objects.
+pub fn image_results(job: &PreparedJob, shown: &Checkpoint) -> Vec<(&'static str, &'static str, Vec<u8>)> {
+    let Some(img) = job.image.as_deref() else { return Vec::new() };
+    let (labels, rows) = objects(img, &shown.mesh);
+    let csv = objects_csv(img.dimension, &rows).into_bytes();
+    if img.dimension == 2 {
+        vec![
+            ("mask.png", "image/png", mask_png(img, &shown.mesh)),
+            ("overlay.png", "image/png", overlay_png(img, &shown.mesh)),
+            ("labels.png", "image/png", labels_png(img, &labels)),
+            ("objects.csv", "text/csv", csv),
+        ]
+    } else {
+        vec![
+            ("mask.nrrd", "application/octet-stream", mask_nrrd(img, &shown.mesh)),
+            ("labels.nrrd", "application/octet-stream", encode_nrrd_labels(img.dims, &labels)),
+            ("objects.csv", "text/csv", csv),
+        ]
+    }
+}
+
+/// Names and media types of [`image_results`] for a 2D image or a volume.
+pub fn image_result_names(dimension: usize) -> &'static [(&'static str, &'static str)] {
+    if dimension == 2 {
+        &[
+            ("mask.png", "image/png"),
+            ("overlay.png", "image/png"),
+            ("labels.png", "image/png"),
+            ("objects.csv", "text/csv"),
+        ]
+    } else {
+        &[
+            ("mask.nrrd", "application/octet-stream"),
+            ("labels.nrrd", "application/octet-stream"),
+            ("objects.csv", "text/csv"),
+        ]
     }
 }
 

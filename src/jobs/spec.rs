@@ -45,7 +45,8 @@ impl SpecError {
 ]))]
 pub struct JobSpec {
     pub problem: ProblemSpec,
-    /// Required, except for segmentation (default: a circle/sphere inscribed in the image box).
+    /// Required, except for segmentation (default: `threshold` for 2D images,
+    /// `inscribed` for volumes).
     #[serde(default)]
     pub initial: Option<InitialSpec>,
     #[serde(default)]
@@ -266,6 +267,83 @@ pub struct SegmentationSpec {
     #[serde(default)]
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub epsilon: Option<f64>,
+    /// (Addition) the functional: `chan_vese` (region-based, one mean intensity
+    /// per object; the default for 2D images), `geodesic` (geodesic active
+    /// contours, the paper's; the default for volumes) or `both` (their sum).
+    #[serde(default)]
+    pub model: Option<SegmentationModel>,
+    /// (Addition, Chan–Vese) weight of the contour's length, in intensity² ×
+    /// pixels (the image normalized to [0, 1]); default 0.05.
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 1000))]
+    pub mu: Option<f64>,
+    /// (Addition, Chan–Vese) weight of the fit inside the objects; default 1.
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 1000))]
+    pub lambda_in: Option<f64>,
+    /// (Addition, Chan–Vese) weight of the fit outside the objects; default 1.
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 1000))]
+    pub lambda_out: Option<f64>,
+    /// (Addition, Chan–Vese) `per_object` (default: each object has its own mean
+    /// intensity, so that dim and bright objects are both fitted) or `global` (one
+    /// mean for all objects: the two-phase model).
+    #[serde(default)]
+    pub means: Option<MeansKind>,
+    /// (Addition) intensity normalization: the percentiles of the image mapped to
+    /// 0 and 1 (values beyond are clipped); default [0.5, 99.5].
+    #[serde(default)]
+    #[schemars(extend("items" = {"type": "number", "format": "double", "minimum": 0, "maximum": 100}))]
+    pub percentiles: Option<[f64; 2]>,
+    /// (Addition) whether the objects are `bright` or `dark`; default: the class
+    /// of the threshold that covers less of the image's border.
+    #[serde(default)]
+    pub polarity: Option<Polarity>,
+    /// (Addition) the threshold of the automatic initial shape on the normalized
+    /// scale [0, 1]; default Otsu's.
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 1))]
+    pub threshold: Option<f64>,
+    /// (Addition) objects of fewer pixels (voxels) are dropped from the automatic
+    /// initial shape, and holes of fewer are filled; default 16 (2D), 64 (3D).
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 1e9))]
+    pub min_size: Option<f64>,
+    /// (Addition) the automatic initial shape splits objects that touch, where a
+    /// neck is clearly narrower than both sides (a watershed of the distance
+    /// transform); they then stay separate objects. Default true.
+    #[serde(default)]
+    pub split_touching: Option<bool>,
+    /// (Addition, Chan–Vese with per-object means) whether objects merge where
+    /// their contours meet; default false: objects that start separate stay the
+    /// objects they are (a trial step that would make them overlap is shortened).
+    #[serde(default)]
+    pub merge: Option<bool>,
+}
+
+/// `problem.model` of segmentation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum SegmentationModel {
+    Geodesic,
+    ChanVese,
+    Both,
+}
+
+/// `problem.means` of Chan–Vese segmentation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum MeansKind {
+    PerObject,
+    Global,
+}
+
+/// `problem.polarity` of segmentation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Polarity {
+    Bright,
+    Dark,
 }
 
 /// Prefix of the message of a malformed `problem.image` (see [`parse_spec`]).
@@ -453,6 +531,25 @@ pub enum InitialSpec {
         #[schemars(range(min = 3, max = 4096))]
         resolution: usize,
     },
+    /// (Addition, segmentation) contours from the image itself, the default when
+    /// `initial` is omitted: a threshold of the smoothed image (Otsu's unless
+    /// `problem.threshold`), specks dropped, touching objects split, one closed
+    /// curve per object and per hole (marching squares).
+    Threshold {},
+    /// (Addition, segmentation) a grid of small circles, `spacing` pixels apart
+    /// (default 1/8 of the image's shorter side), of radius `radius` pixels
+    /// (default a quarter of the spacing).
+    Seeds {
+        #[serde(default)]
+        #[schemars(extend("exclusiveMinimum" = 0))]
+        spacing: Option<f64>,
+        #[serde(default)]
+        #[schemars(extend("exclusiveMinimum" = 0))]
+        radius: Option<f64>,
+    },
+    /// (Addition, segmentation) a circle (sphere) inscribed in the image box, two
+    /// pixels inside it (the default initial shape of volumes).
+    Inscribed {},
     /// An uploaded mesh: `"input:NAME"` (OBJ, OFF, STL or glTF; closed curves as
     /// OBJ `l` polylines or glTF `LINE_LOOP`s in the plane z = 0).
     Mesh {

@@ -1,5 +1,6 @@
 //! The applications, one module each, behind the [`crate::flow::Problem`] trait.
 
+mod chan_vese;
 mod curvature_flow;
 mod edge_refinement;
 mod segmentation;
@@ -7,6 +8,7 @@ mod shape_design;
 mod stressed_film;
 mod surface_diffusion;
 
+pub use chan_vese::ChanVese;
 pub use curvature_flow::CurvatureFlow;
 pub use edge_refinement::{blur_variance, refine_to_edges, EdgeRefinement};
 pub use segmentation::Segmentation;

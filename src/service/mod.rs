@@ -342,7 +342,7 @@ async fn shape(State(state): State<AppState>, Path(id): Path<String>) -> Result<
     let job = results::rebuild(&state, &id).await?;
     let doc = tokio::task::spawn_blocking(move || {
         let shown = crate::jobs::result_state(&job, &cp);
-        shape_json(&shown.mesh, shown.energy, shown.iteration, job.image.as_deref())
+        crate::jobs::shape_document(&job, &shown)
     })
     .await
     .map_err(|e| ApiError::Internal(e.to_string()))?;

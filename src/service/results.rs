@@ -3,9 +3,10 @@
 //! checkpoints (on the blocking pool: it recomputes curvature and normal velocity).
 
 use super::{find, ApiError, AppState};
-use crate::export::{mask_nrrd, mask_png, overlay_png};
 use crate::flow::Checkpoint;
-use crate::jobs::{parse_spec, prepare, result_state, state_glb, states_glb, PreparedJob};
+use crate::jobs::{
+    image_result_names, image_results, parse_spec, prepare, result_state, state_glb, states_glb, PreparedJob,
+};
 use axum::extract::{Path, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
@@ -57,11 +58,8 @@ pub(super) async fn manifest(State(state): State<AppState>, Path(id): Path<Strin
         files.push(json!({"name": "evolution.glb", "href": format!("{base}/results/evolution.glb"), "type": GLB}));
         let spec: Value = serde_json::from_str(&job.spec).unwrap_or(Value::Null);
         if spec["problem"]["type"] == "segmentation" {
-            let names: &[(&str, &str)] = if spec["problem"]["image"].is_array() || is_volume(&state, &id).await? {
-                &[("mask.nrrd", "application/octet-stream")]
-            } else {
-                &[("mask.png", "image/png"), ("overlay.png", "image/png")]
-            };
+            let volume = spec["problem"]["image"].is_array() || is_volume(&state, &id).await?;
+            let names = image_result_names(if volume { 3 } else { 2 });
             for (name, media) in names {
                 files.push(json!({"name": name, "href": format!("{base}/results/{name}"), "type": media}));
             }
@@ -100,13 +98,15 @@ async fn image_job(state: &AppState, id: &str) -> Result<(PreparedJob, Checkpoin
     .await
 }
 
-/// `GET /v1/jobs/{id}/results/mask.png` (2D), `.../mask.nrrd` (3D),
-/// `.../overlay.png` (2D): the segmentation of the latest state.
+/// `GET /v1/jobs/{id}/results/mask.png`, `overlay.png`, `labels.png` (2D),
+/// `mask.nrrd`, `labels.nrrd` (3D), `objects.csv`: the segmentation of the latest
+/// state ([`image_results`]).
 pub(super) async fn image_result(
     State(state): State<AppState>,
     Path((id, file)): Path<(String, String)>,
 ) -> Result<Response, ApiError> {
-    if !["mask.png", "overlay.png", "mask.nrrd"].contains(&file.as_str()) {
+    let known = [2, 3].iter().any(|&d| image_result_names(d).iter().any(|(n, _)| *n == file));
+    if !known {
         state.store.job(&id).await?.ok_or_else(|| ApiError::NotFound(format!("no job {id}")))?;
         return Err(ApiError::NotFound(format!(
             "no result {file:?}; GET /v1/jobs/{id}/results lists this job's files"
@@ -114,15 +114,10 @@ pub(super) async fn image_result(
     }
     let (job, cp) = image_job(&state, &id).await?;
     let dimension = job.image.as_ref().map_or(0, |g| g.dimension);
-    let (media, bytes) = match (file.as_str(), dimension) {
-        ("mask.png", 2) => ("image/png", blocking(move || mask_png(job.image.as_deref().unwrap(), &cp.mesh)).await?),
-        ("overlay.png", 2) => {
-            ("image/png", blocking(move || overlay_png(job.image.as_deref().unwrap(), &cp.mesh)).await?)
-        }
-        ("mask.nrrd", 3) => {
-            ("application/octet-stream", blocking(move || mask_nrrd(job.image.as_deref().unwrap(), &cp.mesh)).await?)
-        }
-        _ => return Err(ApiError::NotFound(format!("job {id} has no result {file} ({dimension}D image)"))),
+    let wanted = file.clone();
+    let found = blocking(move || image_results(&job, &cp).into_iter().find(|(n, _, _)| *n == wanted)).await?;
+    let Some((_, media, bytes)) = found else {
+        return Err(ApiError::NotFound(format!("job {id} has no result {file} ({dimension}D image)")));
     };
     Ok(([(header::CONTENT_TYPE, media)], bytes).into_response())
 }
