@@ -68,6 +68,9 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("GET", "/v1/jobs/{id}/results/mask.png"),
     ("GET", "/v1/jobs/{id}/results/overlay.png"),
     ("GET", "/v1/jobs/{id}/results/mask.nrrd"),
+    ("GET", "/v1/jobs/{id}/results/labels.png"),
+    ("GET", "/v1/jobs/{id}/results/labels.nrrd"),
+    ("GET", "/v1/jobs/{id}/results/objects.csv"),
     ("GET", "/v1/jobs/{id}/checkpoints"),
     ("GET", "/v1/jobs/{id}/checkpoints/{n}.glb"),
 ];
