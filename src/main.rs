@@ -6,7 +6,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use shapeflow::export::{energy_csv, energy_svg};
 use shapeflow::flow::{Checkpoint, Progress};
 use shapeflow::jobs::{
-    image_results, parse_spec, prepare, result_state, run_prepared, shape_document, state_glb, states_glb, RunEvents,
+    image_result_names, parse_spec, prepare, result_state, run_prepared, state_glb, states_glb, RunEvents, StateResults,
 };
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -214,7 +214,8 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
     // what the results show (a segmentation's contour refined onto the edges);
     // checkpoint.json keeps the flow's state for --resume
     let shown = result_state(&job, &last);
-    write("shape.json", serde_json::to_string_pretty(&shape_document(&job, &shown))?)?;
+    let results = StateResults::new(&job, &shown);
+    write("shape.json", serde_json::to_string_pretty(&results.shape_document())?)?;
     write("energy.csv", energy_csv(&rep.history))?;
     write("energy.svg", energy_svg(&rep.history, &spec_path.display().to_string()))?;
     write("checkpoint.json", serde_json::to_string(&last)?)?;
@@ -228,9 +229,13 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
         write_bytes("evolution.glb", glb)?;
         written.push("evolution.glb");
     }
-    for (name, _, bytes) in image_results(&job, &shown) {
-        write_bytes(name, bytes)?;
-        written.push(name);
+    if let Some(img) = job.image.as_deref() {
+        for &(name, _) in image_result_names(img.dimension) {
+            if let Some((_, bytes)) = results.image_file(name) {
+                write_bytes(name, bytes)?;
+                written.push(name);
+            }
+        }
     }
     say(format_args!("wrote {} in {}", written.join(", "), out.display()));
     Ok(code)

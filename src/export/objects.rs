@@ -4,14 +4,13 @@
 //! `"objects"` in shape.json).
 //!
 //! An object is a component of the shape together with the holes (cavities)
-//! inside it: components of negative measure belong to the smallest positive one
-//! around them. Area, perimeter (volume, surface area) and centroid come from the
+//! inside it ([`Mesh::objects`]). Area, perimeter (volume, surface area) and centroid come from the
 //! polygons (triangles), exact for the shape; the bounding box and the mean
 //! intensity from the object's pixels (voxels), whose centres it encloses.
 
 use super::image_results::to_pixel;
 use crate::flow::MeshData;
-use crate::geometry::{winding_number, Point};
+use crate::geometry::{Mesh, Point};
 use crate::imaging::{rasterize_curve, rasterize_surface, Grid};
 use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageEncoder};
@@ -38,7 +37,11 @@ pub struct ObjectRow {
 
 /// The label image (grid order, 2D rows from the bottom) and the table.
 pub fn objects(image: &Grid, mesh: &MeshData) -> (Vec<u16>, Vec<ObjectRow>) {
-    let groups = if mesh.dimension == 2 { curve_objects(mesh) } else { surface_objects(mesh) };
+    let groups = match mesh.dimension {
+        2 => mesh.to_mesh_unvalidated::<2>().map(|m| group(&m)),
+        _ => mesh.to_mesh_unvalidated::<3>().map(|m| group(&m)),
+    }
+    .unwrap_or_default();
     let l = image.scale();
     let d = image.dims;
     // measures from the shape: Σ over elements of the divergence-theorem integrands
@@ -126,99 +129,15 @@ pub fn objects(image: &Grid, mesh: &MeshData) -> (Vec<u16>, Vec<ObjectRow>) {
     (labels, rows)
 }
 
-/// The elements of each object of a curve mesh.
-fn curve_objects(mesh: &MeshData) -> Vec<Vec<usize>> {
-    let cycles = crate::geometry::segment_cycles(mesh.positions.len(), mesh.elements.iter().map(|e| (e[0], e[1])));
-    let pts: Vec<Vec<Point<2>>> = cycles
-        .iter()
-        .map(|c| c.iter().map(|&v| Point::<2>::new(mesh.positions[v][0], mesh.positions[v][1])).collect())
-        .collect();
-    let area: Vec<f64> = pts
-        .iter()
-        .map(|p| (0..p.len()).map(|k| 0.5 * (p[k].x * p[(k + 1) % p.len()].y - p[(k + 1) % p.len()].x * p[k].y)).sum())
-        .collect();
-    let mut owner: Vec<usize> = (0..cycles.len()).collect();
-    for h in (0..cycles.len()).filter(|&h| area[h] < 0.0) {
-        let around = (0..cycles.len())
-            .filter(|&o| area[o] > 0.0 && winding_number(&[&pts[o]], pts[h][0]) != 0)
-            .min_by(|&a, &b| area[a].total_cmp(&area[b]));
-        owner[h] = around.unwrap_or(h);
-    }
-    let mut vertex_cycle = vec![usize::MAX; mesh.positions.len()];
-    for (c, cyc) in cycles.iter().enumerate() {
-        for &v in cyc {
-            vertex_cycle[v] = c;
-        }
-    }
-    group(mesh, &owner, |e| vertex_cycle[mesh.elements[e][0]], |c| area[c] > 0.0)
-}
-
-/// The elements of each object of a surface mesh (cavities by bounding boxes).
-fn surface_objects(mesh: &MeshData) -> Vec<Vec<usize>> {
-    let n = mesh.positions.len();
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn find(p: &mut [usize], mut x: usize) -> usize {
-        while p[x] != x {
-            p[x] = p[p[x]];
-            x = p[x];
-        }
-        x
-    }
-    for el in &mesh.elements {
-        let r = find(&mut parent, el[0]);
-        for &v in &el[1..] {
-            let s = find(&mut parent, v);
-            parent[s] = r;
-        }
-    }
-    let mut id = vec![usize::MAX; n];
-    let mut nc = 0;
-    let mut comp_of_element = Vec::with_capacity(mesh.elements.len());
-    for el in &mesh.elements {
-        let r = find(&mut parent, el[0]);
-        if id[r] == usize::MAX {
-            id[r] = nc;
-            nc += 1;
-        }
-        comp_of_element.push(id[r]);
-    }
-    let mut volume = vec![0.0; nc];
-    let mut bbox = vec![([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]); nc];
-    for (e, el) in mesh.elements.iter().enumerate() {
-        let c = comp_of_element[e];
-        let [a, b, cc] = [0, 1, 2].map(|k| Point::<3>::from_fn(|i, _| mesh.positions[el[k]][i]));
-        volume[c] += a.dot(&(b - a).cross(&(cc - a))) / 6.0;
-        for p in [a, b, cc] {
-            for i in 0..3 {
-                bbox[c].0[i] = bbox[c].0[i].min(p[i]);
-                bbox[c].1[i] = bbox[c].1[i].max(p[i]);
-            }
-        }
-    }
-    let mut owner: Vec<usize> = (0..nc).collect();
-    for h in (0..nc).filter(|&h| volume[h] < 0.0) {
-        let within = |o: usize| (0..3).all(|i| bbox[o].0[i] <= bbox[h].0[i] && bbox[h].1[i] <= bbox[o].1[i]);
-        owner[h] = (0..nc)
-            .filter(|&o| volume[o] > 0.0 && within(o))
-            .min_by(|&a, &b| volume[a].total_cmp(&volume[b]))
-            .unwrap_or(h);
-    }
-    group(mesh, &owner, |e| comp_of_element[e], |c| volume[c] > 0.0)
-}
-
-/// Elements grouped by the owner of their component; components that own nothing
-/// positive (a hole with no curve around it) are left out.
-fn group(
-    mesh: &MeshData,
-    owner: &[usize],
-    component: impl Fn(usize) -> usize,
-    positive: impl Fn(usize) -> bool,
-) -> Vec<Vec<usize>> {
-    let mut slot = vec![usize::MAX; owner.len()];
+/// The elements of each object ([`Mesh::objects`]), objects in the order of their
+/// first element; holes with nothing around them are left out.
+fn group<const D: usize>(mesh: &Mesh<D>) -> Vec<Vec<usize>> {
+    let objects = mesh.objects();
+    let mut slot = vec![usize::MAX; objects.owner.len()];
     let mut out: Vec<Vec<usize>> = Vec::new();
-    for e in 0..mesh.elements.len() {
-        let o = owner[component(e)];
-        if !positive(o) {
+    for (e, el) in mesh.elements().iter().enumerate() {
+        let o = objects.owner[objects.vertex_component[el[0]]];
+        if objects.measures[o] <= 0.0 {
             continue;
         }
         if slot[o] == usize::MAX {

@@ -27,6 +27,21 @@ impl<const D: usize> From<&Mesh<D>> for MeshData {
 }
 
 impl MeshData {
+    /// The mesh of dimension `D` as it is, without validation (for reading off
+    /// results of any state); `None` if the data are not of dimension `D`.
+    pub fn to_mesh_unvalidated<const D: usize>(&self) -> Option<Mesh<D>> {
+        let n = self.positions.len();
+        if self.dimension != D
+            || self.positions.iter().any(|p| p.len() != D)
+            || self.elements.iter().any(|e| e.len() != D || e.iter().any(|&v| v >= n))
+        {
+            return None;
+        }
+        let positions = self.positions.iter().map(|p| Point::<D>::from_iterator(p.iter().copied())).collect();
+        let elements = self.elements.iter().map(|e| std::array::from_fn(|k| e[k])).collect();
+        Some(Mesh::from_trusted_parts(positions, elements))
+    }
+
     /// Rebuild a validated mesh of dimension `D`.
     pub fn to_mesh<const D: usize>(&self) -> Result<Mesh<D>, MeshError> {
         let positions = self

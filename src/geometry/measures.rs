@@ -30,7 +30,7 @@ impl<const D: usize> Mesh<D> {
     }
 
     /// The share of element `e` in [`Mesh::enclosed_measure`].
-    fn element_enclosed_contribution(&self, e: usize) -> f64 {
+    pub(super) fn element_enclosed_contribution(&self, e: usize) -> f64 {
         let p = self.element_points(e);
         if self.period().is_some() {
             -0.5 * (p[1][0] - p[0][0]) * (p[0][1] + p[1][1])

@@ -10,6 +10,7 @@ mod curves;
 mod intersect;
 mod measures;
 mod mesh;
+mod objects;
 pub mod simplex;
 mod surface_remesh;
 mod surfaces;
@@ -22,6 +23,7 @@ pub use curves::{circle, curves_from_loops, drop_small_loops, ellipse, polygon, 
 pub use intersect::{find_periodic_intersections, find_segment_intersections, SegmentHit};
 pub use measures::MeshQuality;
 pub use mesh::{segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};
+pub use objects::Objects;
 pub use surface_remesh::{
     adapt_surface, edge_statistics, regularize_surface, surface_edges, SurfaceEdge, SurfaceRemeshSettings,
 };

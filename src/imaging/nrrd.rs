@@ -129,28 +129,25 @@ pub fn parse_nrrd(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Gri
 
 /// A 0/1 uint8 mask of `dims` as a gzip NRRD file.
 pub fn encode_nrrd_mask(dims: [usize; 3], mask: &[bool]) -> Vec<u8> {
-    let mut out = format!(
-        "NRRD0004\n# shapeflow segmentation mask\ntype: uint8\ndimension: 3\nsizes: {} {} {}\nencoding: gzip\n\n",
-        dims[0], dims[1], dims[2]
-    )
-    .into_bytes();
-    let mut gz = GzEncoder::new(Vec::new(), flate2::Compression::fast());
     let raw: Vec<u8> = mask.iter().map(|&m| m as u8).collect();
-    gz.write_all(&raw).expect("writing to memory");
-    out.extend(gz.finish().expect("writing to memory"));
-    out
+    encode_gzip_nrrd(dims, "mask", "uint8", &raw)
 }
 
 /// A label volume as uint16 (little endian), gzip-encoded NRRD of size `dims`.
 pub fn encode_nrrd_labels(dims: [usize; 3], labels: &[u16]) -> Vec<u8> {
+    let raw: Vec<u8> = labels.iter().flat_map(|l| l.to_le_bytes()).collect();
+    encode_gzip_nrrd(dims, "labels", "uint16\nendian: little", &raw)
+}
+
+/// The header of a gzip NRRD of `dims` samples of `ty`, then `raw` compressed.
+fn encode_gzip_nrrd(dims: [usize; 3], what: &str, ty: &str, raw: &[u8]) -> Vec<u8> {
     let mut out = format!(
-        "NRRD0004\n# shapeflow segmentation labels\ntype: uint16\ndimension: 3\nsizes: {} {} {}\nendian: little\nencoding: gzip\n\n",
+        "NRRD0004\n# shapeflow segmentation {what}\ntype: {ty}\ndimension: 3\nsizes: {} {} {}\nencoding: gzip\n\n",
         dims[0], dims[1], dims[2]
     )
     .into_bytes();
     let mut gz = GzEncoder::new(Vec::new(), flate2::Compression::fast());
-    let raw: Vec<u8> = labels.iter().flat_map(|l| l.to_le_bytes()).collect();
-    gz.write_all(&raw).expect("writing to memory");
+    gz.write_all(raw).expect("writing to memory");
     out.extend(gz.finish().expect("writing to memory"));
     out
 }

@@ -108,7 +108,12 @@ pub(super) fn finite(field: &str, v: &[f64]) -> Result<(), SpecError> {
     }
 }
 
-fn in_range<T: PartialOrd + std::fmt::Display + Copy>(field: &str, v: T, lo: T, hi: T) -> Result<T, SpecError> {
+pub(super) fn in_range<T: PartialOrd + std::fmt::Display + Copy>(
+    field: &str,
+    v: T,
+    lo: T,
+    hi: T,
+) -> Result<T, SpecError> {
     if v >= lo && v <= hi {
         Ok(v)
     } else {

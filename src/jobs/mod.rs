@@ -17,9 +17,7 @@ mod spec_path;
 
 pub use build::{prepare, AnyMesh, PreparedJob, ProblemKind};
 pub use mesh_io::{read_mesh_file, MeshFileError};
-pub use results::{
-    image_result_names, image_results, job_extras, result_state, shape_document, state_glb, states_glb, MAX_FRAMES,
-};
+pub use results::{image_result_names, job_extras, result_state, state_glb, states_glb, StateResults, MAX_FRAMES};
 pub use run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
 pub use schema::{job_spec_schema, openapi_schemas};
 pub use segment::{default_min_size, SegmentationSetup, DEFAULT_MU};

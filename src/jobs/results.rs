@@ -4,12 +4,14 @@
 use super::build::PreparedJob;
 use super::run::vertex_fields;
 use crate::export::{
-    evolution_glb, labels_png, mask_nrrd, mask_png, objects, objects_csv, overlay_png, shape_glb, shape_json, GltfFrame,
+    evolution_glb, labels_png, mask_nrrd, mask_png, objects, objects_csv, overlay_png, shape_glb, shape_json,
+    GltfFrame, ObjectRow,
 };
 use crate::flow::{Checkpoint, MeshData};
-use crate::imaging::encode_nrrd_labels;
+use crate::imaging::{encode_nrrd_labels, Grid};
 use crate::problems::refine_to_edges;
 use serde_json::{json, Value};
+use std::cell::OnceCell;
 
 /// Largest number of frames in evolution.glb; longer runs are subsampled evenly
 /// (first and last checkpoint always kept).
@@ -37,44 +39,61 @@ pub fn result_state(job: &PreparedJob, state: &Checkpoint) -> Checkpoint {
     }
 }
 
-/// shape.json of the state `shown` (see [`result_state`]): the shape, and for
-/// image jobs the pixel coordinates, the settings of the segmentation
-/// (`"segmentation"`, automatic or given) and the table of objects (`"objects"`).
-pub fn shape_document(job: &PreparedJob, shown: &Checkpoint) -> Value {
-    let image = job.image.as_deref();
-    let mut doc = shape_json(&shown.mesh, shown.energy, shown.iteration, image);
-    if let Some(setup) = &job.segmentation {
-        doc["segmentation"] = serde_json::to_value(setup).unwrap_or(Value::Null);
-    }
-    if let Some(img) = image {
-        doc["objects"] = serde_json::to_value(objects(img, &shown.mesh).1).unwrap_or(Value::Null);
-    }
-    doc
+/// The result documents and files of one state `shown` (see [`result_state`]),
+/// each computed on request; the objects (label image and table), which several
+/// of them share, once.
+pub struct StateResults<'a> {
+    job: &'a PreparedJob,
+    shown: &'a Checkpoint,
+    objects: OnceCell<(Vec<u16>, Vec<ObjectRow>)>,
 }
 
-/// The image results of a segmentation: `(file name, media type, bytes)` of the
+impl<'a> StateResults<'a> {
+    pub fn new(job: &'a PreparedJob, shown: &'a Checkpoint) -> Self {
+        StateResults { job, shown, objects: OnceCell::new() }
+    }
+
+    fn objects(&self, image: &Grid) -> &(Vec<u16>, Vec<ObjectRow>) {
+        self.objects.get_or_init(|| objects(image, &self.shown.mesh))
+    }
+
+    /// shape.json: the shape, and for image jobs the pixel coordinates, the
+    /// settings of the segmentation (`"segmentation"`, automatic or given) and the
+    /// table of objects (`"objects"`).
+    pub fn shape_document(&self) -> Value {
+        let (job, shown) = (self.job, self.shown);
+        let image = job.image.as_deref();
+        let mut doc = shape_json(&shown.mesh, shown.energy, shown.iteration, image);
+        if let Some(setup) = &job.segmentation {
+            doc["segmentation"] = serde_json::to_value(setup).unwrap_or(Value::Null);
+        }
+        if let Some(img) = image {
+            doc["objects"] = serde_json::to_value(&self.objects(img).1).unwrap_or(Value::Null);
+        }
+        doc
+    }
+
+    /// The image result `name` ([`image_result_names`]) and its media type; `None`
+    /// if the job has no such file.
+    pub fn image_file(&self, name: &str) -> Option<(&'static str, Vec<u8>)> {
+        let img = self.job.image.as_deref()?;
+        let media = image_result_names(img.dimension).iter().find(|(n, _)| *n == name)?.1;
+        let mesh = &self.shown.mesh;
+        let bytes = match name {
+            "mask.png" => mask_png(img, mesh),
+            "overlay.png" => overlay_png(img, mesh),
+            "mask.nrrd" => mask_nrrd(img, mesh),
+            "labels.png" => labels_png(img, &self.objects(img).0),
+            "labels.nrrd" => encode_nrrd_labels(img.dims, &self.objects(img).0),
+            "objects.csv" => objects_csv(img.dimension, &self.objects(img).1).into_bytes(),
+            _ => return None,
+        };
+        Some((media, bytes))
+    }
+}
+
+/// Names and media types of the image results of a 2D image or a volume: the
 /// mask, the overlay (2D), the label image and the table of objects.
-pub fn image_results(job: &PreparedJob, shown: &Checkpoint) -> Vec<(&'static str, &'static str, Vec<u8>)> {
-    let Some(img) = job.image.as_deref() else { return Vec::new() };
-    let (labels, rows) = objects(img, &shown.mesh);
-    let csv = objects_csv(img.dimension, &rows).into_bytes();
-    if img.dimension == 2 {
-        vec![
-            ("mask.png", "image/png", mask_png(img, &shown.mesh)),
-            ("overlay.png", "image/png", overlay_png(img, &shown.mesh)),
-            ("labels.png", "image/png", labels_png(img, &labels)),
-            ("objects.csv", "text/csv", csv),
-        ]
-    } else {
-        vec![
-            ("mask.nrrd", "application/octet-stream", mask_nrrd(img, &shown.mesh)),
-            ("labels.nrrd", "application/octet-stream", encode_nrrd_labels(img.dims, &labels)),
-            ("objects.csv", "text/csv", csv),
-        ]
-    }
-}
-
-/// Names and media types of [`image_results`] for a 2D image or a volume.
 pub fn image_result_names(dimension: usize) -> &'static [(&'static str, &'static str)] {
     if dimension == 2 {
         &[

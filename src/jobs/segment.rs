@@ -4,7 +4,7 @@
 //! the functional (Chan–Vese, geodesic, or both). Every automatic choice is kept
 //! in a [`SegmentationSetup`] that the results report.
 
-use super::build::{curve, load_image, positive, surface, AnyMesh, ProblemKind};
+use super::build::{curve, in_range, load_image, positive, surface, AnyMesh, ProblemKind};
 use super::spec::{ImageSource, InitialSpec, MeansKind, Polarity, SegmentationModel, SegmentationSpec, SpecError};
 use crate::geometry::{self, Point};
 use crate::imaging::labels::{clean_mask, components, distance_transform, separate, split_touching};
@@ -59,14 +59,6 @@ pub(super) struct PreparedSegmentation {
     pub setup: SegmentationSetup,
 }
 
-fn in_unit(field: &str, v: f64, hi: f64) -> Result<f64, SpecError> {
-    if v.is_finite() && (0.0..=hi).contains(&v) {
-        Ok(v)
-    } else {
-        Err(SpecError::new(field, format!("must be between 0 and {hi}, got {v}")))
-    }
-}
-
 pub(super) fn prepare_segmentation(
     spec: &SegmentationSpec,
     initial: Option<&InitialSpec>,
@@ -75,8 +67,8 @@ pub(super) fn prepare_segmentation(
     let grid = load_image(&spec.image, inputs)?;
     let (d, l) = (grid.dimension, grid.scale());
     let percentiles = spec.percentiles.unwrap_or([PERCENTILES.0, PERCENTILES.1]);
-    in_unit("problem.percentiles[0]", percentiles[0], 100.0)?;
-    in_unit("problem.percentiles[1]", percentiles[1], 100.0)?;
+    in_range("problem.percentiles[0]", percentiles[0], 0.0, 100.0)?;
+    in_range("problem.percentiles[1]", percentiles[1], 0.0, 100.0)?;
     if percentiles[0] >= percentiles[1] {
         return Err(SpecError::new("problem.percentiles", "the first must be below the second"));
     }
@@ -104,17 +96,17 @@ pub(super) fn prepare_segmentation(
     };
     let smoothed = gaussian_smooth(&unit, sigma);
     let threshold = match spec.threshold {
-        Some(t) => in_unit("problem.threshold", t, 1.0)?,
+        Some(t) => in_range("problem.threshold", t, 0.0, 1.0)?,
         None => otsu(&smoothed.values).ok_or_else(constant)?,
     };
     let polarity = spec.polarity.unwrap_or_else(|| border_polarity(&smoothed, threshold));
     let min_size = match spec.min_size {
-        Some(m) => in_unit("problem.min_size", m, 1e9)?,
+        Some(m) => in_range("problem.min_size", m, 0.0, 1e9)?,
         None => default_min_size(d),
     };
-    let mu = in_unit("problem.mu", spec.mu.unwrap_or(DEFAULT_MU), 1000.0)?;
-    let lambda_in = in_unit("problem.lambda_in", spec.lambda_in.unwrap_or(1.0), 1000.0)?;
-    let lambda_out = in_unit("problem.lambda_out", spec.lambda_out.unwrap_or(1.0), 1000.0)?;
+    let mu = in_range("problem.mu", spec.mu.unwrap_or(DEFAULT_MU), 0.0, 1000.0)?;
+    let lambda_in = in_range("problem.lambda_in", spec.lambda_in.unwrap_or(1.0), 0.0, 1000.0)?;
+    let lambda_out = in_range("problem.lambda_out", spec.lambda_out.unwrap_or(1.0), 0.0, 1000.0)?;
     // the geodesic model's weights are checked whichever model runs
     for (field, v) in [("problem.lambda", spec.lambda), ("problem.lambda_final", spec.lambda_final)] {
         if let Some(v) = v.filter(|v| !(v.is_finite() && *v >= 0.0)) {
@@ -162,31 +154,22 @@ pub(super) fn prepare_segmentation(
 
     let mut second_stage = None;
     let mut edges = None;
+    // (the weights given in the spec are checked above)
     let geodesic = match model {
         SegmentationModel::ChanVese => None,
         _ => {
-            let epsilon = positive("problem.epsilon", spec.epsilon.unwrap_or(super::spec::default_beta_epsilon(l)))?;
-            let lambda = spec.lambda.unwrap_or(if model == SegmentationModel::Both {
-                0.0
-            } else {
-                super::spec::default_lambda(d, l)
+            let epsilon = spec.epsilon.unwrap_or(super::spec::default_beta_epsilon(l));
+            let lambda = spec.lambda.unwrap_or(match model {
+                SegmentationModel::Both => 0.0,
+                _ => super::spec::default_lambda(d, l),
             });
-            if !(lambda.is_finite() && lambda >= 0.0) {
-                return Err(SpecError::new("problem.lambda", format!("must be a nonnegative number, got {lambda}")));
-            }
             let field = EdgeField::new(&grid, sigma).ok_or_else(constant)?;
-            Some((Segmentation { field: Arc::new(field), lambda, epsilon }, spec.lambda_final))
+            Some(Segmentation { field: Arc::new(field), lambda, epsilon })
         }
     };
     let problem = match (model, geodesic) {
-        (SegmentationModel::Geodesic, Some((problem, lambda_final))) => {
-            let lambda_final = lambda_final.unwrap_or(super::spec::default_lambda_final(d, problem.lambda));
-            if !(lambda_final.is_finite() && lambda_final >= 0.0) {
-                return Err(SpecError::new(
-                    "problem.lambda_final",
-                    format!("must be a nonnegative number, got {lambda_final}"),
-                ));
-            }
+        (SegmentationModel::Geodesic, Some(problem)) => {
+            let lambda_final = spec.lambda_final.unwrap_or(super::spec::default_lambda_final(d, problem.lambda));
             if lambda_final != problem.lambda {
                 second_stage =
                     Some(ProblemKind::Segmentation(Segmentation { lambda: lambda_final, ..problem.clone() }));
@@ -208,7 +191,7 @@ pub(super) fn prepare_segmentation(
             let mut cv = ChanVese::new(d, grid.dims, &values, mu / l, (lambda_in, lambda_out));
             cv.per_object = means == MeansKind::PerObject;
             cv.separate = cv.per_object && !merge;
-            cv.geodesic = geodesic.map(|(g, _)| g);
+            cv.geodesic = geodesic;
             if spec.edge_refinement == Some(true) {
                 if let Some(g) = &cv.geodesic {
                     edges = Some(g.field.clone());

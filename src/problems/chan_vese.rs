@@ -22,7 +22,7 @@
 use super::Segmentation;
 use crate::fem::Weight;
 use crate::flow::{H1Weights, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
-use crate::geometry::{winding_number, Mesh, Point};
+use crate::geometry::{Mesh, Point};
 use crate::imaging::EdgeField;
 use std::sync::Arc;
 
@@ -78,14 +78,7 @@ impl ChanVese {
     }
 
     fn check_dimension<const D: usize>(&self) -> Result<(), ProblemError> {
-        if self.intensity.dimension() != D {
-            return Err(ProblemError(format!(
-                "a {}D image cannot segment a {}",
-                self.intensity.dimension(),
-                if D == 2 { "curve" } else { "surface" }
-            )));
-        }
-        Ok(())
+        super::check_image_dimension::<D>(self.intensity.dimension())
     }
 
     /// `(∫_e Φ_I ν₁, ∫_e Φ_Q ν₁, ∫_e x₁ ν₁)` over element `e`: two Gauss points per
@@ -143,44 +136,23 @@ impl ChanVese {
         acc
     }
 
-    /// The object of every component of `mesh` (components of negative measure, holes
-    /// and cavities, belong to the smallest positive one around them) and the moments
-    /// of every object; `per_object = false` puts everything in object 0.
+    /// The object of every component of `mesh` (holes and cavities belong to the
+    /// component around them, [`Mesh::objects`]) and the moments of every object;
+    /// `per_object = false` puts everything in object 0. Returns the component of
+    /// every vertex, the object of every component and the moments.
     fn objects<const D: usize>(&self, mesh: &Mesh<D>) -> (Vec<usize>, Vec<usize>, Vec<Moments>) {
-        let (vertex_component, nc) = mesh.component_labels();
-        let mut comp = vec![[0.0; 3]; nc];
+        let objects = mesh.objects();
+        let nc = objects.owner.len();
+        let mut moments = vec![[0.0; 3]; if self.per_object { nc.max(1) } else { 1 }];
+        let object_of: Vec<usize> = if self.per_object { objects.owner } else { vec![0; nc] };
         for e in 0..mesh.num_elements() {
-            let c = vertex_component[mesh.elements()[e][0]];
+            let o = object_of[objects.vertex_component[mesh.elements()[e][0]]];
             let m = self.element_moments(&mesh.element_points(e));
             for k in 0..3 {
-                comp[c][k] += m[k];
+                moments[o][k] += m[k];
             }
         }
-        let mut object_of: Vec<usize> = (0..nc).collect();
-        if !self.per_object {
-            object_of.iter_mut().for_each(|o| *o = 0);
-        } else if comp.iter().any(|m| m[2] < 0.0) {
-            let first_vertex = first_vertices(&vertex_component, nc);
-            let bbox = bounding_boxes(mesh, &vertex_component, nc);
-            for c in (0..nc).filter(|&c| comp[c][2] < 0.0) {
-                let x = mesh.positions()[first_vertex[c]];
-                let around = (0..nc)
-                    .filter(|&o| comp[o][2] > 0.0 && inside_box(&bbox[o], &x))
-                    .filter(|&o| D != 2 || encloses(mesh, &vertex_component, o, &x))
-                    .min_by(|&a, &b| comp[a][2].total_cmp(&comp[b][2]));
-                if let Some(o) = around {
-                    object_of[c] = o;
-                }
-            }
-        }
-        let objects = if self.per_object { nc } else { 1 };
-        let mut moments = vec![[0.0; 3]; objects.max(1)];
-        for c in 0..nc {
-            for k in 0..3 {
-                moments[object_of[c]][k] += comp[c][k];
-            }
-        }
-        (vertex_component, object_of, moments)
+        (objects.vertex_component, object_of, moments)
     }
 
     /// The fitted means `c_k` of the objects and `c_out`, and the region part of `J`.
@@ -252,52 +224,6 @@ fn crossing_vertices<const D: usize>(mesh: &Mesh<D>) -> Vec<usize> {
     out.sort_unstable();
     out.dedup();
     out
-}
-
-fn first_vertices(vertex_component: &[usize], nc: usize) -> Vec<usize> {
-    let mut first = vec![usize::MAX; nc];
-    for (v, &c) in vertex_component.iter().enumerate() {
-        if first[c] == usize::MAX {
-            first[c] = v;
-        }
-    }
-    first
-}
-
-fn bounding_boxes<const D: usize>(mesh: &Mesh<D>, vc: &[usize], nc: usize) -> Vec<[Point<D>; 2]> {
-    let mut b = vec![[Point::<D>::repeat(f64::INFINITY), Point::<D>::repeat(f64::NEG_INFINITY)]; nc];
-    for (x, &c) in mesh.positions().iter().zip(vc) {
-        b[c][0] = b[c][0].inf(x);
-        b[c][1] = b[c][1].sup(x);
-    }
-    b
-}
-
-fn inside_box<const D: usize>(b: &[Point<D>; 2], x: &Point<D>) -> bool {
-    (0..D).all(|a| x[a] >= b[0][a] && x[a] <= b[1][a])
-}
-
-/// Whether component `o` of a curve mesh winds around `x`.
-fn encloses<const D: usize>(mesh: &Mesh<D>, vc: &[usize], o: usize, x: &Point<D>) -> bool {
-    let lp: Vec<Point<2>> =
-        mesh.positions().iter().zip(vc).filter(|(_, &c)| c == o).map(|(p, _)| Point::<2>::new(p[0], p[1])).collect();
-    // the vertices of a component in cycle order: follow the elements
-    let mut next = vec![usize::MAX; mesh.num_vertices()];
-    for el in mesh.elements() {
-        next[el[0]] = el[D - 1];
-    }
-    let start = vc.iter().position(|&c| c == o).unwrap_or(0);
-    let mut cycle = Vec::with_capacity(lp.len());
-    let mut v = start;
-    while cycle.len() <= lp.len() {
-        let p = mesh.positions()[v];
-        cycle.push(Point::<2>::new(p[0], p[1]));
-        v = next[v];
-        if v == start || v == usize::MAX {
-            break;
-        }
-    }
-    winding_number(&[cycle], Point::<2>::new(x[0], x[1])) != 0
 }
 
 impl<const D: usize> Problem<D> for ChanVese {

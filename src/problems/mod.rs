@@ -15,3 +15,14 @@ pub use segmentation::Segmentation;
 pub use shape_design::{alpha_84, DesignSolution, GradientKind, ShapeDesign, Target};
 pub use stressed_film::StressedFilm;
 pub use surface_diffusion::SurfaceDiffusion;
+
+/// The error of an image problem run on a mesh of the other dimension.
+fn check_image_dimension<const D: usize>(image_dimension: usize) -> Result<(), crate::flow::ProblemError> {
+    if image_dimension != D {
+        return Err(crate::flow::ProblemError(format!(
+            "a {image_dimension}D image cannot segment a {}",
+            if D == 2 { "curve" } else { "surface" }
+        )));
+    }
+    Ok(())
+}

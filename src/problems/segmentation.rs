@@ -41,14 +41,7 @@ const GAUSS2: [f64; 2] = [0.211_324_865_405_187_1, 0.788_675_134_594_812_9];
 
 impl Segmentation {
     fn check_dimension<const D: usize>(&self) -> Result<(), ProblemError> {
-        if self.field.dimension() != D {
-            return Err(ProblemError(format!(
-                "a {}D image cannot segment a {}",
-                self.field.dimension(),
-                if D == 2 { "curve" } else { "surface" }
-            )));
-        }
-        Ok(())
+        super::check_image_dimension::<D>(self.field.dimension())
     }
 
     /// `(∫_e H, ∫_e Φ ν₁)` over element `e`.

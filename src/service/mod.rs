@@ -345,7 +345,7 @@ async fn shape(State(state): State<AppState>, Path(id): Path<String>) -> Result<
     let job = results::rebuild(&state, &id).await?;
     let doc = tokio::task::spawn_blocking(move || {
         let shown = crate::jobs::result_state(&job, &cp);
-        crate::jobs::shape_document(&job, &shown)
+        crate::jobs::StateResults::new(&job, &shown).shape_document()
     })
     .await
     .map_err(|e| ApiError::Internal(e.to_string()))?;

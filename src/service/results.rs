@@ -5,7 +5,7 @@
 use super::{find, ApiError, AppState};
 use crate::flow::Checkpoint;
 use crate::jobs::{
-    image_result_names, image_results, parse_spec, prepare, result_state, state_glb, states_glb, PreparedJob,
+    image_result_names, parse_spec, prepare, result_state, state_glb, states_glb, PreparedJob, StateResults,
 };
 use axum::extract::{Path, State};
 use axum::http::header;
@@ -100,7 +100,7 @@ async fn image_job(state: &AppState, id: &str) -> Result<(PreparedJob, Checkpoin
 
 /// `GET /v1/jobs/{id}/results/mask.png`, `overlay.png`, `labels.png` (2D),
 /// `mask.nrrd`, `labels.nrrd` (3D), `objects.csv`: the segmentation of the latest
-/// state ([`image_results`]).
+/// state ([`StateResults::image_file`]).
 pub(super) async fn image_result(
     State(state): State<AppState>,
     Path((id, file)): Path<(String, String)>,
@@ -115,8 +115,8 @@ pub(super) async fn image_result(
     let (job, cp) = image_job(&state, &id).await?;
     let dimension = job.image.as_ref().map_or(0, |g| g.dimension);
     let wanted = file.clone();
-    let found = blocking(move || image_results(&job, &cp).into_iter().find(|(n, _, _)| *n == wanted)).await?;
-    let Some((_, media, bytes)) = found else {
+    let found = blocking(move || StateResults::new(&job, &cp).image_file(&wanted)).await?;
+    let Some((media, bytes)) = found else {
         return Err(ApiError::NotFound(format!("job {id} has no result {file} ({dimension}D image)")));
     };
     Ok(([(header::CONTENT_TYPE, media)], bytes).into_response())
