@@ -54,20 +54,20 @@ fn nuclei_at_defaults() {
     assert!((80..=170).contains(&n), "{n} objects");
 }
 
-/// A 192² picture: twelve discs of contrasts 80–140 on an even background, two of
-/// them touching, Gaussian noise. (Discs of contrast 40 beside ones of 140, or an
-/// illumination gradient, are missed by the global threshold of the initial
-/// shape: a known limit, docs/segmentation-real-images.md.)
+/// A 192² picture: twelve discs of contrasts 40–140 on a background with an
+/// illumination gradient (29 levels across, most of the weakest contrast), two of
+/// them touching with different contrasts, Gaussian noise of 6 levels. Otsu's
+/// threshold alone finds 7 of them.
 #[test]
 fn many_objects_of_different_contrast_some_touching() {
     let (w, h) = (192usize, 192usize);
     let mut discs = Vec::new();
     for k in 0..10 {
         let (cx, cy) = (24.0 + 36.0 * (k % 5) as f64, 40.0 + 90.0 * (k / 5) as f64);
-        discs.push((cx, cy, 11.0, [80.0, 110.0, 140.0][k % 3]));
+        discs.push((cx, cy, 11.0, [40.0, 80.0, 140.0][k % 3]));
     }
     // a touching pair of different contrast
-    discs.push((42.0, 86.0, 10.0, 90.0));
+    discs.push((42.0, 86.0, 10.0, 60.0));
     discs.push((62.0, 86.0, 10.0, 130.0));
     let mut seed = 17u64;
     let mut noise = || {
@@ -85,7 +85,7 @@ fn many_objects_of_different_contrast_some_touching() {
     for r in 0..h {
         for c in 0..w {
             let (x, y) = (c as f64 + 0.5, r as f64 + 0.5);
-            let mut v = 30.0;
+            let mut v = 30.0 + 0.15 * x;
             for &(cx, cy, rad, add) in &discs {
                 if (x - cx).hypot(y - cy) < rad {
                     v += add;
@@ -96,18 +96,70 @@ fn many_objects_of_different_contrast_some_touching() {
             pixels[c + w * r] = (v + 6.0 * noise()).round().clamp(0.0, 255.0) as u8;
         }
     }
+    let (got, n, _) = segment(DEFAULTS, png_gray8(&pixels, w, h));
+    let d = dice(&got, &truth, w, h);
+    eprintln!("discs: dice {d:.4}, {n} objects (12)");
+    assert!(d >= 0.98, "dice {d}");
+    assert_eq!(n, 12, "{n} objects");
+}
+
+/// The five-armed star of tests/segmentation.rs at SNR 2 (contrast 130, noise 65,
+/// clipped to 8 bits). Peers, tuned: Dice 0.96–0.97.
+#[test]
+fn star_at_snr_2() {
+    let (w, h) = (128usize, 128usize);
+    let mut seed = 5u64;
+    let mut noise = || {
+        let mut s = 0.0;
+        for _ in 0..12 {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            s += (seed >> 11) as f64 / (1u64 << 53) as f64;
+        }
+        s - 6.0
+    };
+    let mut pixels = vec![0u8; w * h];
+    let mut truth = vec![false; w * h];
+    for r in 0..h {
+        for c in 0..w {
+            let (dx, dy) = (c as f64 + 0.5 - 64.0, r as f64 + 0.5 - 64.0);
+            let inside = dx.hypot(dy) < 34.0 * (1.0 + 0.3 * (5.0 * dy.atan2(dx)).cos());
+            truth[c + w * r] = inside;
+            let v = 60.0 + if inside { 130.0 } else { 0.0 } + 65.0 * noise();
+            pixels[c + w * r] = v.round().clamp(0.0, 255.0) as u8;
+        }
+    }
+    let (got, n, _) = segment(DEFAULTS, png_gray8(&pixels, w, h));
+    let d = dice(&got, &truth, w, h);
+    eprintln!("star at SNR 2: dice {d:.4}, {n} objects");
+    assert!(d >= 0.97, "dice {d}");
+    assert_eq!(n, 1);
+}
+
+/// A photograph of 24 coins on a background with uneven illumination (tests/data,
+/// from scikit-image). Without the illumination model, Otsu's threshold joins the
+/// top row of coins to the bright top of the background. No annotation ships with
+/// it: the count is checked, with the one bright patch at the top edge that is
+/// found as a 25th object and a bright piece inside a coin's dark figure.
+#[test]
+fn coins_at_defaults() {
+    let (_, n, job) = segment(DEFAULTS, include_bytes!("data/coins.png").to_vec());
+    let setup = job.segmentation.as_ref().unwrap();
+    eprintln!("coins: {n} objects; {setup:?}");
+    assert!((24..=26).contains(&n), "{n} objects");
+    assert!(setup.illumination_range > 0.05, "{}", setup.illumination_range);
+}
+
+fn png_gray8(pixels: &[u8], w: usize, h: usize) -> Vec<u8> {
     let mut png = Vec::new();
     image::ImageEncoder::write_image(
         image::codecs::png::PngEncoder::new(&mut png),
-        &pixels,
+        pixels,
         w as u32,
         h as u32,
         image::ExtendedColorType::L8,
     )
     .unwrap();
-    let (got, n, _) = segment(DEFAULTS, png);
-    let d = dice(&got, &truth, w, h);
-    eprintln!("discs: dice {d:.4}, {n} objects (12)");
-    assert!(d >= 0.9, "dice {d}");
-    assert_eq!(n, 12, "{n} objects");
+    png
 }

@@ -29,7 +29,9 @@
 //!    exceed what the step gains). `J_n` is replaced by the fresh value and the step
 //!    is tried again, once per iteration.
 //!
-//! Below `τ_min` the run stops with [`StopReason::TauMin`] on the last good state.
+//! Below `τ_min` the run stops with [`StopReason::TauMin`] on the last good state,
+//! or with [`StopReason::Converged`] when the trials were rejected for raising `J`
+//! by no more than `tolerance·|J|` (the state is stationary to the tolerance).
 
 use super::mesh_management::{Managed, MeshManager};
 use super::problem::{curvature_and_normals, Problem, SurfaceState};
@@ -429,6 +431,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             Some(_) => (self.mesh.enclosed_measure(), self.mesh.component_measures()),
             None => (0.0, Vec::new()),
         };
+        let mut smallest_rise = f64::INFINITY;
         loop {
             if tau < s.tau_min {
                 if report.rejected == Some(Rejection::EnergyIncrease) && self.rediscretized_at != Some(self.iteration) {
@@ -441,7 +444,15 @@ impl<'p, const D: usize> Flow<'p, D> {
                         return Ok(report);
                     }
                 }
-                report.stop = Some(StopReason::TauMin);
+                // no step lowers J, and none raises it by more than the tolerance:
+                // the state is stationary to the tolerance (rounding and quadrature
+                // of J, not a failure of the flow)
+                let stationary = s.tolerance > 0.0 && smallest_rise <= s.tolerance * self.energy.abs();
+                report.stop = Some(if report.rejected == Some(Rejection::EnergyIncrease) && stationary {
+                    StopReason::Converged
+                } else {
+                    StopReason::TauMin
+                });
                 return Ok(report);
             }
             let sys = LinearSystem {
@@ -506,6 +517,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             // +∞ marks an inadmissible candidate (shape design: Γ met D or Σ), which
             // is shortened even where backtracking is off
             if !report.contact && energy > self.energy && (s.backtracking || energy == f64::INFINITY) {
+                smallest_rise = smallest_rise.min(energy - self.energy);
                 tau *= 0.5;
                 report.backtracks += 1;
                 report.rejected =

@@ -8,6 +8,7 @@
 //! `((i+½)/L, (j+½)/L, (k+½)/L)`. 2D images are stored with their rows flipped
 //! (`j = 0` is the bottom row of the picture), so that y points up.
 
+mod background;
 mod bspline;
 pub mod contours;
 mod decode;
@@ -19,13 +20,17 @@ mod raster;
 mod smooth;
 mod threshold;
 
+pub use background::quadratic_background;
 pub use decode::{decode_image, decode_slices, decode_volume, ImageLimits};
 pub use edge::{EdgeField, EdgeSample};
 pub use grid::{Grid, SampleKind};
 pub use nrrd::{encode_nrrd_labels, encode_nrrd_mask, parse_nrrd};
 pub use raster::{draw_overlay, rasterize_curve, rasterize_surface};
 pub use smooth::gaussian_smooth;
-pub use threshold::{noise_level, otsu, percentile, percentiles, smoothing_for_noise, Normalization, PERCENTILES};
+pub use threshold::{
+    histogram_mode, noise_level, otsu, percentile, percentiles, smoothed_noise, smoothing_for_noise, Normalization,
+    PERCENTILES,
+};
 
 /// A bad or unsupported input file; `input` names it (the multipart part or file).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -94,6 +94,28 @@ pub fn smoothing_for_noise(noise: f64, dimension: usize) -> f64 {
     sigma.clamp(1.0, 4.0)
 }
 
+/// Standard deviation of white noise of standard deviation `noise` after a
+/// Gaussian of `sigma` samples in `dimension` dimensions: divided by `2σ√π` per
+/// pair of axes (2D: `2σ√π`; 3D: `(2σ√π)^{3/2}`); unchanged for `σ = 0`.
+pub fn smoothed_noise(noise: f64, sigma: f64, dimension: usize) -> f64 {
+    if sigma <= 0.0 {
+        return noise;
+    }
+    noise / (2.0 * sigma * std::f64::consts::PI.sqrt()).powf(dimension as f64 / 2.0)
+}
+
+/// The most frequent value of `values` in `[0, 1]` (centre of the fullest of 256
+/// bins): the background level of an image mostly made of background.
+pub fn histogram_mode(values: &[f64]) -> f64 {
+    const BINS: usize = 256;
+    let mut hist = [0usize; BINS];
+    for &v in values {
+        hist[((v.clamp(0.0, 1.0) * BINS as f64) as usize).min(BINS - 1)] += 1;
+    }
+    let best = (0..BINS).max_by_key(|&b| (hist[b], std::cmp::Reverse(b))).unwrap_or(0);
+    (best as f64 + 0.5) / BINS as f64
+}
+
 /// Otsu's threshold of values in `[0, 1]` (256 bins): the level that maximizes the
 /// between-class variance. `None` if all values fall in one bin.
 pub fn otsu(values: &[f64]) -> Option<f64> {
@@ -162,6 +184,15 @@ mod tests {
         let t = otsu(&values).unwrap();
         assert!(t > 0.2 && t <= 0.8, "{t}");
         assert!(otsu(&[0.5; 10]).is_none());
+    }
+
+    #[test]
+    fn mode_and_smoothed_noise() {
+        let values: Vec<f64> = (0..1000).map(|i| if i % 4 == 0 { 0.9 } else { 0.2 }).collect();
+        assert!((histogram_mode(&values) - 0.2).abs() < 1.0 / 256.0);
+        let s = smoothed_noise(0.1, 2.0, 2);
+        assert!((s - 0.1 / (4.0 * std::f64::consts::PI.sqrt())).abs() < 1e-15);
+        assert_eq!(smoothed_noise(0.1, 0.0, 3), 0.1);
     }
 
     #[test]

@@ -5,11 +5,14 @@
 //! in a [`SegmentationSetup`] that the results report.
 
 use super::build::{curve, in_range, load_image, positive, surface, AnyMesh, ProblemKind};
-use super::spec::{ImageSource, InitialSpec, MeansKind, Polarity, SegmentationModel, SegmentationSpec, SpecError};
+use super::spec::{
+    BackgroundModel, ImageSource, InitialSpec, MeansKind, Polarity, SegmentationModel, SegmentationSpec, SpecError,
+};
 use crate::geometry::{self, Point};
 use crate::imaging::labels::{clean_mask, components, distance_transform, separate, split_touching};
 use crate::imaging::{
-    contours, gaussian_smooth, noise_level, otsu, smoothing_for_noise, EdgeField, Grid, Normalization, PERCENTILES,
+    contours, gaussian_smooth, histogram_mode, noise_level, otsu, quadratic_background, smoothed_noise,
+    smoothing_for_noise, EdgeField, Grid, Normalization, PERCENTILES,
 };
 use crate::problems::{ChanVese, Segmentation};
 use serde::Serialize;
@@ -22,6 +25,9 @@ pub const DEFAULT_MU: f64 = 0.05;
 const SPLIT_RELATIVE_DEPTH: f64 = 0.0;
 /// Absolute depth (pixels) of a neck that splits touching objects.
 const SPLIT_DEPTH: f64 = 1.5;
+/// Dim objects are detected this many standard deviations of the smoothed noise
+/// away from the background level.
+const DIM_OBJECT_SNR: f64 = 8.0;
 
 /// The settings a segmentation ran with, automatic or given (shape.json and the
 /// job's results report them).
@@ -35,9 +41,15 @@ pub struct SegmentationSetup {
     pub noise: f64,
     /// Gaussian smoothing (pixels).
     pub sigma: f64,
+    pub background: BackgroundModel,
+    /// The range (largest minus smallest value) of the illumination removed.
+    pub illumination_range: f64,
     pub polarity: Polarity,
     /// Threshold of the automatic initial shape (normalized scale).
     pub threshold: f64,
+    /// The more permissive threshold for dim objects that the main one misses
+    /// entirely (`None` where it is not more permissive).
+    pub dim_threshold: Option<f64>,
     pub min_size: f64,
     /// Objects of the initial shape.
     pub initial_objects: usize,
@@ -95,11 +107,28 @@ pub(super) fn prepare_segmentation(
         None => smoothing_for_noise(noise, d).max(super::spec::default_sigma(d)),
     };
     let smoothed = gaussian_smooth(&unit, sigma);
+    let first = otsu(&smoothed.values).ok_or_else(constant)?;
+    let polarity = spec.polarity.unwrap_or_else(|| border_polarity(&smoothed, first));
+    let background_model = spec.background.unwrap_or(BackgroundModel::Quadratic);
+    let (smoothed, illumination) = match background_model {
+        BackgroundModel::Flat => (smoothed, 0.0),
+        BackgroundModel::Quadratic => flatten(smoothed, first, polarity),
+    };
     let threshold = match spec.threshold {
         Some(t) => in_range("problem.threshold", t, 0.0, 1.0)?,
         None => otsu(&smoothed.values).ok_or_else(constant)?,
     };
-    let polarity = spec.polarity.unwrap_or_else(|| border_polarity(&smoothed, threshold));
+    // dim objects: above the background level by DIM_OBJECT_SNR times the smoothed
+    // noise (a threshold only where it is more permissive than the main one)
+    let sign = if polarity == Polarity::Bright { 1.0 } else { -1.0 };
+    let dim_threshold = match spec.dim_threshold {
+        Some(t) => in_range("problem.dim_threshold", t, 0.0, 1.0)?,
+        None => {
+            let background = histogram_mode(&smoothed.values);
+            (background + sign * DIM_OBJECT_SNR * smoothed_noise(noise, sigma, d)).clamp(0.0, 1.0)
+        }
+    };
+    let dim_threshold = (sign * (threshold - dim_threshold) > 0.0).then_some(dim_threshold);
     let min_size = match spec.min_size {
         Some(m) => in_range("problem.min_size", m, 0.0, 1e9)?,
         None => default_min_size(d),
@@ -132,9 +161,9 @@ pub(super) fn prepare_segmentation(
     let mut background = None;
     match image_shape {
         Some(InitialSpec::Threshold {}) => {
-            let objects =
-                threshold_objects(&smoothed, threshold, polarity, min_size, spec.split_touching.unwrap_or(true));
-            let (m, count) = threshold_mesh(&smoothed, &objects, threshold, polarity)?;
+            let levels = Levels { main: threshold, dim: dim_threshold, sign };
+            let objects = threshold_objects(&smoothed, &levels, min_size, spec.split_touching.unwrap_or(true));
+            let (m, count) = threshold_mesh(&smoothed, &objects)?;
             (mesh, cut, initial_objects, background) = (Some(m), objects.cleared, count, Some(objects.background));
         }
         Some(InitialSpec::Seeds { spacing, radius }) => {
@@ -206,8 +235,11 @@ pub(super) fn prepare_segmentation(
         intensity_range: [norm.lo, norm.hi],
         noise,
         sigma,
+        background: background_model,
+        illumination_range: illumination,
         polarity,
         threshold,
+        dim_threshold,
         min_size,
         initial_objects,
         mu,
@@ -217,6 +249,33 @@ pub(super) fn prepare_segmentation(
         merge,
     };
     Ok(PreparedSegmentation { grid, problem, second_stage, edges, mesh, setup })
+}
+
+/// `smoothed` with a quadratic illumination removed (its mean over the background
+/// kept), fitted to the samples outside the objects of Otsu's threshold, twice (the
+/// second time with the threshold of the first corrected image); and the range of
+/// the illumination removed. Unchanged where the fit is not possible.
+fn flatten(smoothed: Grid, threshold: f64, polarity: Polarity) -> (Grid, f64) {
+    let sign = if polarity == Polarity::Bright { 1.0 } else { -1.0 };
+    let mut current = smoothed.clone();
+    let mut t = threshold;
+    let mut range = 0.0;
+    for _ in 0..2 {
+        let background: Vec<bool> = current.values.iter().map(|&v| sign * (v - t) <= 0.0).collect();
+        let Some(b) = quadratic_background(&smoothed, &background) else { break };
+        let (sum, n) =
+            b.iter().zip(&background).filter(|(_, &m)| m).fold((0.0, 0.0), |(s, n), (v, _)| (s + v, n + 1.0));
+        let mean = sum / n;
+        let (lo, hi) = b.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, c), &v| (a.min(v), c.max(v)));
+        range = hi - lo;
+        current =
+            Grid { values: smoothed.values.iter().zip(&b).map(|(v, b)| v - b + mean).collect(), ..smoothed.clone() };
+        match otsu(&current.values) {
+            Some(next) => t = next,
+            None => break,
+        }
+    }
+    (current, range)
 }
 
 /// Default `problem.min_size`: 16 pixels (a disc of radius 2.3), 64 voxels.
@@ -250,44 +309,80 @@ fn border_polarity(g: &Grid, t: f64) -> Polarity {
     }
 }
 
+/// The thresholds of the automatic initial shape.
+struct Levels {
+    main: f64,
+    /// The permissive threshold of dim objects, if any.
+    dim: Option<f64>,
+    /// +1 for bright objects, −1 for dark ones.
+    sign: f64,
+}
+
+impl Levels {
+    fn inside(&self, v: f64, t: f64) -> bool {
+        self.sign * (v - t) > 0.0
+    }
+}
+
 /// The objects of a thresholded image.
 pub(super) struct ThresholdObjects {
     /// Label per sample (`1..=count`, 0 background).
     pub labels: Vec<u32>,
     pub count: usize,
+    /// The threshold each label's contour is drawn at (index = label).
+    pub levels: Vec<f64>,
+    pub sign: f64,
     /// Samples cleared between touching objects.
     pub cleared: Vec<usize>,
     /// Mean of the smoothed image over the background.
     pub background: f64,
 }
 
-/// Threshold, specks and small holes, the split of touching objects, and one
-/// sample of background between objects.
-fn threshold_objects(s: &Grid, t: f64, polarity: Polarity, min_size: f64, split: bool) -> ThresholdObjects {
-    let mask: Vec<bool> = s.values.iter().map(|&v| (v > t) == (polarity == Polarity::Bright)).collect();
+/// The main threshold with specks dropped and small holes filled, touching objects
+/// split; then the components of the dim threshold that contain no sample of the
+/// main mask (dim objects the main threshold misses entirely) as objects of their
+/// own; one sample of background between objects.
+fn threshold_objects(s: &Grid, levels: &Levels, min_size: f64, split: bool) -> ThresholdObjects {
     let min = min_size.ceil() as usize;
-    let mask = clean_mask(&mask, s.dims, min);
-    let (bg_sum, bg_n) =
-        s.values.iter().zip(&mask).filter(|(_, &m)| !m).fold((0.0, 0usize), |(a, n), (v, _)| (a + v, n + 1));
-    let background = if bg_n > 0 { bg_sum / bg_n as f64 } else { 0.0 };
-    let (mut labels, count) = if split {
-        let dist = distance_transform(&mask, s.dims, [1.0; 3]);
-        split_touching(&mask, &dist, s.dims, SPLIT_DEPTH, SPLIT_RELATIVE_DEPTH)
+    let main: Vec<bool> = s.values.iter().map(|&v| levels.inside(v, levels.main)).collect();
+    let main = clean_mask(&main, s.dims, min);
+    let (mut labels, mut count) = if split {
+        let dist = distance_transform(&main, s.dims, [1.0; 3]);
+        split_touching(&main, &dist, s.dims, SPLIT_DEPTH, SPLIT_RELATIVE_DEPTH)
     } else {
-        components(&mask, s.dims)
+        components(&main, s.dims)
     };
+    let mut object_levels = vec![levels.main; count + 1];
+    if let Some(t) = levels.dim {
+        let dim: Vec<bool> = s.values.iter().map(|&v| levels.inside(v, t)).collect();
+        let dim = clean_mask(&dim, s.dims, min);
+        let (dim_labels, n) = components(&dim, s.dims);
+        let mut touches_main = vec![false; n + 1];
+        for (p, &l) in dim_labels.iter().enumerate() {
+            touches_main[l as usize] |= main[p];
+        }
+        let mut new_label = vec![0u32; n + 1];
+        for (p, &l) in dim_labels.iter().enumerate() {
+            if l != 0 && !touches_main[l as usize] {
+                if new_label[l as usize] == 0 {
+                    count += 1;
+                    new_label[l as usize] = count as u32;
+                    object_levels.push(t);
+                }
+                labels[p] = new_label[l as usize];
+            }
+        }
+    }
+    let (bg_sum, bg_n) =
+        s.values.iter().zip(&labels).filter(|(_, &l)| l == 0).fold((0.0, 0usize), |(a, n), (v, _)| (a + v, n + 1));
+    let background = if bg_n > 0 { bg_sum / bg_n as f64 } else { 0.0 };
     let cleared = separate(&mut labels, s.dims);
-    ThresholdObjects { labels, count, cleared, background }
+    ThresholdObjects { labels, count, levels: object_levels, sign: levels.sign, cleared, background }
 }
 
-/// One closed curve per object and hole of `objects`, on the threshold level of the
+/// One closed curve per object and hole of `objects`, on its threshold level of the
 /// smoothed image (sub-pixel) within each object's samples.
-fn threshold_mesh(
-    s: &Grid,
-    objects: &ThresholdObjects,
-    t: f64,
-    polarity: Polarity,
-) -> Result<(AnyMesh, usize), SpecError> {
+fn threshold_mesh(s: &Grid, objects: &ThresholdObjects) -> Result<(AnyMesh, usize), SpecError> {
     let none = || SpecError::new("initial", "the threshold finds no object in the image: give `initial` a shape");
     if s.dimension != 2 {
         return Err(SpecError::new(
@@ -305,17 +400,17 @@ fn threshold_mesh(
         }
     }
     let l = s.scale();
-    let sign = if polarity == Polarity::Bright { 1.0 } else { -1.0 };
     let mut loops = Vec::new();
     let mut count = 0;
     for (lab, b) in bbox.iter().enumerate().skip(1) {
         if b[0] == usize::MAX {
             continue;
         }
+        let t = objects.levels[lab];
         let window = [b[0].saturating_sub(1), (b[1] + 1).min(nx), b[2].saturating_sub(1), (b[3] + 1).min(ny)];
         let level = |i: usize, j: usize| {
             let p = i + nx * j;
-            let a = (sign * (s.values[p] - t)).abs().max(1e-3);
+            let a = (objects.sign * (s.values[p] - t)).abs().max(1e-3);
             if objects.labels[p] == lab as u32 {
                 a
             } else {

@@ -295,6 +295,11 @@ pub struct SegmentationSpec {
     #[serde(default)]
     #[schemars(extend("items" = {"type": "number", "format": "double", "minimum": 0, "maximum": 100}))]
     pub percentiles: Option<[f64; 2]>,
+    /// (Addition) the background model removed before thresholding and fitting:
+    /// `quadratic` (default: a quadratic illumination fitted to the background) or
+    /// `flat` (none).
+    #[serde(default)]
+    pub background: Option<BackgroundModel>,
     /// (Addition) whether the objects are `bright` or `dark`; default: the class
     /// of the threshold that covers less of the image's border.
     #[serde(default)]
@@ -304,6 +309,12 @@ pub struct SegmentationSpec {
     #[serde(default)]
     #[schemars(range(min = 0, max = 1))]
     pub threshold: Option<f64>,
+    /// (Addition) the threshold (normalized scale) at which dim objects that the
+    /// main threshold misses entirely are found; default: the background level
+    /// (the histogram's mode) plus 8 standard deviations of the smoothed noise.
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 1))]
+    pub dim_threshold: Option<f64>,
     /// (Addition) objects of fewer pixels (voxels) are dropped from the automatic
     /// initial shape, and holes of fewer are filled; default 16 (2D), 64 (3D).
     #[serde(default)]
@@ -336,6 +347,14 @@ pub enum SegmentationModel {
 pub enum MeansKind {
     PerObject,
     Global,
+}
+
+/// `problem.background` of segmentation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum BackgroundModel {
+    Flat,
+    Quadratic,
 }
 
 /// `problem.polarity` of segmentation.

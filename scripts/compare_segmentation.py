@@ -1,0 +1,185 @@
+#!/usr/bin/env python3
+"""Dev-only: shapeflow segmentation at defaults beside established active-contour
+tools with tuned parameters, measured in one run (BENCHMARKS.md, "Segmentation of
+real images").
+
+Needs: numpy, scipy, scikit-image, SimpleITK, tifffile, Pillow (pip), and a release
+build (`cargo build --release`). Usage:
+
+    python3 scripts/compare_segmentation.py [--quick]
+
+Images: tests/data/nuclei.png with its manual annotation (Dice and object count),
+tests/data/coins.png (count only: 24 coins, no annotation), and two synthetic
+pictures with known masks generated here (the twelve discs of different contrast
+on an illumination gradient, and the five-armed star at SNR 2).
+
+Peers, each tuned over a small grid on each image (the best Dice is reported, with
+the time of that run; the count of 4-connected components of its mask):
+scikit-image morphological geodesic active contour (MGAC) and morphological
+Chan-Vese (MCV), scikit-image Chan-Vese, SimpleITK geodesic active contour
+(seeded by an Otsu mask, as its documentation does). shapeflow runs the CLI on the
+file with the spec `{"problem": {"type": "segmentation", "image": "input:image"}}`;
+its time is the whole process (decoding, preparation, run, writing all results).
+"""
+import itertools
+import json
+import pathlib
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+import SimpleITK as sitk
+from PIL import Image
+from scipy import ndimage as ndi
+from skimage import filters, measure, segmentation
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+BIN = ROOT / "target" / "release" / "shapeflow"
+QUICK = "--quick" in sys.argv
+
+
+def dice(a, b):
+    return 2 * (a & b).sum() / (a.sum() + b.sum())
+
+
+def hausdorff(a, b):
+    """Symmetric Hausdorff distance (pixels) between the boundaries of two masks."""
+    if not a.any() or not b.any():
+        return float("inf")
+    ba = a & ~ndi.binary_erosion(a)
+    bb = b & ~ndi.binary_erosion(b)
+    da = ndi.distance_transform_edt(~bb)
+    db = ndi.distance_transform_edt(~ba)
+    return max(da[ba].max(), db[bb].max())
+
+
+def components(m):
+    return measure.label(m, connectivity=1).max()
+
+
+def discs():
+    h = w = 192
+    yy, xx = np.mgrid[0:h, 0:w] + 0.5
+    rng = np.random.default_rng(1)
+    v = 30 + 0.15 * xx
+    truth = np.zeros((h, w), bool)
+    spec = [(24 + 36 * (k % 5), 40 + 90 * (k // 5), 11, [40, 80, 140][k % 3]) for k in range(10)]
+    spec += [(42, 86, 10, 60), (62, 86, 10, 130)]
+    for cx, cy, r, a in spec:
+        m = (np.hypot(xx - cx, yy - cy) < r) & ~truth
+        v = v + a * m
+        truth |= m
+    img = np.clip(np.round(v + 6 * rng.standard_normal((h, w))), 0, 255).astype(np.uint8)
+    return img, truth
+
+
+def star_snr2():
+    yy, xx = np.mgrid[0:128, 0:128] + 0.5
+    dx, dy = xx - 64, yy - 64
+    truth = np.hypot(dx, dy) < 34 * (1 + 0.3 * np.cos(5 * np.arctan2(dy, dx)))
+    rng = np.random.default_rng(2)
+    img = np.clip(np.round(60 + 130 * truth + 65 * rng.standard_normal(truth.shape)), 0, 255).astype(np.uint8)
+    return img, truth
+
+
+def images():
+    nuclei = np.array(Image.open(ROOT / "tests/data/nuclei.png"))
+    labels = np.array(Image.open(ROOT / "tests/data/nuclei_labels.png"))
+    yield "nuclei (512², 125 annotated)", nuclei, labels > 0, len(np.unique(labels)) - 1
+    coins = np.array(Image.open(ROOT / "tests/data/coins.png"))
+    yield "coins (384×303, 24 coins)", coins, None, 24
+    img, truth = discs()
+    yield "12 discs, contrast 40–140, gradient", img, truth, 12
+    img, truth = star_snr2()
+    yield "star at SNR 2 (128²)", img, truth, 1
+
+
+def shapeflow(img):
+    with tempfile.TemporaryDirectory() as d:
+        d = pathlib.Path(d)
+        Image.fromarray(img).save(d / "image.png")
+        (d / "spec.json").write_text('{"problem": {"type": "segmentation", "image": "input:image"}}')
+        t = time.perf_counter()
+        subprocess.run([str(BIN), "run", str(d / "spec.json"), "--input", f"image={d / 'image.png'}", "--out", str(d / "out")],
+                       check=True, capture_output=True)
+        elapsed = time.perf_counter() - t
+        mask = np.array(Image.open(d / "out/mask.png")) > 0
+        objects = len(json.loads((d / "out/shape.json").read_text())["objects"])
+    return mask, elapsed, objects
+
+
+def normalized(img):
+    lo, hi = np.percentile(img, [0.5, 99.5])
+    return np.clip((img.astype(float) - lo) / (hi - lo), 0, 1)
+
+
+def polarity_fix(mask):
+    """Level-set peers do not know which phase is the object: take the phase that
+    covers less of the border."""
+    border = np.concatenate([mask[0], mask[-1], mask[:, 0], mask[:, -1]])
+    return ~mask if border.mean() > 0.5 else mask
+
+
+def peers(img):
+    u = normalized(img)
+    iters = [100] if QUICK else [100, 300]
+    for sigma, alpha, balloon, it in itertools.product([1, 2], [100, 400], [-1, 1], iters):
+        gimage = segmentation.inverse_gaussian_gradient(u, alpha=alpha, sigma=sigma)
+        init = np.zeros(u.shape, np.int8)
+        if balloon < 0:
+            init[2:-2, 2:-2] = 1
+        else:
+            init = segmentation.checkerboard_level_set(u.shape, 6).astype(np.int8)
+        t = time.perf_counter()
+        m = segmentation.morphological_geodesic_active_contour(gimage, it, init, smoothing=1, balloon=balloon) > 0
+        yield "skimage MGAC", dict(sigma=sigma, alpha=alpha, balloon=balloon, iterations=it), polarity_fix(m), time.perf_counter() - t
+    for smoothing, lam, it in itertools.product([0, 1, 2], [1, 2], iters):
+        t = time.perf_counter()
+        m = segmentation.morphological_chan_vese(u, it, init_level_set="checkerboard", smoothing=smoothing, lambda1=1, lambda2=lam) > 0
+        yield "skimage MCV", dict(smoothing=smoothing, lambda2=lam, iterations=it), polarity_fix(m), time.perf_counter() - t
+    for mu in ([0.1] if QUICK else [0.05, 0.1, 0.25]):
+        t = time.perf_counter()
+        m = segmentation.chan_vese(u, mu=mu, max_num_iter=200, tol=1e-3)
+        yield "skimage Chan-Vese", dict(mu=mu), polarity_fix(np.asarray(m, bool)), time.perf_counter() - t
+    for sigma, prop, curv in itertools.product([1.0, 2.0], [1.0, 2.0], [1.0, 4.0]):
+        t = time.perf_counter()
+        image = sitk.GetImageFromArray(u.astype(np.float32))
+        smooth = sitk.CurvatureAnisotropicDiffusion(image, timeStep=0.0625, numberOfIterations=5)
+        speed = sitk.BoundedReciprocal(sitk.GradientMagnitudeRecursiveGaussian(smooth, sigma=sigma))
+        seed = sitk.GetImageFromArray((filters.gaussian(u, 1) > filters.threshold_otsu(filters.gaussian(u, 1))).astype(np.float32))
+        levelset = sitk.SignedMaurerDistanceMap(sitk.Cast(seed, sitk.sitkUInt8), insideIsPositive=False, useImageSpacing=True)
+        gac = sitk.GeodesicActiveContourLevelSetImageFilter()
+        gac.SetPropagationScaling(prop)
+        gac.SetCurvatureScaling(curv)
+        gac.SetAdvectionScaling(1.0)
+        gac.SetMaximumRMSError(0.01)
+        gac.SetNumberOfIterations(200 if QUICK else 400)
+        out = gac.Execute(levelset, sitk.Cast(speed, sitk.sitkFloat32))
+        m = sitk.GetArrayFromImage(out) < 0
+        yield "SimpleITK GAC", dict(sigma=sigma, propagation=prop, curvature=curv), polarity_fix(m), time.perf_counter() - t
+
+
+def main():
+    print("| image | method | Dice | Hausdorff (px) | objects (truth) | time (s) | parameters |")
+    print("|---|---|---|---|---|---|---|")
+    for name, img, truth, count in images():
+        mask, elapsed, objects = shapeflow(img)
+        fmt = lambda m: ("%.4f" % dice(m, truth), "%.1f" % hausdorff(m, truth)) if truth is not None else ("—", "—")
+        d, h = fmt(mask)
+        print(f"| {name} | shapeflow, defaults | {d} | {h} | {objects} ({count}) | {elapsed:.2f} | — |")
+        best = {}
+        for method, params, m, t in peers(img):
+            score = dice(m, truth) if truth is not None else -abs(components(m) - count)
+            if method not in best or score > best[method][0]:
+                best[method] = (score, params, m, t)
+        for method, (_, params, m, t) in best.items():
+            d, h = fmt(m)
+            p = ", ".join(f"{k} {v}" for k, v in params.items())
+            print(f"| {name} | {method}, tuned | {d} | {h} | {components(m)} ({count}) | {t:.2f} | {p} |")
+        sys.stdout.flush()
+
+
+if __name__ == "__main__":
+    main()
