@@ -50,7 +50,7 @@ fn nuclei_at_defaults() {
     let (got, n, job) = segment(DEFAULTS, include_bytes!("data/nuclei.png").to_vec());
     let d = dice(&got, &truth, w, h);
     eprintln!("nuclei: dice {d:.4}, {n} objects (125 annotated); {:?}", job.segmentation);
-    assert!(d >= 0.89, "dice {d}");
+    assert!(d >= 0.90, "dice {d}");
     assert!((80..=170).contains(&n), "{n} objects");
 }
 
@@ -104,7 +104,8 @@ fn many_objects_of_different_contrast_some_touching() {
 }
 
 /// The five-armed star of tests/segmentation.rs at SNR 2 (contrast 130, noise 65,
-/// clipped to 8 bits). Peers, tuned: Dice 0.96–0.97.
+/// clipped to 8 bits). Peers, tuned (scripts/compare_segmentation.py, another
+/// draw of the noise): Dice 0.98–0.99.
 #[test]
 fn star_at_snr_2() {
     let (w, h) = (128usize, 128usize);
@@ -133,7 +134,7 @@ fn star_at_snr_2() {
     let (got, n, _) = segment(DEFAULTS, png_gray8(&pixels, w, h));
     let d = dice(&got, &truth, w, h);
     eprintln!("star at SNR 2: dice {d:.4}, {n} objects");
-    assert!(d >= 0.97, "dice {d}");
+    assert!(d >= 0.985, "dice {d}");
     assert_eq!(n, 1);
 }
 
@@ -162,4 +163,24 @@ fn png_gray8(pixels: &[u8], w: usize, h: usize) -> Vec<u8> {
     )
     .unwrap();
     png
+}
+
+/// Two overlapping balls (examples/data/balls.nrrd: radius 8.5, centres 15 apart,
+/// 48³) at defaults: the threshold's surface is split at the neck, and the two
+/// objects keep the union's volume.
+#[test]
+fn two_overlapping_balls_are_two_objects() {
+    let inputs: HashMap<String, Vec<u8>> =
+        [("image".to_string(), include_bytes!("../examples/data/balls.nrrd").to_vec())].into();
+    let job = prepare(parse_spec(DEFAULTS).unwrap(), &inputs).unwrap();
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
+    let img = job.image.as_deref().unwrap();
+    let (_, rows) = objects(img, &result_state(&job, &out.last).mesh);
+    let volume: f64 = rows.iter().map(|r| r.size).sum();
+    let (r, d) = (8.5f64, 15.0f64);
+    let lens = std::f64::consts::PI * (2.0 * r - d).powi(2) * (d * d + 4.0 * d * r) / (12.0 * d);
+    let exact = 2.0 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) - lens;
+    eprintln!("balls: {} objects, volume {volume:.1} (exact {exact:.1})", rows.len());
+    assert_eq!(rows.len(), 2);
+    assert!((volume / exact - 1.0).abs() < 0.05, "{volume} {exact}");
 }

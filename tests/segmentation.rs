@@ -375,7 +375,7 @@ fn two_touching_balls_in_3d() {
             }
         }
     }
-    let spec = r#"{"problem": {"type": "segmentation", "image": "input:volume"}, "flow": {"max_iterations": 300}}"#;
+    let spec = r#"{"initial": {"shape": "inscribed"}, "problem": {"type": "segmentation", "image": "input:volume", "model": "geodesic"}, "flow": {"max_iterations": 300}}"#;
     let t = std::time::Instant::now();
     let (job, out) = run(spec, &[("volume", nrrd_u8(n, &vox))]);
     let shown = result_state(&job, &out.last);

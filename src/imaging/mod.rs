@@ -14,6 +14,7 @@ pub mod contours;
 mod decode;
 mod edge;
 mod grid;
+pub mod isosurface;
 pub mod labels;
 mod nrrd;
 mod raster;

@@ -7,6 +7,7 @@ mod build;
 mod design;
 mod film;
 mod gltf_in;
+mod image_shapes;
 mod mesh_io;
 mod results;
 mod run;
@@ -20,7 +21,7 @@ pub use mesh_io::{read_mesh_file, MeshFileError};
 pub use results::{image_result_names, job_extras, result_state, state_glb, states_glb, StateResults, MAX_FRAMES};
 pub use run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
 pub use schema::{job_spec_schema, openapi_schemas};
-pub use segment::{default_min_size, SegmentationSetup, DEFAULT_MU};
+pub use segment::{default_min_size, default_mu, SegmentationSetup};
 pub use spec::{
     parse_spec, BoundarySpec, ControlSpec, FlowSpec, InitialSpec, JobSpec, MeansKind, MeshSpec, OutputSpec, Polarity,
     ProblemSpec, SegmentationModel, SegmentationSpec, ShapeDesignSpec, SpecError, StressedFilmSpec, TargetSpec,

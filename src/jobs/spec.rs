@@ -245,10 +245,17 @@ pub struct SegmentationSpec {
     /// `"input:NAME"` (PNG/JPEG/TIFF → 2D, NRRD → 3D) or a list of them (a stack
     /// of 2D slices → 3D, first slice at the bottom).
     pub image: ImageSource,
-    /// Gaussian smoothing in pixels; default 1.5.
+    /// Gaussian smoothing in pixels of the image the threshold and the edge
+    /// indicator see; default from the image's noise level (1–4 pixels; at least
+    /// 1.5 for the geodesic model).
     #[serde(default)]
     #[schemars(range(min = 0, max = 64))]
     pub sigma: Option<f64>,
+    /// (Addition, Chan–Vese) Gaussian smoothing in pixels of the image the fit
+    /// sees; default 0 (the fit averages the noise over regions).
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 64))]
+    pub data_sigma: Option<f64>,
     /// Weight of the region term (balloon force); default `0.3 L` (2D) or `0.15 L`
     /// (3D), `L` the number of samples along the image's longest side.
     #[serde(default)]
@@ -273,7 +280,8 @@ pub struct SegmentationSpec {
     #[serde(default)]
     pub model: Option<SegmentationModel>,
     /// (Addition, Chan–Vese) weight of the contour's length, in intensity² ×
-    /// pixels (the image normalized to [0, 1]); default 0.05.
+    /// pixels (the image normalized to [0, 1]); default `max(0.05, noise/2)` with
+    /// the noise's standard deviation on that scale.
     #[serde(default)]
     #[schemars(range(min = 0, max = 1000))]
     pub mu: Option<f64>,
