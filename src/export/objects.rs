@@ -11,7 +11,7 @@
 use super::image_results::to_pixel;
 use crate::flow::MeshData;
 use crate::geometry::{Mesh, Point};
-use crate::imaging::{rasterize_curve, rasterize_surface, Grid};
+use crate::imaging::{rasterize_curve_window, rasterize_surface_window, Grid};
 use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageEncoder};
 use serde::Serialize;
@@ -82,25 +82,45 @@ pub fn objects(image: &Grid, mesh: &MeshData) -> (Vec<u16>, Vec<ObjectRow>) {
     let mut rows = Vec::with_capacity(shapes.len());
     for (k, (size, boundary, centroid, elements)) in shapes.into_iter().enumerate() {
         let label = (k + 1).min(u16::MAX as usize) as u16;
+        // the samples of the object's bounding box
+        let mut window = [0usize; 6];
+        for a in 0..3 {
+            let n = d[a];
+            let (lo, hi) = if a < mesh.dimension {
+                elements
+                    .iter()
+                    .flat_map(|&e| mesh.elements[e].iter())
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                        (lo.min(mesh.positions[v][a]), hi.max(mesh.positions[v][a]))
+                    })
+            } else {
+                (0.0, 0.0)
+            };
+            window[2 * a] = ((lo * l - 0.5).floor().max(0.0) as usize).min(n);
+            window[2 * a + 1] =
+                if a < mesh.dimension { ((hi * l - 0.5).ceil() + 1.0).clamp(0.0, n as f64) as usize } else { n };
+        }
         let inside = if mesh.dimension == 2 {
             let pos: Vec<Point<2>> = mesh.positions.iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
             let segs: Vec<[usize; 2]> = elements.iter().map(|&e| [mesh.elements[e][0], mesh.elements[e][1]]).collect();
-            rasterize_curve(&pos, &segs, [d[0], d[1]])
+            rasterize_curve_window(&pos, &segs, l, [window[0], window[1], window[2], window[3]])
         } else {
             let pos: Vec<Point<3>> = mesh.positions.iter().map(|p| Point::<3>::new(p[0], p[1], p[2])).collect();
             let tris: Vec<[usize; 3]> =
                 elements.iter().map(|&e| std::array::from_fn(|i| mesh.elements[e][i])).collect();
-            rasterize_surface(&pos, &tris, d)
+            rasterize_surface_window(&pos, &tris, l, window)
         };
+        let (w, h) = (window[1] - window[0], window[3] - window[2]);
         let (mut sum, mut count) = (0.0, 0usize);
         let (mut lo, mut hi) = ([usize::MAX; 3], [0usize; 3]);
-        for (p, _) in inside.iter().enumerate().filter(|(_, &m)| m) {
+        for (q, _) in inside.iter().enumerate().filter(|(_, &m)| m) {
+            let ijk = [window[0] + q % w, window[2] + (q / w) % h, window[4] + q / (w * h)];
+            let p = image.index(ijk[0], ijk[1], ijk[2]);
             if labels[p] == 0 {
                 labels[p] = label;
             }
             sum += image.values[p];
             count += 1;
-            let ijk = [p % d[0], (p / d[0]) % d[1], p / (d[0] * d[1])];
             for a in 0..3 {
                 lo[a] = lo[a].min(ijk[a]);
                 hi[a] = hi[a].max(ijk[a]);

@@ -73,6 +73,7 @@ impl CurveManager {
             min_area: h_min * h_min,
             keep_area: false,
             fill_pockets: false,
+            keep_apart: false,
         }
     }
 }
@@ -124,6 +125,9 @@ fn manage_curves(
             Some(w) if cur.period().is_none() => w.crossings_of(cur),
             _ => cur.crossings(),
         };
+        if s.params.keep_apart && joins_components(cur, &hits) {
+            return Ok(Managed::Unchanged);
+        }
         if let Some(m) = resolve_crossings(cur, &hits, s.params.min_area, s.params.fill_pockets).map_err(fail)? {
             (remeshed, moved) = (Some(m), None);
         }
@@ -135,6 +139,16 @@ fn manage_curves(
         }
     }
     Ok(outcome(remeshed, moved))
+}
+
+/// Whether some of `hits` are crossings of two different components of `mesh`.
+fn joins_components(mesh: &CurveMesh, hits: &[crate::geometry::SegmentHit]) -> bool {
+    if hits.is_empty() {
+        return false;
+    }
+    let (label, _) = mesh.component_labels();
+    let els = mesh.elements();
+    hits.iter().any(|h| label[els[h.a][0]] != label[els[h.b][0]])
 }
 
 /// Switches and resolved parameters of surface mesh management.

@@ -379,6 +379,7 @@ mod tests {
             min_area: 0.0,
             keep_area: false,
             fill_pockets: false,
+            keep_apart: false,
         };
         let hd = desired_sizes(&len, &beta, &s);
         let total: f64 = hd.iter().sum();

@@ -24,6 +24,10 @@ pub struct CurveRemeshSettings {
     /// exterior that a curve closed around are filled (shape design, where such a
     /// pocket of `Ω` would be cut off from `Σ`).
     pub fill_pockets: bool,
+    /// Different components never merge: a management pass that would make two of
+    /// them cross is not applied (segmentation: touching objects stay the objects
+    /// they are).
+    pub keep_apart: bool,
 }
 
 fn loops_of(mesh: &CurveMesh) -> Vec<Loop> {

@@ -26,7 +26,7 @@ pub use decode::{decode_image, decode_slices, decode_volume, ImageLimits};
 pub use edge::{EdgeField, EdgeSample};
 pub use grid::{Grid, SampleKind};
 pub use nrrd::{encode_nrrd_labels, encode_nrrd_mask, parse_nrrd};
-pub use raster::{draw_overlay, rasterize_curve, rasterize_surface};
+pub use raster::{draw_overlay, rasterize_curve, rasterize_curve_window, rasterize_surface, rasterize_surface_window};
 pub use smooth::gaussian_smooth;
 pub use threshold::{
     histogram_mode, noise_level, otsu, percentile, percentiles, smoothed_noise, smoothing_for_noise, Normalization,

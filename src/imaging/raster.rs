@@ -15,7 +15,20 @@ fn centre(i: usize, l: f64) -> f64 {
 /// bottom. Nonzero winding, so orientation errors cannot punch holes.
 pub fn rasterize_curve(positions: &[Point<2>], segments: &[[usize; 2]], dims: [usize; 2]) -> Vec<bool> {
     let l = dims[0].max(dims[1]) as f64;
-    let mut rows: Vec<Vec<(f64, i32)>> = vec![Vec::new(); dims[1]];
+    rasterize_curve_window(positions, segments, l, [0, dims[0], 0, dims[1]])
+}
+
+/// [`rasterize_curve`] on the window `[i0, i1) × [j0, j1)` of a grid with `L`
+/// samples per unit (the mask of the window's samples, row by row).
+pub fn rasterize_curve_window(
+    positions: &[Point<2>],
+    segments: &[[usize; 2]],
+    l: f64,
+    window: [usize; 4],
+) -> Vec<bool> {
+    let [i0, i1, j0, j1] = window;
+    let (w, h) = (i1 - i0, j1 - j0);
+    let mut rows: Vec<Vec<(f64, i32)>> = vec![Vec::new(); h];
     for s in segments {
         let (a, b) = (positions[s[0]], positions[s[1]]);
         if a.y == b.y {
@@ -23,31 +36,32 @@ pub fn rasterize_curve(positions: &[Point<2>], segments: &[[usize; 2]], dims: [u
         }
         let (lo, hi) = (a.y.min(b.y), a.y.max(b.y));
         // rows whose centre y satisfies lo <= y < hi
-        let j0 = ((lo * l - 0.5).ceil().max(0.0)) as usize;
-        let j1 = ((hi * l - 0.5).ceil().min(dims[1] as f64)).max(0.0) as usize;
-        for (j, row) in rows.iter_mut().enumerate().take(j1).skip(j0) {
+        let r0 = ((lo * l - 0.5).ceil().max(j0 as f64)) as usize;
+        let r1 = ((hi * l - 0.5).ceil().min(j1 as f64)).max(j0 as f64) as usize;
+        for j in r0..r1.max(r0) {
             let y = centre(j, l);
             if y < lo || y >= hi {
                 continue;
             }
             let x = a.x + (y - a.y) * (b.x - a.x) / (b.y - a.y);
-            row.push((x, if b.y > a.y { 1 } else { -1 }));
+            rows[j - j0].push((x, if b.y > a.y { 1 } else { -1 }));
         }
     }
-    let mut mask = vec![false; dims[0] * dims[1]];
-    for (j, row) in rows.iter_mut().enumerate() {
-        fill_line(row, dims[0], l, |i, inside| mask[i + dims[0] * j] = inside);
+    let mut mask = vec![false; w * h];
+    for (r, row) in rows.iter_mut().enumerate() {
+        fill_line(row, i0, w, l, |i, inside| mask[i + w * r] = inside);
     }
     mask
 }
 
 /// Along one grid line: sort the boundary crossings `(coordinate, ±1)` and report
-/// for each of the `n` cell centres whether the winding number there is nonzero.
-fn fill_line(hits: &mut [(f64, i32)], n: usize, l: f64, mut set: impl FnMut(usize, bool)) {
+/// for each of the `n` cell centres from `first` on whether the winding number
+/// there is nonzero (`set(i − first, inside)`).
+fn fill_line(hits: &mut [(f64, i32)], first: usize, n: usize, l: f64, mut set: impl FnMut(usize, bool)) {
     hits.sort_by(|p, q| p.0.total_cmp(&q.0));
     let (mut winding, mut next) = (0, 0);
     for i in 0..n {
-        let x = centre(i, l);
+        let x = centre(first + i, l);
         while next < hits.len() && hits[next].0 < x {
             winding += hits[next].1;
             next += 1;
@@ -60,24 +74,37 @@ fn fill_line(hits: &mut [(f64, i32)], n: usize, l: f64, mut set: impl FnMut(usiz
 /// `dims` (`L = max(dims)`), by casting one ray along `z` per column.
 pub fn rasterize_surface(positions: &[Point<3>], triangles: &[[usize; 3]], dims: [usize; 3]) -> Vec<bool> {
     let l = dims.iter().copied().max().unwrap_or(1) as f64;
+    rasterize_surface_window(positions, triangles, l, [0, dims[0], 0, dims[1], 0, dims[2]])
+}
+
+/// [`rasterize_surface`] on the window `[i0, i1) × [j0, j1) × [k0, k1)` of a grid
+/// with `L` samples per unit (`x` fastest).
+pub fn rasterize_surface_window(
+    positions: &[Point<3>],
+    triangles: &[[usize; 3]],
+    l: f64,
+    window: [usize; 6],
+) -> Vec<bool> {
+    let [i0, i1, j0, j1, k0, k1] = window;
+    let (w, h, d) = (i1 - i0, j1 - j0, k1 - k0);
     // tiny irrational offsets keep rays off edges and vertices
     let (ox, oy) = (1.3e-7, 2.9e-7);
-    let mut columns: Vec<Vec<(f64, i32)>> = vec![Vec::new(); dims[0] * dims[1]];
+    let mut columns: Vec<Vec<(f64, i32)>> = vec![Vec::new(); w * h];
     for t in triangles {
         let [a, b, c] = t.map(|v| positions[v]);
         let (xmin, xmax) = (a.x.min(b.x).min(c.x), a.x.max(b.x).max(c.x));
         let (ymin, ymax) = (a.y.min(b.y).min(c.y), a.y.max(b.y).max(c.y));
-        let range = |lo: f64, hi: f64, n: usize| {
-            let i0 = ((lo * l - 0.5).floor().max(0.0)) as usize;
-            let i1 = ((hi * l - 0.5).ceil() + 1.0).clamp(0.0, n as f64) as usize;
-            i0..i1
+        let range = |lo: f64, hi: f64, from: usize, to: usize| {
+            let s0 = ((lo * l - 0.5).floor().max(from as f64)) as usize;
+            let s1 = ((hi * l - 0.5).ceil() + 1.0).clamp(from as f64, to as f64) as usize;
+            s0..s1.max(s0)
         };
         let det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
         if det == 0.0 {
             continue;
         }
-        for j in range(ymin, ymax, dims[1]) {
-            for i in range(xmin, xmax, dims[0]) {
+        for j in range(ymin, ymax, j0, j1) {
+            for i in range(xmin, xmax, i0, i1) {
                 let (x, y) = (centre(i, l) + ox, centre(j, l) + oy);
                 let l1 = ((b.x - x) * (c.y - y) - (c.x - x) * (b.y - y)) / det;
                 let l2 = ((c.x - x) * (a.y - y) - (a.x - x) * (c.y - y)) / det;
@@ -86,13 +113,13 @@ pub fn rasterize_surface(positions: &[Point<3>], triangles: &[[usize; 3]], dims:
                     continue;
                 }
                 let z = l1 * a.z + l2 * b.z + l3 * c.z;
-                columns[i + dims[0] * j].push((z, if det > 0.0 { 1 } else { -1 }));
+                columns[(i - i0) + w * (j - j0)].push((z, if det > 0.0 { 1 } else { -1 }));
             }
         }
     }
-    let mut mask = vec![false; dims[0] * dims[1] * dims[2]];
+    let mut mask = vec![false; w * h * d];
     for (col, hits) in columns.iter_mut().enumerate() {
-        fill_line(hits, dims[2], l, |k, inside| mask[col + dims[0] * dims[1] * k] = inside);
+        fill_line(hits, k0, d, l, |k, inside| mask[col + w * h * k] = inside);
     }
     mask
 }

@@ -275,6 +275,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         m.params.keep_area = scalar_product == ScalarProduct::HMinus1;
         // a pocket of Ω closed off by Γ would have no Dirichlet boundary
         m.params.fill_pockets = matches!(problem, ProblemKind::ShapeDesign(_));
+        m.params.keep_apart = matches!(&problem, ProblemKind::ChanVese(p) if p.separate);
     }
     let d = FlowSettings::default();
     let default_tau = match (&problem, scalar_product) {

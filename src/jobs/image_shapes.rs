@@ -12,6 +12,11 @@ use crate::imaging::{contours, isosurface, Grid};
 const SPLIT_RELATIVE_DEPTH: f64 = 0.0;
 /// Absolute depth (pixels) of a neck that splits touching objects.
 const SPLIT_DEPTH: f64 = 1.5;
+/// Holes of less than this fraction of the object around them are filled in the
+/// initial shape (the flow does not open new holes): objects in photographs and
+/// micrographs are mostly solid, with darker details inside; a ring keeps its
+/// hole.
+const HOLE_FRACTION: f64 = 0.25;
 
 /// The thresholds of the automatic initial shape.
 pub(super) struct Levels {
@@ -49,7 +54,7 @@ pub(super) struct ThresholdObjects {
 pub(super) fn threshold_objects(s: &Grid, levels: &Levels, min_size: f64, split: bool) -> ThresholdObjects {
     let min = min_size.ceil() as usize;
     let main: Vec<bool> = s.values.iter().map(|&v| levels.inside(v, levels.main)).collect();
-    let main = clean_mask(&main, s.dims, min);
+    let main = clean_mask(&main, s.dims, min, HOLE_FRACTION);
     let (mut labels, mut count) = if split {
         let dist = distance_transform(&main, s.dims, [1.0; 3]);
         split_touching(&main, &dist, s.dims, SPLIT_DEPTH, SPLIT_RELATIVE_DEPTH)
@@ -59,7 +64,7 @@ pub(super) fn threshold_objects(s: &Grid, levels: &Levels, min_size: f64, split:
     let mut object_levels = vec![levels.main; count + 1];
     if let Some(t) = levels.dim {
         let dim: Vec<bool> = s.values.iter().map(|&v| levels.inside(v, t)).collect();
-        let dim = clean_mask(&dim, s.dims, min);
+        let dim = clean_mask(&dim, s.dims, min, HOLE_FRACTION);
         let (dim_labels, n) = components(&dim, s.dims);
         let mut touches_main = vec![false; n + 1];
         for (p, &l) in dim_labels.iter().enumerate() {
