@@ -95,7 +95,7 @@ fn main() {
     println!("| image | iterations | vertices | decode+prepare | flow | refine+mask | total | Dice |");
     println!("|---|---|---|---|---|---|---|---|");
     let spec = parse_spec(
-        r#"{"problem": {"type": "segmentation", "image": "input:image"}, "flow": {"max_iterations": 2000}}"#,
+        r#"{"initial": {"shape": "inscribed"}, "problem": {"type": "segmentation", "image": "input:image", "model": "geodesic"}, "flow": {"max_iterations": 2000}}"#,
     )
     .unwrap();
     for (name, bytes, truth) in cases {

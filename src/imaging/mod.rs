@@ -1,5 +1,5 @@
-//! Images as sampled scalar fields: decoding (PNG, JPEG, TIFF; NRRD volumes and
-//! slice stacks), Gaussian smoothing, the edge indicator `H = 1/(1 + |∇I|²)` of
+//! Images as sampled scalar fields: decoding (PNG, JPEG, TIFF; NRRD, NIfTI-1 and
+//! multi-page TIFF volumes, slice stacks), Gaussian smoothing, the edge indicator `H = 1/(1 + |∇I|²)` of
 //! geodesic active contours with a C² interpolant, and rasterization of shapes into
 //! masks. Pure functions over bytes and arrays; nothing here touches files.
 //!
@@ -20,6 +20,7 @@ mod nrrd;
 mod raster;
 mod smooth;
 mod threshold;
+mod volumes;
 
 pub use background::quadratic_background;
 pub use decode::{decode_image, decode_slices, decode_volume, ImageLimits};
@@ -32,6 +33,7 @@ pub use threshold::{
     histogram_mode, noise_level, otsu, percentile, percentiles, smoothed_noise, smoothing_for_noise, Normalization,
     PERCENTILES,
 };
+pub use volumes::{decode_nifti, decode_tiff_stack, is_nifti, is_tiff, isotropic, tiff_pages};
 
 /// A bad or unsupported input file; `input` names it (the multipart part or file).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

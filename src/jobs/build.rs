@@ -6,7 +6,10 @@ use super::segment::SegmentationSetup;
 use super::spec::{ImageSource, InitialSpec, JobSpec, ProblemSpec, SpecError};
 use crate::flow::{CurveManager, FlowSettings, Problem, ScalarProduct, SolverKind, SurfaceManager};
 use crate::geometry::{self, CurveMesh, Mesh, MeshError, Point, SurfaceMesh};
-use crate::imaging::{decode_image, decode_slices, decode_volume, EdgeField, Grid, ImageLimits};
+use crate::imaging::{
+    decode_image, decode_nifti, decode_slices, decode_tiff_stack, decode_volume, is_nifti, is_tiff, tiff_pages,
+    EdgeField, Grid, ImageLimits,
+};
 use crate::problems::{ChanVese, CurvatureFlow, Segmentation, ShapeDesign, StressedFilm, SurfaceDiffusion};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -396,6 +399,10 @@ pub(super) fn load_image(source: &ImageSource, inputs: &HashMap<String, Vec<u8>>
             let (key, bytes) = input("problem.image", name, inputs)?;
             let grid = if bytes.starts_with(b"NRRD") {
                 decode_volume(key, bytes, &limits)
+            } else if is_nifti(bytes) {
+                decode_nifti(key, bytes, &limits)
+            } else if is_tiff(bytes) && tiff_pages(bytes, 2) > 1 {
+                decode_tiff_stack(key, bytes, &limits)
             } else {
                 decode_image(key, bytes, &limits)
             };

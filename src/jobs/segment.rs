@@ -10,8 +10,8 @@ use super::spec::{
     BackgroundModel, ImageSource, InitialSpec, MeansKind, Polarity, SegmentationModel, SegmentationSpec, SpecError,
 };
 use crate::imaging::{
-    gaussian_smooth, histogram_mode, noise_level, otsu, quadratic_background, smoothed_noise, smoothing_for_noise,
-    EdgeField, Grid, Normalization, PERCENTILES,
+    gaussian_smooth, histogram_mode, noise_level, otsu, percentile, quadratic_background, smoothed_noise,
+    smoothing_for_noise, EdgeField, Grid, Normalization, PERCENTILES,
 };
 use crate::problems::{ChanVese, Segmentation};
 use serde::Serialize;
@@ -270,16 +270,29 @@ pub(super) fn prepare_segmentation(
 }
 
 /// The quadratic illumination of `smoothed` less its mean over the background (the
-/// offset to subtract), fitted to the samples outside the objects of Otsu's
-/// threshold, twice (the second time with the threshold of the first corrected
-/// image); `None` where the fit is not possible.
+/// offset to subtract), fitted to the samples below Otsu's threshold, then twice
+/// more to those of them within 2.5 robust standard deviations of the fit (with the
+/// threshold of the corrected image); `None` where the fit is not possible.
 fn flatten(smoothed: &Grid, threshold: f64, polarity: Polarity) -> Option<Vec<f64>> {
     let sign = if polarity == Polarity::Bright { 1.0 } else { -1.0 };
     let mut t = threshold;
     let mut offset: Option<Vec<f64>> = None;
-    for _ in 0..2 {
+    let mut background: Vec<bool> = Vec::new();
+    for _ in 0..3 {
         let current = |p: usize| smoothed.values[p] - offset.as_ref().map_or(0.0, |o| o[p]);
-        let background: Vec<bool> = (0..smoothed.len()).map(|p| sign * (current(p) - t) <= 0.0).collect();
+        let below = |p: usize| sign * (current(p) - t) <= 0.0;
+        background = if offset.is_none() {
+            (0..smoothed.len()).map(below).collect()
+        } else {
+            // robust refit: the samples of the last background that deviate from the
+            // fit by more than 2.5 robust standard deviations towards the objects
+            // (the blurred rims of objects, dim objects) are left out
+            let used: Vec<f64> = (0..smoothed.len()).filter(|&p| background[p]).map(current).collect();
+            let level = used.iter().sum::<f64>() / used.len().max(1) as f64;
+            let deviations: Vec<f64> = used.iter().map(|v| (v - level).abs()).collect();
+            let spread = 1.4826 * percentile(&deviations, 50.0);
+            (0..smoothed.len()).map(|p| below(p) && sign * (current(p) - level) <= 2.5 * spread).collect()
+        };
         let Some(b) = quadratic_background(smoothed, &background) else { break };
         let (sum, n) =
             b.iter().zip(&background).filter(|(_, &m)| m).fold((0.0, 0.0), |(s, n), (v, _)| (s + v, n + 1.0));

@@ -1,0 +1,10 @@
+//! NIfTI-1 and multi-page TIFF volumes (3D segmentation inputs), small limits.
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+use shapeflow::imaging::{decode_nifti, decode_tiff_stack, ImageLimits};
+
+fuzz_target!(|data: &[u8]| {
+    let limits = ImageLimits { max_pixels: 1 << 16, max_voxels: 1 << 18, min_side: 2 };
+    let _ = decode_nifti("in", data, &limits);
+    let _ = decode_tiff_stack("in", data, &limits);
+});
