@@ -28,6 +28,14 @@ pub(super) struct Levels {
 }
 
 impl Levels {
+    pub fn polarity(&self) -> super::spec::Polarity {
+        if self.sign > 0.0 {
+            super::spec::Polarity::Bright
+        } else {
+            super::spec::Polarity::Dark
+        }
+    }
+
     fn inside(&self, v: f64, t: f64) -> bool {
         self.sign * (v - t) > 0.0
     }

@@ -80,24 +80,91 @@ pub(super) fn prepare_segmentation(
     inputs: &HashMap<String, Vec<u8>>,
 ) -> Result<PreparedSegmentation, SpecError> {
     let grid = load_image(&spec.image, inputs)?;
-    let (d, l) = (grid.dimension, grid.scale());
+    let model = spec.model.unwrap_or(SegmentationModel::ChanVese);
+    let pre = preprocess(spec, &grid, model)?;
+    let d = grid.dimension;
+    let min_size = match spec.min_size {
+        Some(m) => in_range("problem.min_size", m, 0.0, 1e9)?,
+        None => default_min_size(d),
+    };
+    let mu = in_range("problem.mu", spec.mu.unwrap_or(default_mu(pre.noise)), 0.0, 1000.0)?;
+    let lambda_in = in_range("problem.lambda_in", spec.lambda_in.unwrap_or(1.0), 0.0, 1000.0)?;
+    let lambda_out = in_range("problem.lambda_out", spec.lambda_out.unwrap_or(1.0), 0.0, 1000.0)?;
+    // the geodesic model's weights are checked whichever model runs
+    for (field, v) in [("problem.lambda", spec.lambda), ("problem.lambda_final", spec.lambda_final)] {
+        if let Some(v) = v.filter(|v| !(v.is_finite() && *v >= 0.0)) {
+            return Err(SpecError::new(field, format!("must be a nonnegative number, got {v}")));
+        }
+    }
+    if let Some(e) = spec.epsilon {
+        positive("problem.epsilon", e)?;
+    }
+    let means = spec.means.unwrap_or(MeansKind::PerObject);
+    let merge = spec.merge.unwrap_or(false);
+    let start = image_initial(spec, initial, &grid, &pre, min_size)?;
+    let weights = ChanVeseWeights { mu, lambda_in, lambda_out, per_object: means == MeansKind::PerObject, merge };
+    let (problem, second_stage, edges) = functional(spec, model, &grid, &pre.data, &start, &weights, pre.sigma)?;
+    let setup = SegmentationSetup {
+        model,
+        percentiles: pre.percentiles,
+        intensity_range: [pre.normalization.lo, pre.normalization.hi],
+        noise: pre.noise,
+        sigma: pre.sigma,
+        data_sigma: pre.data_sigma,
+        background: pre.background,
+        illumination_range: pre.illumination,
+        polarity: pre.levels.polarity(),
+        threshold: pre.levels.main,
+        dim_threshold: pre.levels.dim,
+        min_size,
+        initial_objects: start.objects,
+        mu,
+        lambda_in,
+        lambda_out,
+        means,
+        merge,
+    };
+    Ok(PreparedSegmentation { grid, problem, second_stage, edges, mesh: start.mesh, setup })
+}
+
+/// The image as the segmentation sees it, and the automatic choices made on it.
+struct Preprocessed {
+    percentiles: [f64; 2],
+    normalization: Normalization,
+    noise: f64,
+    sigma: f64,
+    data_sigma: f64,
+    background: BackgroundModel,
+    illumination: f64,
+    /// Normalized, corrected, smoothed by `sigma` (threshold, initial shape).
+    smoothed: Grid,
+    /// Normalized, corrected, smoothed by `data_sigma` (the Chan–Vese fit).
+    data: Grid,
+    levels: Levels,
+}
+
+/// The error of an image with nothing to segment.
+fn constant_image(source: &ImageSource) -> SpecError {
+    let names = match source {
+        ImageSource::One(s) => s.clone(),
+        ImageSource::Slices(v) => v.join(", "),
+    };
+    SpecError::new("problem.image", format!("the image {names} is constant: there is nothing to segment"))
+}
+
+/// Normalization, noise, smoothing, polarity, illumination and thresholds.
+fn preprocess(spec: &SegmentationSpec, grid: &Grid, model: SegmentationModel) -> Result<Preprocessed, SpecError> {
+    let d = grid.dimension;
     let percentiles = spec.percentiles.unwrap_or([PERCENTILES.0, PERCENTILES.1]);
     in_range("problem.percentiles[0]", percentiles[0], 0.0, 100.0)?;
     in_range("problem.percentiles[1]", percentiles[1], 0.0, 100.0)?;
     if percentiles[0] >= percentiles[1] {
         return Err(SpecError::new("problem.percentiles", "the first must be below the second"));
     }
-    let constant = || {
-        let names = match &spec.image {
-            ImageSource::One(s) => s.clone(),
-            ImageSource::Slices(v) => v.join(", "),
-        };
-        SpecError::new("problem.image", format!("the image {names} is constant: there is nothing to segment"))
-    };
-    let norm = Normalization::of(&grid, (percentiles[0], percentiles[1])).ok_or_else(constant)?;
-    let unit = norm.apply(&grid);
+    let constant = || constant_image(&spec.image);
+    let normalization = Normalization::of(grid, (percentiles[0], percentiles[1])).ok_or_else(constant)?;
+    let unit = normalization.apply(grid);
     let noise = noise_level(&unit);
-    let model = spec.model.unwrap_or(SegmentationModel::ChanVese);
     let sigma = match spec.sigma {
         Some(s) => {
             if !(s.is_finite() && (0.0..=64.0).contains(&s)) {
@@ -112,8 +179,8 @@ pub(super) fn prepare_segmentation(
     let smoothed = gaussian_smooth(&unit, sigma);
     let first = otsu(&smoothed.values).ok_or_else(constant)?;
     let polarity = spec.polarity.unwrap_or_else(|| border_polarity(&smoothed, first));
-    let background_model = spec.background.unwrap_or(BackgroundModel::Quadratic);
-    let offset = match background_model {
+    let background = spec.background.unwrap_or(BackgroundModel::Quadratic);
+    let offset = match background {
         BackgroundModel::Flat => None,
         BackgroundModel::Quadratic => flatten(&smoothed, first, polarity),
     };
@@ -139,68 +206,89 @@ pub(super) fn prepare_segmentation(
     // dim objects: above the background level by DIM_OBJECT_SNR times the smoothed
     // noise (a threshold only where it is more permissive than the main one)
     let sign = if polarity == Polarity::Bright { 1.0 } else { -1.0 };
-    let dim_threshold = match spec.dim_threshold {
+    let dim = match spec.dim_threshold {
         Some(t) => in_range("problem.dim_threshold", t, 0.0, 1.0)?,
         None => {
-            let background = histogram_mode(&smoothed.values);
-            (background + sign * DIM_OBJECT_SNR * smoothed_noise(noise, sigma, d)).clamp(0.0, 1.0)
+            let level = histogram_mode(&smoothed.values);
+            (level + sign * DIM_OBJECT_SNR * smoothed_noise(noise, sigma, d)).clamp(0.0, 1.0)
         }
     };
-    let dim_threshold = (sign * (threshold - dim_threshold) > 0.0).then_some(dim_threshold);
-    let min_size = match spec.min_size {
-        Some(m) => in_range("problem.min_size", m, 0.0, 1e9)?,
-        None => default_min_size(d),
-    };
-    let mu = in_range("problem.mu", spec.mu.unwrap_or(default_mu(noise)), 0.0, 1000.0)?;
-    let lambda_in = in_range("problem.lambda_in", spec.lambda_in.unwrap_or(1.0), 0.0, 1000.0)?;
-    let lambda_out = in_range("problem.lambda_out", spec.lambda_out.unwrap_or(1.0), 0.0, 1000.0)?;
-    // the geodesic model's weights are checked whichever model runs
-    for (field, v) in [("problem.lambda", spec.lambda), ("problem.lambda_final", spec.lambda_final)] {
-        if let Some(v) = v.filter(|v| !(v.is_finite() && *v >= 0.0)) {
-            return Err(SpecError::new(field, format!("must be a nonnegative number, got {v}")));
-        }
-    }
-    if let Some(e) = spec.epsilon {
-        positive("problem.epsilon", e)?;
-    }
-    let means = spec.means.unwrap_or(MeansKind::PerObject);
-    let merge = spec.merge.unwrap_or(false);
+    let dim = (sign * (threshold - dim) > 0.0).then_some(dim);
+    let levels = Levels { main: threshold, dim, sign };
+    Ok(Preprocessed {
+        percentiles,
+        normalization,
+        noise,
+        sigma,
+        data_sigma,
+        background,
+        illumination,
+        smoothed,
+        data,
+        levels,
+    })
+}
 
-    // the initial shape from the image, and the samples that separate its objects
-    let image_shape = match initial {
-        None => Some(InitialSpec::Threshold {}),
-        Some(s @ (InitialSpec::Threshold {} | InitialSpec::Seeds { .. } | InitialSpec::Inscribed {})) => {
-            Some(s.clone())
-        }
-        Some(_) => None,
-    };
-    let (mut mesh, mut cut, mut initial_objects) = (None, Vec::new(), 0);
-    let mut background = None;
-    match image_shape {
-        Some(InitialSpec::Threshold {}) => {
-            let levels = Levels { main: threshold, dim: dim_threshold, sign };
-            let objects = threshold_objects(&smoothed, &levels, min_size, spec.split_touching.unwrap_or(true));
-            let (m, count) = threshold_mesh(&smoothed, &objects)?;
-            (mesh, cut, initial_objects, background) = (Some(m), objects.cleared, count, Some(objects.background));
+/// The initial shape when it comes from the image.
+struct ImageInitial {
+    mesh: Option<AnyMesh>,
+    objects: usize,
+    /// Samples between touching objects, and the background level they get.
+    cut: Vec<usize>,
+    background: Option<f64>,
+}
+
+/// The initial shape from the image (`initial` omitted, `threshold`, `seeds` or
+/// `inscribed`), and the samples that separate its objects.
+fn image_initial(
+    spec: &SegmentationSpec,
+    initial: Option<&InitialSpec>,
+    grid: &Grid,
+    pre: &Preprocessed,
+    min_size: f64,
+) -> Result<ImageInitial, SpecError> {
+    let none = ImageInitial { mesh: None, objects: 0, cut: Vec::new(), background: None };
+    Ok(match initial {
+        None | Some(InitialSpec::Threshold {}) => {
+            let objects = threshold_objects(&pre.smoothed, &pre.levels, min_size, spec.split_touching.unwrap_or(true));
+            let (m, count) = threshold_mesh(&pre.smoothed, &objects)?;
+            ImageInitial { mesh: Some(m), objects: count, cut: objects.cleared, background: Some(objects.background) }
         }
         Some(InitialSpec::Seeds { spacing, radius }) => {
-            let m = seeds(&grid, spacing, radius)?;
-            initial_objects = match &m {
+            let m = seeds(grid, *spacing, *radius)?;
+            let objects = match &m {
                 AnyMesh::Curve(c) => c.num_components(),
                 AnyMesh::Surface(s) => s.num_components(),
             };
-            mesh = Some(m);
+            ImageInitial { mesh: Some(m), objects, ..none }
         }
-        Some(InitialSpec::Inscribed {}) => {
-            mesh = Some(inscribed(&grid)?);
-            initial_objects = 1;
-        }
-        _ => {}
-    }
+        Some(InitialSpec::Inscribed {}) => ImageInitial { mesh: Some(inscribed(grid)?), objects: 1, ..none },
+        Some(_) => none,
+    })
+}
 
-    let mut second_stage = None;
-    let mut edges = None;
-    // (the weights given in the spec are checked above)
+/// The weights and switches of the Chan–Vese functional.
+struct ChanVeseWeights {
+    mu: f64,
+    lambda_in: f64,
+    lambda_out: f64,
+    per_object: bool,
+    merge: bool,
+}
+
+/// The functional of `model`, its second stage (geodesic with `lambda_final`) and
+/// the edge field the results are refined onto, if any.
+fn functional(
+    spec: &SegmentationSpec,
+    model: SegmentationModel,
+    grid: &Grid,
+    data: &Grid,
+    start: &ImageInitial,
+    w: &ChanVeseWeights,
+    sigma: f64,
+) -> Result<(ProblemKind, Option<ProblemKind>, Option<Arc<EdgeField>>), SpecError> {
+    let (d, l) = (grid.dimension, grid.scale());
+    // (the weights given in the spec are checked by the caller)
     let geodesic = match model {
         SegmentationModel::ChanVese => None,
         _ => {
@@ -209,64 +297,34 @@ pub(super) fn prepare_segmentation(
                 SegmentationModel::Both => 0.0,
                 _ => super::spec::default_lambda(d, l),
             });
-            let field = EdgeField::new(&grid, sigma).ok_or_else(constant)?;
+            let field = EdgeField::new(grid, sigma).ok_or_else(|| constant_image(&spec.image))?;
             Some(Segmentation { field: Arc::new(field), lambda, epsilon })
         }
     };
-    let problem = match (model, geodesic) {
-        (SegmentationModel::Geodesic, Some(problem)) => {
-            let lambda_final = spec.lambda_final.unwrap_or(super::spec::default_lambda_final(d, problem.lambda));
-            if lambda_final != problem.lambda {
-                second_stage =
-                    Some(ProblemKind::Segmentation(Segmentation { lambda: lambda_final, ..problem.clone() }));
-            }
-            if spec.edge_refinement.unwrap_or(true) {
-                edges = Some(problem.field.clone());
-            }
-            ProblemKind::Segmentation(problem)
+    if let (SegmentationModel::Geodesic, Some(problem)) = (model, &geodesic) {
+        let lambda_final = spec.lambda_final.unwrap_or(super::spec::default_lambda_final(d, problem.lambda));
+        let second = (lambda_final != problem.lambda)
+            .then(|| ProblemKind::Segmentation(Segmentation { lambda: lambda_final, ..problem.clone() }));
+        let edges = spec.edge_refinement.unwrap_or(true).then(|| problem.field.clone());
+        return Ok((ProblemKind::Segmentation(problem.clone()), second, edges));
+    }
+    let mut values = data.values.clone();
+    if let Some(bg) = start.background {
+        // the samples between touching objects get the background level, so that
+        // their contours stay apart
+        for &p in &start.cut {
+            values[p] = bg;
         }
-        (_, geodesic) => {
-            let mut values = data.values;
-            if let Some(bg) = background {
-                // the samples between touching objects get the background level, so
-                // that their contours stay apart
-                for &p in &cut {
-                    values[p] = bg;
-                }
-            }
-            let mut cv = ChanVese::new(d, grid.dims, &values, mu / l, (lambda_in, lambda_out));
-            cv.per_object = means == MeansKind::PerObject;
-            cv.separate = cv.per_object && !merge;
-            cv.geodesic = geodesic;
-            if spec.edge_refinement == Some(true) {
-                if let Some(g) = &cv.geodesic {
-                    edges = Some(g.field.clone());
-                }
-            }
-            ProblemKind::ChanVese(cv)
-        }
+    }
+    let mut cv = ChanVese::new(d, grid.dims, &values, w.mu / l, (w.lambda_in, w.lambda_out));
+    cv.per_object = w.per_object;
+    cv.separate = w.per_object && !w.merge;
+    cv.geodesic = geodesic;
+    let edges = match (&cv.geodesic, spec.edge_refinement) {
+        (Some(g), Some(true)) => Some(g.field.clone()),
+        _ => None,
     };
-    let setup = SegmentationSetup {
-        model,
-        percentiles,
-        intensity_range: [norm.lo, norm.hi],
-        noise,
-        sigma,
-        data_sigma,
-        background: background_model,
-        illumination_range: illumination,
-        polarity,
-        threshold,
-        dim_threshold,
-        min_size,
-        initial_objects,
-        mu,
-        lambda_in,
-        lambda_out,
-        means,
-        merge,
-    };
-    Ok(PreparedSegmentation { grid, problem, second_stage, edges, mesh, setup })
+    Ok((ProblemKind::ChanVese(cv), None, edges))
 }
 
 /// The quadratic illumination of `smoothed` less its mean over the background (the

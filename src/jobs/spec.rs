@@ -45,8 +45,7 @@ impl SpecError {
 ]))]
 pub struct JobSpec {
     pub problem: ProblemSpec,
-    /// Required, except for segmentation (default: `threshold` for 2D images,
-    /// `inscribed` for volumes).
+    /// Required, except for segmentation (default: `threshold`).
     #[serde(default)]
     pub initial: Option<InitialSpec>,
     #[serde(default)]
@@ -275,8 +274,8 @@ pub struct SegmentationSpec {
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub epsilon: Option<f64>,
     /// (Addition) the functional: `chan_vese` (region-based, one mean intensity
-    /// per object; the default for 2D images), `geodesic` (geodesic active
-    /// contours, the paper's; the default for volumes) or `both` (their sum).
+    /// per object; the default), `geodesic` (geodesic active contours, the
+    /// paper's) or `both` (their sum).
     #[serde(default)]
     pub model: Option<SegmentationModel>,
     /// (Addition, Chan–Vese) weight of the contour's length, in intensity² ×
@@ -560,8 +559,9 @@ pub enum InitialSpec {
     },
     /// (Addition, segmentation) contours from the image itself, the default when
     /// `initial` is omitted: a threshold of the smoothed image (Otsu's unless
-    /// `problem.threshold`), specks dropped, touching objects split, one closed
-    /// curve per object and per hole (marching squares).
+    /// `problem.threshold`, and `problem.dim_threshold` for dim objects), specks
+    /// dropped, touching objects split, one closed curve (surface) per object and
+    /// per hole (marching squares, marching tetrahedra).
     Threshold {},
     /// (Addition, segmentation) a grid of small circles, `spacing` pixels apart
     /// (default 1/8 of the image's shorter side), of radius `radius` pixels
