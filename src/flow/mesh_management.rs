@@ -125,7 +125,7 @@ fn manage_curves(
             Some(w) if cur.period().is_none() => w.crossings_of(cur),
             _ => cur.crossings(),
         };
-        if s.params.keep_apart && joins_components(cur, &hits) {
+        if s.params.keep_apart && !cur.crossings_between_components(&hits).is_empty() {
             return Ok(Managed::Unchanged);
         }
         if let Some(m) = resolve_crossings(cur, &hits, s.params.min_area, s.params.fill_pockets).map_err(fail)? {
@@ -139,16 +139,6 @@ fn manage_curves(
         }
     }
     Ok(outcome(remeshed, moved))
-}
-
-/// Whether some of `hits` are crossings of two different components of `mesh`.
-fn joins_components(mesh: &CurveMesh, hits: &[crate::geometry::SegmentHit]) -> bool {
-    if hits.is_empty() {
-        return false;
-    }
-    let (label, _) = mesh.component_labels();
-    let els = mesh.elements();
-    hits.iter().any(|h| label[els[h.a][0]] != label[els[h.b][0]])
 }
 
 /// Switches and resolved parameters of surface mesh management.

@@ -248,6 +248,16 @@ impl Mesh<2> {
         }
     }
 
+    /// The crossings among `hits` (of this mesh's segments) that join two different
+    /// components.
+    pub fn crossings_between_components<'a>(&self, hits: &'a [super::SegmentHit]) -> Vec<&'a super::SegmentHit> {
+        if hits.is_empty() {
+            return Vec::new();
+        }
+        let (label, _) = self.component_labels();
+        hits.iter().filter(|h| label[self.elements[h.a][0]] != label[self.elements[h.b][0]]).collect()
+    }
+
     /// Number of times each component of [`Mesh::cycles`] winds around the cylinder
     /// (0 for non-periodic meshes).
     pub fn windings(&self) -> Vec<i64> {

@@ -271,11 +271,11 @@ fn crossing_vertices<const D: usize>(mesh: &Mesh<D>) -> Vec<usize> {
     let pts: Vec<Point<2>> = mesh.positions().iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
     let els: Vec<[usize; 2]> = mesh.elements().iter().map(|e| [e[0], e[D - 1]]).collect();
     let curve = Mesh::<2>::from_trusted_parts(pts, els.clone());
-    let hits = curve.crossings();
+    let all = curve.crossings();
+    let hits = curve.crossings_between_components(&all);
     if hits.is_empty() {
         return Vec::new();
     }
-    let (label, _) = curve.component_labels();
     let mut prev = vec![usize::MAX; mesh.num_vertices()];
     let mut next = vec![usize::MAX; mesh.num_vertices()];
     for e in &els {
@@ -283,7 +283,7 @@ fn crossing_vertices<const D: usize>(mesh: &Mesh<D>) -> Vec<usize> {
         prev[e[1]] = e[0];
     }
     let mut out = Vec::new();
-    for h in hits.iter().filter(|h| label[els[h.a][0]] != label[els[h.b][0]]) {
+    for h in hits {
         for s in [h.a, h.b] {
             for v in els[s] {
                 out.extend([v, prev[v], next[v]].into_iter().filter(|&u| u != usize::MAX));
