@@ -57,7 +57,12 @@ enum Command {
         token: Option<String>,
     },
     /// Print the JSON Schema of the job spec (api/job-spec.schema.json).
-    Schema,
+    Schema {
+        /// Print the reference page generated from it instead
+        /// (docs/job-spec-reference.md).
+        #[arg(long)]
+        markdown: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -75,9 +80,14 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
-        Command::Schema => {
-            let text = serde_json::to_string_pretty(&shapeflow::jobs::job_spec_schema()).expect("a schema is JSON");
-            say(format_args!("{text}"));
+        Command::Schema { markdown } => {
+            let schema = shapeflow::jobs::job_spec_schema();
+            if markdown {
+                say(format_args!("{}", shapeflow::jobs::job_spec_reference(&schema).trim_end()));
+            } else {
+                let text = serde_json::to_string_pretty(&schema).expect("a schema is JSON");
+                say(format_args!("{text}"));
+            }
             ExitCode::SUCCESS
         }
         Command::Serve { bind, database, data_dir, workers, token } => {

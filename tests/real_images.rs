@@ -4,7 +4,7 @@
 //! and the number of objects found.
 
 use shapeflow::export::{mask, objects};
-use shapeflow::jobs::{parse_spec, prepare, result_state, run_prepared, PreparedJob};
+use shapeflow::jobs::{parse_spec, prepare, result_state, run_prepared, PreparedJob, StateResults};
 use std::collections::HashMap;
 use std::sync::atomic::AtomicBool;
 
@@ -266,4 +266,33 @@ fn an_anisotropic_nifti_volume_and_a_tiff_stack() {
         image.write_data(&page).unwrap();
     }
     check(out.into_inner(), "tiff stack");
+}
+
+/// An empty result is a result: a faint square whose contour costs more than its
+/// region gains (`mu` large, within its bounds) shrinks away; the run ends
+/// `vanished`, successfully, with an empty mask, an empty label image and no
+/// objects.
+#[test]
+fn an_object_that_shrinks_away_is_an_empty_result() {
+    let (w, h) = (64u32, 64u32);
+    let img = image::GrayImage::from_fn(w, h, |x, y| {
+        image::Luma([if (24..40).contains(&x) && (24..40).contains(&y) { 110 } else { 100 }])
+    });
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png).unwrap();
+    let spec = r#"{"problem": {"type": "segmentation", "image": "input:image", "mu": 50}}"#;
+    let inputs: HashMap<String, Vec<u8>> = [("image".to_string(), png)].into();
+    let job = prepare(parse_spec(spec).unwrap(), &inputs).unwrap();
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
+    assert_eq!(out.stop, shapeflow::flow::StopReason::Vanished);
+    assert!(out.note.unwrap().contains("no object"));
+    let shown = result_state(&job, &out.last);
+    let results = StateResults::new(&job, &shown);
+    let mask = image::load_from_memory(&results.image_file("mask.png").unwrap().1).unwrap().to_luma8();
+    assert!(mask.pixels().all(|p| p.0[0] == 0));
+    let labels = image::load_from_memory(&results.image_file("labels.png").unwrap().1).unwrap().to_luma16();
+    assert!(labels.pixels().all(|p| p.0[0] == 0));
+    assert_eq!(results.shape_document()["objects"], serde_json::json!([]));
+    let csv = String::from_utf8(results.image_file("objects.csv").unwrap().1).unwrap();
+    assert_eq!(csv.lines().count(), 1, "{csv}");
 }

@@ -10,6 +10,23 @@ use serde_json::{json, Value};
 use std::collections::HashMap;
 use std::path::Path;
 
+/// docs/job-spec-reference.md is the reference generated from the schema
+/// (`shapeflow schema --markdown`), and it names every field of every spec object.
+#[test]
+fn the_job_spec_reference_is_current() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let committed = std::fs::read_to_string(root.join("docs/job-spec-reference.md")).unwrap();
+    let schema = shapeflow::jobs::job_spec_schema();
+    let generated = shapeflow::jobs::job_spec_reference(&schema);
+    assert!(
+        committed.trim_end() == generated.trim_end(),
+        "docs/job-spec-reference.md is stale: run `cargo run -- schema --markdown > docs/job-spec-reference.md`"
+    );
+    for field in ["tau", "end_time", "edge_contrast", "checkpoint_every", "topology_changes", "wetting_layer"] {
+        assert!(committed.contains(&format!("| `{field}`")), "{field}");
+    }
+}
+
 /// `api/job-spec.schema.json` is the schema derived from the spec's types (`shapeflow
 /// schema`); Ajv (draft 2020-12, strict) accepts every example and rejects what the
 /// parser rejects for its shape: unknown or misspelt fields, a missing `problem`, an

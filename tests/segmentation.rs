@@ -243,14 +243,14 @@ impl RunEvents for Checkpoints {
 /// Paper Figure 1: on a C-shaped object both flows find the object; the Newton-type
 /// H1 flow gets within 1e-5 of the best energy in fewer iterations than L2, and
 /// within 1e-6 in less than 0.6 of them (one stage, `lambda_final` = `lambda`, the
-/// default 0.3 L).
+/// default 0.3 L; the paper's edge indicator, `k` = 1 on the image mapped to [0, 100]).
 #[test]
 fn newton_h1_and_l2_on_a_c_shape() {
     let p = picture(128, 128, 12.0, 7, c_shape(64.0, 64.0, 40.0, 22.0, 10.0));
     let img = png_gray8(&p);
     let spec = |prod: &str| {
         format!(
-            r#"{{"initial": {{"shape": "inscribed"}}, "problem": {{"type": "segmentation", "image": "input:image", "model": "geodesic", "lambda_final": 38.4}}, "flow": {{"scalar_product": "{prod}", "max_iterations": 1500, "tolerance": 1e-10}}}}"#
+            r#"{{"initial": {{"shape": "inscribed"}}, "problem": {{"type": "segmentation", "image": "input:image", "model": "geodesic", "edge_contrast": 1, "lambda_final": 38.4}}, "flow": {{"scalar_product": "{prod}", "max_iterations": 1500, "tolerance": 1e-10}}}}"#
         )
     };
     let (ja, a, ha) = run_with_history(&spec("h1_newton"), &[("image", img.clone())]);

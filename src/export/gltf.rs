@@ -1,4 +1,4 @@
-//! glTF 2.0 binary (.glb) results, laid out per DESIGN.md §3:
+//! glTF 2.0 binary (.glb) results, laid out as docs/results.md describes:
 //!
 //! - curves: one `LINE_LOOP` primitive per component (z = 0), vertices in the
 //!   component's order (counter-clockwise for outer boundaries); on periodic curves

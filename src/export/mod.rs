@@ -1,4 +1,4 @@
-//! Result formats (pure functions to strings/bytes): shape.json (DESIGN.md §3), the
+//! Result formats (pure functions to strings/bytes): shape.json (docs/user-guide.md), the
 //! energy history as CSV and as an SVG plot; masks and overlays of image jobs; glTF (.glb) shapes and evolutions.
 
 mod energy_csv;

@@ -39,7 +39,7 @@ use super::step::{SemiImplicitStep, SolverKind};
 use super::system::{LinearSystem, ProductWeights, ScalarProduct};
 use super::FlowError;
 use crate::fem::{Matrices, Pattern, Weight};
-use crate::geometry::{simplex, Mesh, Point};
+use crate::geometry::{degenerate_measure, simplex, Mesh, Point};
 use serde::{Deserialize, Serialize};
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -56,6 +56,10 @@ pub enum StopReason {
     Cancelled,
     /// A neck of a surface collapsed (mesh management detected it after the step).
     PinchOff,
+    /// Every component shrank below the smallest size the mesh management keeps
+    /// (curves: `min_area`): nothing is left to evolve. The run ends on the last
+    /// state, whose components are all below that size.
+    Vanished,
 }
 
 impl StopReason {
@@ -67,6 +71,7 @@ impl StopReason {
             StopReason::TauMin => "tau_min",
             StopReason::Cancelled => "cancelled",
             StopReason::PinchOff => "pinch_off",
+            StopReason::Vanished => "vanished",
         }
     }
 }
@@ -244,6 +249,32 @@ impl<'p, const D: usize> Flow<'p, D> {
         check_settings(&settings)?;
         check_bending(problem, &settings)?;
         let mesh = checkpoint.mesh.to_mesh::<D>().map_err(|e| FlowError::Checkpoint(e.to_string()))?;
+        Ok(Self::assemble_state(
+            problem,
+            mesh,
+            settings,
+            checkpoint.iteration,
+            checkpoint.time,
+            checkpoint.tau,
+            checkpoint.energy,
+        ))
+    }
+
+    /// Continue a state this process's own flow produced (the next stage of a job)
+    /// with another problem: like [`Flow::resume`], without validating the mesh
+    /// again (the flow keeps its meshes valid up to the tolerances of its own
+    /// checks, which are not those of a file read from outside).
+    pub fn continue_from(
+        problem: &'p dyn Problem<D>,
+        checkpoint: &Checkpoint,
+        settings: FlowSettings,
+    ) -> Result<Self, FlowError> {
+        check_settings(&settings)?;
+        check_bending(problem, &settings)?;
+        let mesh = checkpoint
+            .mesh
+            .to_mesh_unvalidated::<D>()
+            .ok_or_else(|| FlowError::Checkpoint(format!("not a mesh of dimension {D}")))?;
         Ok(Self::assemble_state(
             problem,
             mesh,
@@ -477,13 +508,12 @@ impl<'p, const D: usize> Flow<'p, D> {
                 }
             }
             let mut candidate = advanced(&self.mesh, &vel.vector, tau);
-            if let Some(element) = tangled(&self.mesh, &candidate) {
+            if tangled(&self.mesh, &candidate).is_some() {
+                // retried with half the step; below tau_min the run stops with
+                // `tau_min` on the last good state
                 tau *= 0.5;
                 report.reductions += 1;
                 report.rejected = Some(Rejection::Tangled);
-                if tau < s.tau_min {
-                    return Err(FlowError::Tangled { element, time: self.time });
-                }
                 continue;
             }
             if let Some(tol) = s.conservation {
@@ -544,7 +574,11 @@ impl<'p, const D: usize> Flow<'p, D> {
             if s.tolerance > 0.0 && (previous - energy).abs() <= s.tolerance * previous.abs() * scale {
                 report.stop = Some(StopReason::Converged);
             }
-            if self.manage_mesh()? {
+            let managed = self.manage_mesh()?;
+            if managed == ManageOutcome::Vanished {
+                report.stop = Some(StopReason::Vanished);
+            }
+            if managed == ManageOutcome::PinchOff {
                 // a neck collapsed during this step, which the mesh no longer
                 // resolves: the run ends on the last good state, before the step
                 (self.mesh, self.time, self.tau, self.energy) = (before, time, last_tau, previous);
@@ -560,12 +594,12 @@ impl<'p, const D: usize> Flow<'p, D> {
 impl<const D: usize> Flow<'_, D> {
     /// Apply the mesh manager, if any; a new connectivity rebuilds the pattern and
     /// drops the symbolic factorizations. The energy is re-evaluated on the result.
-    /// Returns `true` on pinch-off.
-    fn manage_mesh(&mut self) -> Result<bool, FlowError> {
-        let Some(manager) = self.manager.as_mut() else { return Ok(false) };
+    fn manage_mesh(&mut self) -> Result<ManageOutcome, FlowError> {
+        let Some(manager) = self.manager.as_mut() else { return Ok(ManageOutcome::Continue) };
         let (mesh, remeshed) = match manager.manage(&self.mesh)? {
-            Managed::Unchanged => return Ok(false),
-            Managed::PinchOff => return Ok(true),
+            Managed::Unchanged => return Ok(ManageOutcome::Continue),
+            Managed::PinchOff => return Ok(ManageOutcome::PinchOff),
+            Managed::Vanished => return Ok(ManageOutcome::Vanished),
             Managed::Moved(m) => (m, false),
             Managed::Remeshed(m) => (m, true),
         };
@@ -573,7 +607,7 @@ impl<const D: usize> Flow<'_, D> {
         if energy == f64::INFINITY {
             // management made the shape inadmissible (shape design: a regularized
             // spike crossed a fixed boundary): keep the accepted mesh this time
-            return Ok(false);
+            return Ok(ManageOutcome::Continue);
         }
         if !energy.is_finite() {
             return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration });
@@ -584,8 +618,16 @@ impl<const D: usize> Flow<'_, D> {
             self.solver.reset();
         }
         self.energy = energy;
-        Ok(false)
+        Ok(ManageOutcome::Continue)
     }
+}
+
+/// What the mesh management after an accepted step means for the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ManageOutcome {
+    Continue,
+    PinchOff,
+    Vanished,
 }
 
 fn check_settings(s: &FlowSettings) -> Result<(), FlowError> {
@@ -716,11 +758,13 @@ struct Linearization<const D: usize> {
     product: ProductWeights,
 }
 
-/// First element that degenerated or flipped between `old` and `new`.
+/// First element that degenerated (relative to `old`, or below what validation
+/// accepts: [`degenerate_measure`]) or flipped between `old` and `new`.
 fn tangled<const D: usize>(old: &Mesh<D>, new: &Mesh<D>) -> Option<usize> {
+    let tiny = degenerate_measure(new.positions());
     (0..old.num_elements()).find(|&e| {
         let (m0, n0) = old.element_geometry(e);
         let (m1, n1) = new.element_geometry(e);
-        !(m1 > 1e-12 * m0) || n0.dot(&n1) <= 0.0 || !m1.is_finite()
+        !(m1 > 1e-12 * m0) || !(m1 > tiny) || n0.dot(&n1) <= 0.0 || !m1.is_finite()
     })
 }

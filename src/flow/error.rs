@@ -12,8 +12,6 @@ pub enum FlowError {
     NoConvergence { residual: f64, iterations: usize },
     #[error("the velocity is not finite at vertex {vertex}")]
     NonFiniteVelocity { vertex: usize },
-    #[error("the mesh tangled: element {element} degenerated or flipped at time {time}")]
-    Tangled { element: usize, time: f64 },
     #[error("the energy is not finite ({value}) at iteration {iteration}")]
     NonFiniteEnergy { value: f64, iteration: usize },
     #[error("problem error: {0}")]

@@ -17,6 +17,10 @@ pub enum Managed<const D: usize> {
     Remeshed(Mesh<D>),
     /// A neck collapsed (3D): the run ends with `pinch_off` on the current mesh.
     PinchOff,
+    /// Every component is below the smallest size kept (closed curves with
+    /// topological changes: `min_area`): the run ends with `vanished` on the
+    /// current mesh.
+    Vanished,
 }
 
 /// Called by the driver after every accepted step.
@@ -114,10 +118,16 @@ fn manage_curves(
     mesh: &CurveMesh,
 ) -> Result<Managed<2>, FlowError> {
     let fail = |e: crate::geometry::MeshError| FlowError::Problem(format!("mesh management: {e}"));
+    if s.topology_changes && crate::geometry::all_loops_below(mesh, s.params.min_area) {
+        return Ok(Managed::Vanished);
+    }
     let sweeps = if s.regularize { s.sweeps } else { 0 };
-    let (mut remeshed, mut moved) = match manage_curve(mesh, &s.params, s.adapt, sweeps).map_err(fail)? {
-        (Some(m), true) => (Some(m), None),
-        (m, _) => (None, m),
+    let (mut remeshed, mut moved) = match manage_curve(mesh, &s.params, s.adapt, sweeps) {
+        Err(crate::geometry::MeshError::Empty) => return Ok(Managed::Vanished),
+        r => match r.map_err(fail)? {
+            (Some(m), true) => (Some(m), None),
+            (m, _) => (None, m),
+        },
     };
     if s.topology_changes {
         let cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
@@ -128,8 +138,13 @@ fn manage_curves(
         if s.params.keep_apart && !cur.crossings_between_components(&hits).is_empty() {
             return Ok(Managed::Unchanged);
         }
-        if let Some(m) = resolve_crossings(cur, &hits, s.params.min_area, s.params.fill_pockets).map_err(fail)? {
-            (remeshed, moved) = (Some(m), None);
+        match resolve_crossings(cur, &hits, s.params.min_area, s.params.fill_pockets) {
+            Err(crate::geometry::MeshError::Empty) => return Ok(Managed::Vanished),
+            r => {
+                if let Some(m) = r.map_err(fail)? {
+                    (remeshed, moved) = (Some(m), None);
+                }
+            }
         }
         // a component that shrank below min_area vanishes (its shrinking would
         // otherwise hold every step to a fraction of its size)

@@ -41,7 +41,8 @@ impl Loop {
     }
 }
 
-pub(super) fn loop_area(l: &[Point<2>]) -> f64 {
+/// Signed area enclosed by the closed polygon `l` (positive counterclockwise).
+pub fn loop_area(l: &[Point<2>]) -> f64 {
     (0..l.len()).map(|k| 0.5 * cross(l[k], l[(k + 1) % l.len()])).sum()
 }
 

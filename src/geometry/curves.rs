@@ -35,6 +35,17 @@ pub fn drop_small_loops(mesh: &CurveMesh, min_area: f64) -> Option<CurveMesh> {
     from_polylines_trusted(kept).ok()
 }
 
+/// Whether every closed component of `mesh` encloses less than `min_area` (what
+/// [`drop_small_loops`] would remove, were it allowed to remove all); `false` for
+/// periodic curves.
+pub fn all_loops_below(mesh: &CurveMesh, min_area: f64) -> bool {
+    mesh.period().is_none()
+        && mesh.cycles().iter().all(|c| {
+            let l: Vec<Point<2>> = c.iter().map(|&v| mesh.positions()[v]).collect();
+            super::curve_loop::loop_area(&l).abs() < min_area
+        })
+}
+
 /// Like [`from_polylines`] for the remeshing kernels, which keep every component
 /// closed with at least three distinct vertices: no validation pass (an
 /// intersection created by a remeshing step is resolved by the topology step of

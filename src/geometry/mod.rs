@@ -4,6 +4,7 @@
 
 mod crossing_watch;
 mod curve_loop;
+pub use curve_loop::loop_area;
 mod curve_remesh;
 mod curve_topology;
 mod curves;
@@ -15,11 +16,12 @@ pub mod simplex;
 mod surface_remesh;
 mod surfaces;
 mod validate;
+pub use validate::degenerate_measure;
 
 pub use crossing_watch::CrossingWatch;
 pub use curve_remesh::{adapt_curve, manage_curve, regularize_curve, CurveRemeshSettings};
 pub use curve_topology::{mesh_winding_number, resolve_crossings, resolve_intersections, winding_number};
-pub use curves::{circle, curves_from_loops, drop_small_loops, ellipse, polygon, rectangle, union};
+pub use curves::{all_loops_below, circle, curves_from_loops, drop_small_loops, ellipse, polygon, rectangle, union};
 pub use intersect::{find_periodic_intersections, find_segment_intersections, SegmentHit};
 pub use measures::MeshQuality;
 pub use mesh::{segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};

@@ -65,8 +65,7 @@ fn basic_checks<const D: usize>(
             return Err(MeshError::NonFinite { vertex });
         }
     }
-    let scale = bounding_diameter(positions).max(f64::MIN_POSITIVE);
-    let tiny = 1e-13 * scale.powi(D as i32 - 1);
+    let tiny = degenerate_measure(positions);
     let mut used = vec![false; n];
     for (e, el) in elements.iter().enumerate() {
         for &index in el {
@@ -100,6 +99,15 @@ fn basic_checks<const D: usize>(
         seen.insert(key, e);
     }
     Ok(())
+}
+
+/// The measure (length, area) at or below which an element of a mesh with these
+/// vertices counts as degenerate: `1e-13 diam^(D−1)` with the bounding box's
+/// diameter. Validation rejects such elements, and the flow rejects a step that
+/// makes one.
+pub fn degenerate_measure<const D: usize>(positions: &[Point<D>]) -> f64 {
+    let scale = bounding_diameter(positions).max(f64::MIN_POSITIVE);
+    1e-13 * scale.powi(D as i32 - 1)
 }
 
 fn bounding_diameter<const D: usize>(positions: &[Point<D>]) -> f64 {

@@ -17,6 +17,21 @@ use super::grid::Grid;
 use super::smooth::gaussian_smooth;
 use nalgebra::{SMatrix, SVector};
 
+/// The automatic contrast scale `k` of the edge indicator from the squared
+/// gradient magnitudes `g2` (of the image on [0, 100]): a twentieth of the strong
+/// edges' gradient, `max(p99, max/4)/20` of `|∇I_σ|` — the strong edges get
+/// `H ≈ 1/400` whatever the image's contrast, and the 99th percentile rather than
+/// the maximum lets a few very bright objects not set the scale (the `max/4`
+/// floor serves images whose edges are under 1 % of the samples). On a clean
+/// image mapped to [0, 100] this is about 1, the scale of the paper's figures.
+pub fn contrast_scale(g2: &[f64]) -> f64 {
+    let mut g: Vec<f64> = g2.iter().map(|v| v.sqrt()).collect();
+    let max = g.iter().copied().fold(0.0, f64::max);
+    let rank = ((g.len() as f64 - 1.0) * 0.99).round() as usize;
+    let p99 = if g.is_empty() { 0.0 } else { *g.select_nth_unstable_by(rank, f64::total_cmp).1 };
+    (p99.max(0.25 * max) / 20.0).max(1e-6)
+}
+
 /// Padding (in samples) of the row prefix sums on each side.
 const PAD: isize = 4;
 
@@ -49,9 +64,18 @@ struct Axis {
 }
 
 impl EdgeField {
-    /// The edge indicator of `grid` smoothed with `sigma` samples. `None` when the
-    /// image is constant (no edges at all).
+    /// The edge indicator `H = 1/(1 + |∇I_σ|²)` of `grid` mapped to [0, 100] and
+    /// smoothed with `sigma` samples (the contrast scale `k = 1` of
+    /// [`EdgeField::with_contrast`]). `None` when the image is constant.
     pub fn new(grid: &Grid, sigma: f64) -> Option<EdgeField> {
+        Self::with_contrast(grid, sigma, Some(1.0)).map(|(f, _)| f)
+    }
+
+    /// The edge indicator `H = 1/(1 + |∇I_σ|²/k²)` of `grid` mapped to [0, 100]
+    /// and smoothed with `sigma` samples, and the contrast scale `k` used: the one
+    /// given, or by default [`contrast_scale`] of the image's own gradients. `None`
+    /// when the image is constant (no edges at all).
+    pub fn with_contrast(grid: &Grid, sigma: f64, k: Option<f64>) -> Option<(EdgeField, f64)> {
         let norm = grid.normalized(100.0)?;
         let s = gaussian_smooth(&norm, sigma);
         let d = grid.dims;
@@ -59,6 +83,7 @@ impl EdgeField {
             let c = |x: isize, n: usize| x.clamp(0, n as isize - 1) as usize;
             s.values[grid.index(c(i, d[0]), c(j, d[1]), c(k, d[2]))]
         };
+        // |∇I_σ|² by central differences
         let mut coef = vec![0.0; grid.len()];
         for k in 0..d[2] as isize {
             for j in 0..d[1] as isize {
@@ -66,11 +91,16 @@ impl EdgeField {
                     let gx = 0.5 * (at(i + 1, j, k) - at(i - 1, j, k));
                     let gy = 0.5 * (at(i, j + 1, k) - at(i, j - 1, k));
                     let gz = if grid.dimension == 3 { 0.5 * (at(i, j, k + 1) - at(i, j, k - 1)) } else { 0.0 };
-                    coef[grid.index(i as usize, j as usize, k as usize)] = 1.0 / (1.0 + gx * gx + gy * gy + gz * gz);
+                    coef[grid.index(i as usize, j as usize, k as usize)] = gx * gx + gy * gy + gz * gz;
                 }
             }
         }
-        Some(EdgeField { sigma, ..Self::from_coefficients(grid.dimension, d, coef) })
+        let k = k.unwrap_or_else(|| contrast_scale(&coef));
+        let inv = 1.0 / (k * k);
+        for c in &mut coef {
+            *c = 1.0 / (1.0 + *c * inv);
+        }
+        Some((EdgeField { sigma, ..Self::from_coefficients(grid.dimension, d, coef) }, k))
     }
 
     /// A field with the given spline coefficients (`H` at the samples).
@@ -490,5 +520,30 @@ mod tests {
         // the valley of H is at the edge x = 8/16
         let at = |x: f64| f.value(&Vector2::new(x, 0.5));
         assert!(at(0.5) < 0.01 && at(0.1) > 0.9 && at(0.9) > 0.9, "{} {} {}", at(0.5), at(0.1), at(0.9));
+    }
+
+    /// The automatic contrast scale follows the strong edges, not a few brightest
+    /// ones: dim objects (most edges of gradient 2, a few of 20) get a smaller `k`
+    /// than bright ones, so their edges still bring `H` near 0; a step on the
+    /// [0, 100] scale gets `H ≈ 1/400` at its steepest point.
+    #[test]
+    fn contrast_scale_from_the_strong_edges() {
+        let mut g2 = vec![0.0; 10_000];
+        for (n, v) in g2.iter_mut().enumerate().take(300) {
+            *v = if n < 10 { 400.0 } else { 4.0 };
+        }
+        let k = contrast_scale(&g2);
+        assert!((k - 0.25).abs() < 1e-12, "{k}"); // the max/4 floor: 20/4/20
+        for v in g2.iter_mut().take(300) {
+            *v = 400.0;
+        }
+        assert!((contrast_scale(&g2) - 1.0).abs() < 1e-12);
+        use crate::imaging::SampleKind;
+        let v = (0..256).map(|i| if i % 16 < 8 { 0.0 } else { 255.0 }).collect();
+        let grid = Grid::new(2, [16, 16, 1], v, SampleKind::U8);
+        let (f, k) = EdgeField::with_contrast(&grid, 1.0, None).unwrap();
+        let lowest = (0..=160).map(|i| f.value(&Vector2::new(0.4 + i as f64 * 1e-3, 0.5))).fold(1.0, f64::min);
+        // (the spline between the samples is not below its lowest sample by much)
+        assert!(lowest > 0.8 / 401.0 && lowest < 1.25 / 401.0, "k {k}, lowest H {lowest}");
     }
 }

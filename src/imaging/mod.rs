@@ -3,7 +3,7 @@
 //! geodesic active contours with a C² interpolant, and rasterization of shapes into
 //! masks. Pure functions over bytes and arrays; nothing here touches files.
 //!
-//! Coordinates (DESIGN.md §3): a grid of `n_x × n_y (× n_z)` samples lives in the
+//! Coordinates (docs/problems/segmentation.md): a grid of `n_x × n_y (× n_z)` samples lives in the
 //! unit box, `L = max(n_x, n_y, n_z)`; sample `(i, j, k)` has its centre at
 //! `((i+½)/L, (j+½)/L, (k+½)/L)`. 2D images are stored with their rows flipped
 //! (`j = 0` is the bottom row of the picture), so that y points up.
@@ -24,7 +24,7 @@ mod volumes;
 
 pub use background::quadratic_background;
 pub use decode::{decode_image, decode_slices, decode_volume, ImageLimits};
-pub use edge::{EdgeField, EdgeSample};
+pub use edge::{contrast_scale, EdgeField, EdgeSample};
 pub use grid::{Grid, SampleKind};
 pub use nrrd::{encode_nrrd_labels, encode_nrrd_mask, parse_nrrd};
 pub use raster::{draw_overlay, rasterize_curve, rasterize_curve_window, rasterize_surface, rasterize_surface_window};

@@ -301,7 +301,9 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     if tau_min > tau {
         return Err(SpecError::new("flow.tau_min", format!("must not exceed flow.tau ({tau})")));
     }
-    let tolerance = f.tolerance.unwrap_or(d.tolerance);
+    // a run given an end time runs to it unless the spec also asks for a tolerance
+    let default_tolerance = if f.end_time.is_some() { 0.0 } else { d.tolerance };
+    let tolerance = f.tolerance.unwrap_or(default_tolerance);
     if !(tolerance.is_finite() && tolerance >= 0.0) {
         return Err(SpecError::new("flow.tolerance", format!("must be a nonnegative number, got {tolerance}")));
     }

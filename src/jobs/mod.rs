@@ -1,4 +1,4 @@
-//! Jobs: the job spec of DESIGN.md §3 (serde, validated with errors naming the
+//! Jobs: the job spec (docs/job-spec.md) (serde, validated with errors naming the
 //! field), its translation into a mesh, a problem and flow settings, and the run of
 //! a prepared job with progress and checkpoint callbacks. No I/O: input files arrive
 //! as bytes.
@@ -12,6 +12,7 @@ mod mesh_io;
 mod results;
 mod run;
 mod schema;
+mod schema_doc;
 mod segment;
 mod spec;
 mod spec_path;
@@ -21,6 +22,7 @@ pub use mesh_io::{read_mesh_file, MeshFileError};
 pub use results::{image_result_names, job_extras, result_state, state_glb, states_glb, StateResults, MAX_FRAMES};
 pub use run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
 pub use schema::{job_spec_schema, openapi_schemas};
+pub use schema_doc::job_spec_reference;
 pub use segment::{default_min_size, default_mu, SegmentationSetup};
 pub use spec::{
     parse_spec, BoundarySpec, ControlSpec, FlowSpec, InitialSpec, JobSpec, MeansKind, MeshSpec, OutputSpec, Polarity,

@@ -8,6 +8,7 @@ use crate::export::{
     GltfFrame, ObjectRow,
 };
 use crate::flow::{Checkpoint, MeshData};
+use crate::geometry::{loop_area, Point};
 use crate::imaging::{encode_nrrd_labels, Grid};
 use crate::problems::refine_to_edges;
 use serde_json::{json, Value};
@@ -46,15 +47,47 @@ pub struct StateResults<'a> {
     job: &'a PreparedJob,
     shown: &'a Checkpoint,
     objects: OnceCell<(Vec<u16>, Vec<ObjectRow>)>,
+    found: OnceCell<MeshData>,
 }
 
 impl<'a> StateResults<'a> {
     pub fn new(job: &'a PreparedJob, shown: &'a Checkpoint) -> Self {
-        StateResults { job, shown, objects: OnceCell::new() }
+        StateResults { job, shown, objects: OnceCell::new(), found: OnceCell::new() }
     }
 
     fn objects(&self, image: &Grid) -> &(Vec<u16>, Vec<ObjectRow>) {
-        self.objects.get_or_init(|| objects(image, &self.shown.mesh))
+        self.objects.get_or_init(|| objects(image, self.found()))
+    }
+
+    /// The shape the mask, the labels and the objects show: the shown state without
+    /// the contours below the mesh management's `min_area`, which the flow removes
+    /// (a run that stops with `vanished` has only such contours, and an empty mask).
+    fn found(&self) -> &MeshData {
+        self.found.get_or_init(|| {
+            let mesh = &self.shown.mesh;
+            let min_area = match self.job.curve_manager {
+                Some(m) if m.topology_changes => m.params.min_area,
+                _ => return mesh.clone(),
+            };
+            match mesh.to_mesh_unvalidated::<2>() {
+                Some(m) if m.period().is_none() => {
+                    let kept: Vec<Vec<Point<2>>> = m
+                        .cycles()
+                        .into_iter()
+                        .map(|c| c.iter().map(|&v| m.positions()[v]).collect::<Vec<_>>())
+                        .filter(|l| loop_area(l).abs() >= min_area)
+                        .collect();
+                    let (mut positions, mut elements) = (Vec::new(), Vec::new());
+                    for l in kept {
+                        let base = positions.len();
+                        positions.extend(l.iter().map(|p| vec![p[0], p[1]]));
+                        elements.extend((0..l.len()).map(|k| vec![base + k, base + (k + 1) % l.len()]));
+                    }
+                    MeshData { dimension: 2, positions, elements, period: None }
+                }
+                _ => mesh.clone(),
+            }
+        })
     }
 
     /// shape.json: the shape, and for image jobs the pixel coordinates, the
@@ -78,11 +111,10 @@ impl<'a> StateResults<'a> {
     pub fn image_file(&self, name: &str) -> Option<(&'static str, Vec<u8>)> {
         let img = self.job.image.as_deref()?;
         let media = image_result_names(img.dimension).iter().find(|(n, _)| *n == name)?.1;
-        let mesh = &self.shown.mesh;
         let bytes = match name {
-            "mask.png" => mask_png(img, mesh),
-            "overlay.png" => overlay_png(img, mesh),
-            "mask.nrrd" => mask_nrrd(img, mesh),
+            "mask.png" => mask_png(img, self.found()),
+            "overlay.png" => overlay_png(img, &self.shown.mesh),
+            "mask.nrrd" => mask_nrrd(img, self.found()),
             "labels.png" => labels_png(img, &self.objects(img).0),
             "labels.nrrd" => encode_nrrd_labels(img.dims, &self.objects(img).0),
             "objects.csv" => objects_csv(img.dimension, &self.objects(img).1).into_bytes(),

@@ -21,7 +21,8 @@ impl RunEvents for () {}
 #[derive(Debug, Clone, PartialEq)]
 pub struct JobOutcome {
     pub stop: StopReason,
-    /// With `tau_min`: why the last trial steps failed (a sentence for users).
+    /// With `tau_min`: why the last trial steps failed; with `vanished`: what that
+    /// means (a sentence for users).
     pub note: Option<&'static str>,
     /// The final state (also passed to [`RunEvents::checkpoint`]).
     pub last: Checkpoint,
@@ -99,7 +100,7 @@ fn run_stage<const D: usize>(
         // a later stage converges on the scale of the first stage's energy at the
         // same shape: without the balloon term the energy of a segmentation is a few
         // hundred times smaller, and re-meshing noise would keep it from converging
-        if let Ok(m) = cp.mesh.to_mesh::<D>() {
+        if let Some(m) = cp.mesh.to_mesh_unvalidated::<D>() {
             let (first, here) = (job.problem.as_dyn::<D>().energy(&m), problem.energy(&m));
             if let (Ok(first), Ok(here)) = (first, here) {
                 let scale = (first / here).abs();
@@ -110,6 +111,8 @@ fn run_stage<const D: usize>(
         }
     }
     let mut flow = match start {
+        // the end of the stage before, in memory
+        Some(cp) if reported => Flow::continue_from(problem, cp, settings),
         Some(cp) => Flow::resume(problem, cp, settings),
         None => Flow::new(problem, mesh.clone(), settings),
     }
@@ -147,7 +150,16 @@ fn run_stage<const D: usize>(
         events.checkpoint(&last);
     }
     match result {
-        Ok(stop) => Ok(JobOutcome { stop, note: flow.stop_cause().map(|r| r.describe()), last }),
+        Ok(stop) => {
+            let note = match stop {
+                StopReason::Vanished => Some(
+                    "every contour shrank below the smallest size kept (mesh.min_area): nothing is left; \
+                     for an image, no object was found (empty mask)",
+                ),
+                _ => flow.stop_cause().map(|r| r.describe()),
+            };
+            Ok(JobOutcome { stop, note, last })
+        }
         Err(e) => Err(fail(e, last)),
     }
 }

@@ -53,6 +53,9 @@ pub struct SegmentationSetup {
     /// The more permissive threshold for dim objects that the main one misses
     /// entirely (`None` where it is not more permissive).
     pub dim_threshold: Option<f64>,
+    /// The contrast scale `k` of the edge indicator `H = 1/(1 + |∇I_σ|²/k²)`
+    /// (image on [0, 100]); `None` for the Chan–Vese model, which has no `H`.
+    pub edge_contrast: Option<f64>,
     pub min_size: f64,
     /// Objects of the initial shape.
     pub initial_objects: usize,
@@ -99,11 +102,15 @@ pub(super) fn prepare_segmentation(
     if let Some(e) = spec.epsilon {
         positive("problem.epsilon", e)?;
     }
+    if let Some(k) = spec.edge_contrast {
+        in_range("problem.edge_contrast", positive("problem.edge_contrast", k)?, 0.0, 1000.0)?;
+    }
     let means = spec.means.unwrap_or(MeansKind::PerObject);
     let merge = spec.merge.unwrap_or(false);
     let start = image_initial(spec, initial, &grid, &pre, min_size)?;
     let weights = ChanVeseWeights { mu, lambda_in, lambda_out, per_object: means == MeansKind::PerObject, merge };
-    let (problem, second_stage, edges) = functional(spec, model, &grid, &pre.data, &start, &weights, pre.sigma)?;
+    let (problem, second_stage, edges, edge_contrast) =
+        functional(spec, model, &grid, &pre.data, &start, &weights, pre.sigma)?;
     let setup = SegmentationSetup {
         model,
         percentiles: pre.percentiles,
@@ -116,6 +123,7 @@ pub(super) fn prepare_segmentation(
         polarity: pre.levels.polarity(),
         threshold: pre.levels.main,
         dim_threshold: pre.levels.dim,
+        edge_contrast,
         min_size,
         initial_objects: start.objects,
         mu,
@@ -286,7 +294,7 @@ fn functional(
     start: &ImageInitial,
     w: &ChanVeseWeights,
     sigma: f64,
-) -> Result<(ProblemKind, Option<ProblemKind>, Option<Arc<EdgeField>>), SpecError> {
+) -> Result<(ProblemKind, Option<ProblemKind>, Option<Arc<EdgeField>>, Option<f64>), SpecError> {
     let (d, l) = (grid.dimension, grid.scale());
     // (the weights given in the spec are checked by the caller)
     let geodesic = match model {
@@ -297,16 +305,21 @@ fn functional(
                 SegmentationModel::Both => 0.0,
                 _ => super::spec::default_lambda(d, l),
             });
-            let field = EdgeField::new(grid, sigma).ok_or_else(|| constant_image(&spec.image))?;
-            Some(Segmentation { field: Arc::new(field), lambda, epsilon })
+            let (field, k) =
+                EdgeField::with_contrast(grid, sigma, spec.edge_contrast).ok_or_else(|| constant_image(&spec.image))?;
+            Some((Segmentation { field: Arc::new(field), lambda, epsilon }, k))
         }
+    };
+    let (geodesic, edge_contrast) = match geodesic {
+        Some((g, k)) => (Some(g), Some(k)),
+        None => (None, None),
     };
     if let (SegmentationModel::Geodesic, Some(problem)) = (model, &geodesic) {
         let lambda_final = spec.lambda_final.unwrap_or(super::spec::default_lambda_final(d, problem.lambda));
         let second = (lambda_final != problem.lambda)
             .then(|| ProblemKind::Segmentation(Segmentation { lambda: lambda_final, ..problem.clone() }));
         let edges = spec.edge_refinement.unwrap_or(true).then(|| problem.field.clone());
-        return Ok((ProblemKind::Segmentation(problem.clone()), second, edges));
+        return Ok((ProblemKind::Segmentation(problem.clone()), second, edges, edge_contrast));
     }
     let mut values = data.values.clone();
     if let Some(bg) = start.background {
@@ -324,7 +337,7 @@ fn functional(
         (Some(g), Some(true)) => Some(g.field.clone()),
         _ => None,
     };
-    Ok((ProblemKind::ChanVese(cv), None, edges))
+    Ok((ProblemKind::ChanVese(cv), None, edges, edge_contrast))
 }
 
 /// The quadratic illumination of `smoothed` less its mean over the background (the

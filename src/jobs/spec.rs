@@ -1,4 +1,4 @@
-//! The job spec (DESIGN.md §3). Unknown fields are rejected; every error names the
+//! The job spec (docs/job-spec.md). Unknown fields are rejected; every error names the
 //! field by its path (`flow.tau`, `initial.parts[1].radius`).
 
 use crate::flow::{ScalarProduct, SolverKind};
@@ -269,6 +269,13 @@ pub struct SegmentationSpec {
     /// sub-pixel accuracy; default true.
     #[serde(default)]
     pub edge_refinement: Option<bool>,
+    /// (Addition, geodesic model) contrast scale `k` of the edge indicator
+    /// `H = 1/(1 + |∇I_σ|²/k²)`, the image mapped to [0, 100]; default from the
+    /// image's gradients, `max(p99, max/4)/20` of `|∇I_σ|` (about 1 on a clean
+    /// image, lower where the objects are dim).
+    #[serde(default)]
+    #[schemars(extend("exclusiveMinimum" = 0), range(max = 1000))]
+    pub edge_contrast: Option<f64>,
     /// Threshold ε of the Newton weight β (paper §4.2.1); default `0.1 L²`.
     #[serde(default)]
     #[schemars(extend("exclusiveMinimum" = 0))]
@@ -608,7 +615,8 @@ pub struct FlowSpec {
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub end_time: Option<f64>,
     /// Stop with `converged` when `|J_{n+1} − J_n| ≤ tolerance·|J_n|` (a rate for
-    /// physical evolutions); 0 disables; default 1e-6.
+    /// physical evolutions); 0 disables; default 1e-6, but 0 when `end_time` is given
+    /// (the run then goes to its end time).
     #[schemars(range(min = 0))]
     pub tolerance: Option<f64>,
     /// Halve τ until J decreases; default on, off for physical flows.

@@ -1,4 +1,4 @@
-//! The job service of DESIGN.md §3 (first slice): axum routes over a SQLite store
+//! The job service (docs/user-guide.md): axum routes over a SQLite store
 //! and a fixed pool of worker threads. Routes so far: `POST /v1/jobs` (JSON),
 //! `GET /v1/jobs`, `GET|DELETE /v1/jobs/{id}`, `POST /v1/jobs/{id}/cancel`,
 //! `GET /v1/jobs/{id}/events` (SSE), `GET /v1/jobs/{id}/energy` (JSON or `?format=csv`),
