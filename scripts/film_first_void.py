@@ -10,7 +10,7 @@ of J at the reconnection.
     cargo build --release
     python3 scripts/film_first_void.py --gamma 0.24 --end 0.0132 64 96 128 192
 
-Measured on 2026-11-24 (README, Stressed film), gamma 0.24, 64/96/128/192 vertices:
+Measured (docs/problems/stressed-film.md), gamma 0.24, 64/96/128/192 vertices:
   t      0.013152  0.012715  0.012544  0.012412
   area   2.06e-3   1.01e-3   6.71e-4   4.11e-4
   height 0.132     0.104     0.087     0.080

@@ -24,9 +24,12 @@ pub mod export;
 pub mod fem;
 pub mod film;
 pub mod flow;
+pub mod formats;
 pub mod geometry;
 pub mod imaging;
 pub mod jobs;
+pub mod limits;
+pub mod linalg;
 pub mod problems;
 pub mod service;
 

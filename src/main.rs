@@ -24,7 +24,7 @@ struct Cli {
 enum Command {
     /// Run a job spec offline and write its results to a directory.
     Run {
-        /// The job spec (JSON; see README.md, "Job spec").
+        /// The job spec (JSON; see docs/job-spec.md).
         spec: PathBuf,
         /// Output directory (created if missing).
         #[arg(long)]

@@ -60,7 +60,7 @@ fn prism_surface_diffusion_reaches_pinch_off() {
     assert!(min_angle > 10.0, "minimum angle {min_angle}");
     assert!(early > 25.0, "minimum angle before the final collapse {early}");
     assert!(w.vertices.0 >= 1000 && w.vertices.1 <= 2500, "vertex counts of the paper's order: {:?}", w.vertices);
-    // the paper reports t ≈ 0.4135; we reach the pinch somewhat earlier (see README)
+    // the paper reports t ≈ 0.4135; we reach the pinch somewhat earlier (see docs/problems/surface-evolution.md)
     assert!(last.time > 0.33 && last.time < 0.45, "pinch-off time {}", last.time);
 }
 
@@ -93,6 +93,6 @@ fn pinch_off_time_is_stable_under_refinement() {
     let (lo, hi) = (times.iter().copied().fold(f64::INFINITY, f64::min), times.iter().copied().fold(0.0, f64::max));
     assert!(hi - lo < 0.02 * lo, "pinch-off times {times:?} spread by 2 % or more");
     // converged in space and time (and by an independent axisymmetric solver, see
-    // README) the pinch is at 0.3675; the paper reports 0.4135
+    // docs/problems/surface-evolution.md) the pinch is at 0.3675; the paper reports 0.4135
     assert!(times.iter().all(|&t| (0.36..0.39).contains(&t)), "{times:?}");
 }

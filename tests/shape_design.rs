@@ -391,7 +391,7 @@ fn curves_driven_into_contact_merge_instead_of_stalling() {
 /// Paper §4.3.3 (Figure 8) with a fixed τ = 1 (`examples/design_square.json`): the
 /// small circle grows into one smoothed square, aligned with the square ring `D`, and
 /// J falls slowly (measured in release: 0.10773 at k = 200, 0.10480 at k = 600; the
-/// paper, in our ½ convention: 0.1022 and 0.1000; see README, Shape design, for why
+/// paper, in our ½ convention: 0.1022 and 0.1000; see docs/problems/shape-design.md for why
 /// the last 3 % are out of reach of a single curve). Re-meshings raise J a little
 /// (27 times in 600 iterations, each below 3.5e-5).
 #[test]

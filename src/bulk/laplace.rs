@@ -15,8 +15,9 @@
 use super::mesh::{triangle_area, BulkMesh};
 use super::BulkError;
 use crate::fem::element::cotangent_stiffness;
-use crate::fem::{Pattern, SparseCholesky};
+use crate::fem::Pattern;
 use crate::geometry::Point;
+use crate::linalg::SparseCholesky;
 
 /// Barycentric coordinates and weights (summing to 1) of the seven-point rule.
 const RULE7: [([f64; 3], f64); 7] = {

@@ -7,12 +7,10 @@
 //! * `N⃗_ij = ∫_Γ φ_i φ_j ν` and its lumped form `N⃗_i = ∫_Γ φ_i ν`.
 
 mod assemble;
-mod cholesky;
 pub mod element;
 mod pattern;
 mod recovery;
 
 pub use assemble::{Matrices, Weight};
-pub use cholesky::SparseCholesky;
 pub use pattern::{csc_mul, Pattern};
 pub use recovery::tangential_derivative;

@@ -7,7 +7,8 @@
 use super::{FilmCell, FilmMesh};
 use crate::bulk::{triangle_area, BulkError};
 use crate::fem::element::cotangent_stiffness;
-use crate::fem::{Pattern, SparseCholesky};
+use crate::fem::Pattern;
+use crate::linalg::SparseCholesky;
 
 /// The field on one film mesh.
 #[derive(Debug, Clone)]

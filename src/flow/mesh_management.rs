@@ -222,3 +222,42 @@ impl MeshManager<3> for SurfaceManager {
         Ok(outcome(remeshed, moved))
     }
 }
+
+impl<const D: usize> super::driver::Flow<'_, D> {
+    /// Apply the mesh manager, if any; a new connectivity rebuilds the pattern and
+    /// drops the symbolic factorizations. The energy is re-evaluated on the result.
+    pub(super) fn manage_mesh(&mut self) -> Result<ManageOutcome, FlowError> {
+        let Some(manager) = self.manager.as_mut() else { return Ok(ManageOutcome::Continue) };
+        let (mesh, remeshed) = match manager.manage(&self.mesh)? {
+            Managed::Unchanged => return Ok(ManageOutcome::Continue),
+            Managed::PinchOff => return Ok(ManageOutcome::PinchOff),
+            Managed::Vanished => return Ok(ManageOutcome::Vanished),
+            Managed::Moved(m) => (m, false),
+            Managed::Remeshed(m) => (m, true),
+        };
+        let energy = self.problem.energy(&mesh).map_err(|e| FlowError::Problem(e.0))?;
+        if energy == f64::INFINITY {
+            // management made the shape inadmissible (shape design: a regularized
+            // spike crossed a fixed boundary): keep the accepted mesh this time
+            return Ok(ManageOutcome::Continue);
+        }
+        if !energy.is_finite() {
+            return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration });
+        }
+        self.mesh = mesh;
+        if remeshed {
+            self.pattern = crate::fem::Pattern::new(self.mesh.num_vertices(), self.mesh.elements());
+            self.solver.reset();
+        }
+        self.energy = energy;
+        Ok(ManageOutcome::Continue)
+    }
+}
+
+/// What the mesh management after an accepted step means for the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum ManageOutcome {
+    Continue,
+    PinchOff,
+    Vanished,
+}

@@ -2,8 +2,10 @@
 //! validated constructors, built-in shapes and measures. Topology (the element list)
 //! is kept apart from positions; derived quantities are computed on request.
 
+mod any_mesh;
 mod crossing_watch;
 mod curve_loop;
+pub use any_mesh::AnyMesh;
 pub use curve_loop::loop_area;
 mod curve_remesh;
 mod curve_topology;

@@ -1,10 +1,10 @@
 //! From a parsed spec to a runnable job: value checks (each naming its field), the
 //! initial mesh, the problem and the flow settings.
 
-use super::mesh_io::read_mesh_file;
 use super::segment::SegmentationSetup;
 use super::spec::{ImageSource, InitialSpec, JobSpec, ProblemSpec, SpecError};
 use crate::flow::{CurveManager, FlowSettings, Problem, ScalarProduct, SolverKind, SurfaceManager};
+use crate::formats::read_mesh_file;
 use crate::geometry::{self, CurveMesh, Mesh, MeshError, Point, SurfaceMesh};
 use crate::imaging::{
     decode_image, decode_nifti, decode_slices, decode_tiff_stack, decode_volume, is_nifti, is_tiff, tiff_pages,
@@ -14,24 +14,9 @@ use crate::problems::{ChanVese, CurvatureFlow, Segmentation, ShapeDesign, Stress
 use std::collections::HashMap;
 use std::sync::Arc;
 
-/// Largest number of vertices an initial mesh may have.
-pub const MAX_VERTICES: usize = 2_000_000;
+pub use crate::limits::MAX_VERTICES;
 
-/// The initial mesh, curve or surface.
-#[derive(Debug, Clone, PartialEq)]
-pub enum AnyMesh {
-    Curve(CurveMesh),
-    Surface(SurfaceMesh),
-}
-
-impl AnyMesh {
-    pub fn dimension(&self) -> usize {
-        match self {
-            AnyMesh::Curve(_) => 2,
-            AnyMesh::Surface(_) => 3,
-        }
-    }
-}
+pub use crate::geometry::AnyMesh;
 
 /// A concrete problem (works in 2D and 3D).
 #[derive(Debug, Clone, PartialEq)]

@@ -10,7 +10,7 @@ use crate::problems::{ShapeDesign, Target};
 use std::sync::Arc;
 
 /// Most vertices a fixed boundary may have.
-const MAX_BOUNDARY_VERTICES: usize = 100_000;
+use crate::limits::MAX_BOUNDARY_VERTICES;
 
 fn count(field: &str, length: f64, h: f64) -> Result<usize, SpecError> {
     let n = (length / h).ceil();

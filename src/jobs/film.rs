@@ -7,7 +7,7 @@ use crate::film::{cosine_film, polyline_film, BoundaryData, FilmCell};
 use crate::geometry::{CurveMesh, MeshError, Point};
 
 /// Most vertices of an initial film surface.
-const MAX_FILM_VERTICES: usize = 100_000;
+use crate::limits::MAX_FILM_VERTICES;
 
 /// The cell of a spec (`problem.length`, `problem.boundary`).
 pub fn film_cell(spec: &StressedFilmSpec) -> Result<FilmCell, SpecError> {

@@ -6,9 +6,7 @@
 mod build;
 mod design;
 mod film;
-mod gltf_in;
 mod image_shapes;
-mod mesh_io;
 mod results;
 mod run;
 mod schema;
@@ -17,8 +15,8 @@ mod segment;
 mod spec;
 mod spec_path;
 
+pub use crate::formats::{read_mesh_file, MeshFileError};
 pub use build::{prepare, AnyMesh, PreparedJob, ProblemKind};
-pub use mesh_io::{read_mesh_file, MeshFileError};
 pub use results::{image_result_names, job_extras, result_state, state_glb, states_glb, StateResults, MAX_FRAMES};
 pub use run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
 pub use schema::{job_spec_schema, openapi_schemas};

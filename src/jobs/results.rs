@@ -14,9 +14,7 @@ use crate::problems::refine_to_edges;
 use serde_json::{json, Value};
 use std::cell::OnceCell;
 
-/// Largest number of frames in evolution.glb; longer runs are subsampled evenly
-/// (first and last checkpoint always kept).
-pub const MAX_FRAMES: usize = 500;
+pub use crate::limits::MAX_FRAMES;
 
 /// The state a job's results show (shape.json, shape.glb, the mask and the overlay):
 /// for a segmentation with `problem.edge_refinement` (default on), `state` with its

@@ -30,11 +30,7 @@ use store::{JobRow, Store};
 use tokio::sync::Notify;
 use worker::{Registry, Worker};
 
-/// Largest accepted JSON request body (a job spec).
-pub const MAX_BODY_BYTES: usize = 2 * 1024 * 1024;
-
-/// Largest accepted multipart request body (a spec plus input files).
-pub const MAX_UPLOAD_BYTES: usize = 64 * 1024 * 1024;
+pub use crate::limits::{MAX_BODY_BYTES, MAX_UPLOAD_BYTES};
 
 /// Shared state of the handlers.
 #[derive(Clone)]

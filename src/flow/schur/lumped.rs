@@ -34,13 +34,11 @@
 //! [`super::h_minus_1`] for its preconditioned iterative solve (sparse LU of the
 //! assembled `S` is the fallback).
 
-use super::cyclic::{cyclic_solve, cyclic_solve_checked, CyclicComponent};
-use super::gmres::gmres;
-use super::system::{LinearSystem, ProductWeights};
-use super::FlowError;
-use crate::fem::SparseCholesky;
 use crate::fem::{csc_mul, Pattern};
+use crate::flow::system::{LinearSystem, ProductWeights};
+use crate::flow::FlowError;
 use crate::geometry::segment_cycles;
+use crate::linalg::{cyclic_solve, cyclic_solve_checked, gmres, CyclicComponent, SparseCholesky};
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};

@@ -1,108 +1,14 @@
-//! Readers for uploaded meshes (bytes in, validated mesh out): Wavefront OBJ
-//! (`v`/`f` surfaces, or `v`/`l` closed polylines in the plane z = 0), OFF, STL
-//! (ASCII or binary; coincident vertices merged), and glTF (`super::gltf_in`).
+//! Readers of Wavefront OBJ (`v`/`f` surfaces, or `v`/`l` closed polylines in the
+//! plane z = 0), OFF and STL (ASCII or binary; coincident vertices merged).
 
-use super::build::{AnyMesh, MAX_VERTICES};
-use crate::geometry::{Mesh, MeshError, Point};
+use super::soup::{
+    from_soup, nums, parse_err, surface, too_many_corners, too_many_triangles, MeshFileError, MAX_TRIANGLES,
+};
+use crate::geometry::{AnyMesh, Mesh, Point};
+use crate::limits::MAX_VERTICES;
 use std::collections::HashMap;
 
-/// A mesh file that could not be read; names the input and, for text formats, the line.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum MeshFileError {
-    #[error("input {name:?}: not a recognised mesh file (OBJ, OFF, STL or glTF)")]
-    UnknownFormat { name: String },
-    #[error("input {name:?}, line {line}: {message}")]
-    Parse { name: String, line: usize, message: String },
-    #[error("input {name:?}: {message}")]
-    Content { name: String, message: String },
-    #[error("input {name:?}: invalid mesh: {error}")]
-    Mesh { name: String, error: MeshError },
-}
-
-/// Read a mesh from the bytes of an uploaded file named `name`.
-pub fn read_mesh_file(name: &str, bytes: &[u8]) -> Result<AnyMesh, MeshFileError> {
-    let is_binary_stl = bytes.len() >= 84 && {
-        let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
-        bytes.len() == 84 + 50 * n
-    };
-    if bytes.starts_with(b"glTF") {
-        return super::gltf_in::read_gltf(name, bytes);
-    }
-    if is_binary_stl && !bytes.starts_with(b"solid") {
-        return read_binary_stl(name, bytes);
-    }
-    let text = std::str::from_utf8(bytes).map_err(|_| {
-        if is_binary_stl {
-            MeshFileError::UnknownFormat { name: name.into() }
-        } else {
-            MeshFileError::Content {
-                name: name.into(),
-                message: "not UTF-8 text, not binary STL and not binary glTF".into(),
-            }
-        }
-    })?;
-    let head = text.trim_start();
-    if head.starts_with('{') {
-        super::gltf_in::read_gltf(name, bytes)
-    } else if head.starts_with("OFF") {
-        read_off(name, text)
-    } else if head.starts_with("solid") && text.contains("facet") {
-        read_ascii_stl(name, text)
-    } else if text.lines().any(|l| l.trim_start().starts_with("v ")) {
-        read_obj(name, text)
-    } else if is_binary_stl {
-        read_binary_stl(name, bytes)
-    } else {
-        Err(MeshFileError::UnknownFormat { name: name.into() })
-    }
-}
-
-/// Largest number of triangles a mesh file may give (a closed surface has about
-/// twice as many triangles as vertices).
-const MAX_TRIANGLES: usize = 4 * MAX_VERTICES;
-
-/// The error of a file with more triangles than [`MAX_TRIANGLES`], checked as they
-/// are read so that a crafted file cannot make the reader hold many more.
-fn too_many_triangles(name: &str, tris: &[[usize; 3]]) -> Result<(), MeshFileError> {
-    if tris.len() > MAX_TRIANGLES {
-        return Err(MeshFileError::Content {
-            name: name.into(),
-            message: format!("more than {MAX_TRIANGLES} triangles"),
-        });
-    }
-    Ok(())
-}
-
-/// The error of a face or polyline with more corners than a mesh may have vertices.
-fn too_many_corners(name: &str, line: usize, n: usize) -> Result<(), MeshFileError> {
-    if n > MAX_VERTICES + 1 {
-        return Err(parse_err(name, line, format!("more than {MAX_VERTICES} corners")));
-    }
-    Ok(())
-}
-
-fn parse_err(name: &str, line: usize, message: impl Into<String>) -> MeshFileError {
-    MeshFileError::Parse { name: name.into(), line, message: message.into() }
-}
-
-fn nums<T: std::str::FromStr>(name: &str, line: usize, parts: &[&str]) -> Result<Vec<T>, MeshFileError> {
-    parts
-        .iter()
-        .map(|p| p.parse::<T>().map_err(|_| parse_err(name, line, format!("cannot read number {p:?}"))))
-        .collect()
-}
-
-fn surface(name: &str, positions: Vec<Point<3>>, tris: Vec<[usize; 3]>) -> Result<AnyMesh, MeshFileError> {
-    if positions.len() > MAX_VERTICES {
-        return Err(MeshFileError::Content {
-            name: name.into(),
-            message: format!("more than {MAX_VERTICES} vertices"),
-        });
-    }
-    Mesh::new(positions, tris).map(AnyMesh::Surface).map_err(|error| MeshFileError::Mesh { name: name.into(), error })
-}
-
-fn read_obj(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
+pub(super) fn read_obj(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
     let mut verts: Vec<Point<3>> = Vec::new();
     let mut tris = Vec::new();
     let mut loops: Vec<Vec<usize>> = Vec::new();
@@ -190,7 +96,7 @@ fn read_obj(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
     surface(name, verts, tris)
 }
 
-fn read_off(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
+pub(super) fn read_off(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
     let mut lines = text.lines().enumerate().filter(|(_, l)| {
         let t = l.trim();
         !t.is_empty() && !t.starts_with('#')
@@ -256,28 +162,7 @@ fn read_off(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
     surface(name, verts, tris)
 }
 
-/// Triangles given by coordinates; merge bit-identical vertices.
-pub(super) fn from_soup(name: &str, soup: Vec<[Point<3>; 3]>) -> Result<AnyMesh, MeshFileError> {
-    let mut map: HashMap<[u64; 3], usize> = HashMap::new();
-    let mut positions = Vec::new();
-    let mut tris = Vec::with_capacity(soup.len());
-    for t in soup {
-        if positions.len() > MAX_VERTICES {
-            break; // `surface` reports it
-        }
-        let ids = t.map(|p| {
-            let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
-            *map.entry(key).or_insert_with(|| {
-                positions.push(p);
-                positions.len() - 1
-            })
-        });
-        tris.push(ids);
-    }
-    surface(name, positions, tris)
-}
-
-fn read_ascii_stl(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
+pub(super) fn read_ascii_stl(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
     let mut soup = Vec::new();
     let mut cur: Vec<Point<3>> = Vec::new();
     for (k, l) in text.lines().enumerate() {
@@ -303,7 +188,7 @@ fn read_ascii_stl(name: &str, text: &str) -> Result<AnyMesh, MeshFileError> {
     from_soup(name, soup)
 }
 
-fn read_binary_stl(name: &str, bytes: &[u8]) -> Result<AnyMesh, MeshFileError> {
+pub(super) fn read_binary_stl(name: &str, bytes: &[u8]) -> Result<AnyMesh, MeshFileError> {
     let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
     if n > 3 * MAX_VERTICES {
         return Err(MeshFileError::Content { name: name.into(), message: format!("{n} triangles is too many") });

@@ -13,9 +13,9 @@
 //! accessors are read here, bounds-checked, under a budget of vertex records that
 //! counts every instance of a mesh.
 
-use super::build::{AnyMesh, MAX_VERTICES};
-use super::mesh_io::{from_soup, MeshFileError};
-use crate::geometry::{Mesh, Point};
+use super::soup::{from_soup, MeshFileError};
+use crate::geometry::{AnyMesh, Mesh, Point};
+use crate::limits::MAX_VERTICES;
 use base64::Engine;
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;

@@ -21,11 +21,10 @@
 //! the product is bounded by a multiple of the symbol's terms (ratio in `[2/9, 1]`),
 //! in the second `τḡ ≤ c²` and the ratio lies in `[1/4, 1.15]`.
 
-use super::cyclic::cyclic_solve_checked;
-use super::gmres::gmres;
 use super::lumped::{solve_f32, Last, LumpedSolver};
-use super::system::LinearSystem;
-use super::{FlowError, SparseCholesky};
+use crate::flow::system::LinearSystem;
+use crate::flow::FlowError;
+use crate::linalg::{cyclic_solve_checked, gmres, SparseCholesky};
 
 impl LumpedSolver {
     /// `Some(V)`, or `None` if `B` could not be factorized or GMRES stalled (the

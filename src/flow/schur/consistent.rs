@@ -11,12 +11,12 @@
 //!
 //! where `N_c` is the `c`-th component of `N⃗_ij = ∫ φ_i φ_j ν` (symmetric).
 
-use super::gmres::{gmres, GmresOutcome};
-use super::system::{LinearSystem, ProductWeights};
-use super::{FlowError, LumpedSolver};
-use crate::fem::SparseCholesky;
+use super::LumpedSolver;
 use crate::fem::Weight;
+use crate::flow::system::{LinearSystem, ProductWeights};
+use crate::flow::FlowError;
 use crate::geometry::Point;
+use crate::linalg::{gmres, GmresOutcome, SparseCholesky};
 
 /// Stateful consistent-mass solver (keeps the symbolic factorizations).
 #[derive(Default)]

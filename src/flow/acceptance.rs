@@ -1,0 +1,185 @@
+//! The acceptance rules of a trial step, one function per rule, each returning a
+//! [`Verdict`]: accept, or retry with a shorter `τ` for a [`Rejection`]. The driver
+//! applies them in the order of the module documentation of [`super::driver`]:
+//! geometric control, tangling, conservation, then the energy (backtracking).
+//! Below `τ_min`, [`stop_below_tau_min`] decides between `tau_min` and `converged`.
+
+use super::report::{Rejection, StopReason};
+use crate::geometry::{degenerate_measure, simplex, Mesh, Point};
+
+/// What a rule says about a trial step of size `τ`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Verdict {
+    Accept,
+    /// Try again with this `τ`.
+    Retry {
+        tau: f64,
+        rejection: Rejection,
+    },
+}
+
+/// Geometric control (paper §4.1): with `ratio = τ max_T |V⃗(z_a) − V⃗(z_b)|/h_T`
+/// above `ε`, retry with `τ · min(0.9 ε/ratio, ½)`.
+pub(super) fn step_control<const D: usize>(
+    mesh: &Mesh<D>,
+    velocity: &[Point<D>],
+    tau: f64,
+    eps: Option<f64>,
+) -> Verdict {
+    let Some(eps) = eps else { return Verdict::Accept };
+    let ratio = tau * relative_motion(mesh, velocity);
+    if ratio > eps {
+        Verdict::Retry { tau: tau * (0.9 * eps / ratio).min(0.5), rejection: Rejection::StepControl }
+    } else {
+        Verdict::Accept
+    }
+}
+
+/// Tangling: an element of `new` that degenerated or flipped against `old` halves `τ`.
+pub(super) fn tangling<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, tau: f64) -> Verdict {
+    match tangled(old, new) {
+        Some(_) => Verdict::Retry { tau: 0.5 * tau, rejection: Rejection::Tangled },
+        None => Verdict::Accept,
+    }
+}
+
+/// Conservation (`H⁻¹` flows): a relative change of the enclosed measure from `a0`
+/// to `a1` above `tolerance` halves `τ`, down to `4 τ_min` (a fresh topological
+/// change leaves corners that need a few very short steps; below that the step is
+/// taken anyway).
+pub(super) fn conservation(a0: f64, a1: f64, tolerance: Option<f64>, tau: f64, tau_min: f64) -> Verdict {
+    match tolerance {
+        Some(tol) if (a1 - a0).abs() > tol * a0.abs() && tau > 4.0 * tau_min => {
+            Verdict::Retry { tau: 0.5 * tau, rejection: Rejection::Conservation }
+        }
+        _ => Verdict::Accept,
+    }
+}
+
+/// Backtracking (paper §3.2): a trial energy above the current one halves `τ` when
+/// backtracking is on; `+∞` (an inadmissible shape) does so even when it is off.
+pub(super) fn energy(current: f64, trial: f64, backtracking: bool, tau: f64) -> Verdict {
+    if trial == f64::INFINITY {
+        return Verdict::Retry { tau: 0.5 * tau, rejection: Rejection::Inadmissible };
+    }
+    if backtracking && trial > current {
+        return Verdict::Retry { tau: 0.5 * tau, rejection: Rejection::EnergyIncrease };
+    }
+    Verdict::Accept
+}
+
+/// The stop when `τ` fell below `τ_min`: `converged` when the last trials were
+/// rejected for raising `J` by no more than `tolerance·|J|` (the state is
+/// stationary to the tolerance: rounding and quadrature of `J`, not a failure of
+/// the flow), else `tau_min`.
+pub(super) fn stop_below_tau_min(
+    last: Option<Rejection>,
+    smallest_rise: f64,
+    tolerance: f64,
+    energy: f64,
+) -> StopReason {
+    let stationary = tolerance > 0.0 && smallest_rise <= tolerance * energy.abs();
+    if last == Some(Rejection::EnergyIncrease) && stationary {
+        StopReason::Converged
+    } else {
+        StopReason::TauMin
+    }
+}
+
+/// `max_T max_{a,b ∈ T} |V⃗(z_a) − V⃗(z_b)| / h_T`: relative motion per unit time.
+fn relative_motion<const D: usize>(mesh: &Mesh<D>, v: &[Point<D>]) -> f64 {
+    let mut worst: f64 = 0.0;
+    for (e, el) in mesh.elements().iter().enumerate() {
+        let h = simplex::diameter(&mesh.element_points(e));
+        for a in 0..D {
+            for b in a + 1..D {
+                worst = worst.max((v[el[a]] - v[el[b]]).norm() / h);
+            }
+        }
+    }
+    worst
+}
+
+/// First element that degenerated (relative to `old`, or below what validation
+/// accepts: [`degenerate_measure`]) or flipped between `old` and `new`.
+pub(super) fn tangled<const D: usize>(old: &Mesh<D>, new: &Mesh<D>) -> Option<usize> {
+    let tiny = degenerate_measure(new.positions());
+    (0..old.num_elements()).find(|&e| {
+        let (m0, n0) = old.element_geometry(e);
+        let (m1, n1) = new.element_geometry(e);
+        !(m1 > 1e-12 * m0) || !(m1 > tiny) || n0.dot(&n1) <= 0.0 || !m1.is_finite()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::circle;
+
+    fn retried(v: Verdict) -> Option<(f64, Rejection)> {
+        match v {
+            Verdict::Accept => None,
+            Verdict::Retry { tau, rejection } => Some((tau, rejection)),
+        }
+    }
+
+    /// The control compares `τ` times the largest relative motion with `ε`: a
+    /// uniform translation moves nothing relative, a stretch does.
+    #[test]
+    fn step_control_limits_the_relative_motion() {
+        let mesh = circle([0.0, 0.0], 1.0, 64).unwrap();
+        let shift = vec![Point::<2>::new(1.0, 0.0); 64];
+        assert_eq!(step_control(&mesh, &shift, 10.0, Some(0.5)), Verdict::Accept);
+        let stretch: Vec<Point<2>> = mesh.positions().iter().map(|p| p * 2.0).collect();
+        // relative motion of a stretch: |2(x_a − x_b)|/|x_a − x_b| = 2
+        assert_eq!(step_control(&mesh, &stretch, 0.2, Some(0.5)), Verdict::Accept);
+        let (tau, why) = retried(step_control(&mesh, &stretch, 1.0, Some(0.5))).unwrap();
+        assert_eq!(why, Rejection::StepControl);
+        assert!((tau - 0.9 * 0.5 / 2.0).abs() < 1e-12, "{tau}"); // τ · 0.9 ε/ratio
+        assert_eq!(step_control(&mesh, &stretch, 1.0, None), Verdict::Accept);
+    }
+
+    /// A mirrored curve (every segment flipped) and a collapsed one tangle; a
+    /// slightly shrunk one does not.
+    #[test]
+    fn tangling_catches_flips_and_degenerate_elements() {
+        let mesh = circle([0.0, 0.0], 1.0, 32).unwrap();
+        let shrunk = mesh.with_positions(mesh.positions().iter().map(|p| p * 0.9).collect());
+        assert_eq!(tangling(&mesh, &shrunk, 1.0), Verdict::Accept);
+        let mirrored = mesh.with_positions(mesh.positions().iter().map(|p| Point::<2>::new(-p.x, p.y)).collect());
+        assert_eq!(retried(tangling(&mesh, &mirrored, 1.0)), Some((0.5, Rejection::Tangled)));
+        let collapsed = mesh.with_positions(mesh.positions().iter().map(|p| p * 1e-14).collect());
+        assert!(tangled(&mesh, &collapsed).is_some());
+    }
+
+    #[test]
+    fn conservation_halves_tau_down_to_four_tau_min() {
+        assert_eq!(conservation(1.0, 1.0 + 1e-7, Some(1e-6), 1e-3, 1e-10), Verdict::Accept);
+        assert_eq!(
+            retried(conservation(1.0, 1.0 + 1e-5, Some(1e-6), 1e-3, 1e-10)),
+            Some((5e-4, Rejection::Conservation))
+        );
+        assert_eq!(conservation(1.0, 1.0 + 1e-5, Some(1e-6), 3e-10, 1e-10), Verdict::Accept);
+        assert_eq!(conservation(1.0, 2.0, None, 1e-3, 1e-10), Verdict::Accept);
+    }
+
+    #[test]
+    fn energy_rule_backtracks_rises_and_always_rejects_inadmissible_shapes() {
+        assert_eq!(energy(1.0, 0.9, true, 1.0), Verdict::Accept);
+        assert_eq!(retried(energy(1.0, 1.1, true, 1.0)), Some((0.5, Rejection::EnergyIncrease)));
+        assert_eq!(energy(1.0, 1.1, false, 1.0), Verdict::Accept);
+        assert_eq!(retried(energy(1.0, f64::INFINITY, false, 1.0)), Some((0.5, Rejection::Inadmissible)));
+        assert!(Rejection::Inadmissible.is_backtrack() && !Rejection::Tangled.is_backtrack());
+    }
+
+    /// Below τ_min: stationary to the tolerance only after energy rises no larger
+    /// than `tolerance·|J|`; any other last rejection is a `tau_min` stop.
+    #[test]
+    fn below_tau_min_a_tiny_rise_is_convergence() {
+        let e = Some(Rejection::EnergyIncrease);
+        assert_eq!(stop_below_tau_min(e, 1e-9, 1e-6, 2.0), StopReason::Converged);
+        assert_eq!(stop_below_tau_min(e, 1e-3, 1e-6, 2.0), StopReason::TauMin);
+        assert_eq!(stop_below_tau_min(e, 1e-9, 0.0, 2.0), StopReason::TauMin);
+        assert_eq!(stop_below_tau_min(Some(Rejection::StepControl), 0.0, 1e-6, 2.0), StopReason::TauMin);
+    }
+}

@@ -1,0 +1,23 @@
+//! The sizes the library and the service accept, stated once: what a spec, an
+//! upload or a result may hold. Images have their own limits in
+//! [`crate::imaging::ImageLimits`] (4096² pixels, 256³ voxels, 4 samples a side).
+//! A leaf module: it imports nothing.
+
+/// Largest number of vertices an initial mesh may have (shapes, mesh files).
+pub const MAX_VERTICES: usize = 2_000_000;
+
+/// Largest number of vertices of a stressed film's initial surface.
+pub const MAX_FILM_VERTICES: usize = 100_000;
+
+/// Largest number of vertices of a fixed boundary of the shape-design domain.
+pub const MAX_BOUNDARY_VERTICES: usize = 100_000;
+
+/// Largest number of frames in evolution.glb; longer runs are subsampled evenly
+/// (first and last checkpoint always kept).
+pub const MAX_FRAMES: usize = 500;
+
+/// Largest accepted JSON request body (a job spec).
+pub const MAX_BODY_BYTES: usize = 2 * 1024 * 1024;
+
+/// Largest accepted multipart request body (a spec plus input files).
+pub const MAX_UPLOAD_BYTES: usize = 64 * 1024 * 1024;
