@@ -1,7 +1,5 @@
 //! The sizes the library and the service accept, stated once: what a spec, an
-//! upload or a result may hold. Images have their own limits in
-//! [`crate::imaging::ImageLimits`] (4096² pixels, 256³ voxels, 4 samples a side).
-//! A leaf module: it imports nothing.
+//! upload, an image or a result may hold. A leaf module: it imports nothing.
 
 /// Largest number of vertices an initial mesh may have (shapes, mesh files).
 pub const MAX_VERTICES: usize = 2_000_000;
@@ -21,3 +19,12 @@ pub const MAX_BODY_BYTES: usize = 2 * 1024 * 1024;
 
 /// Largest accepted multipart request body (a spec plus input files).
 pub const MAX_UPLOAD_BYTES: usize = 64 * 1024 * 1024;
+
+/// Largest number of pixels of a 2D image (4096²).
+pub const MAX_PIXELS: usize = 4096 * 4096;
+
+/// Largest number of voxels of a volume (256³).
+pub const MAX_VOXELS: usize = 256 * 256 * 256;
+
+/// Fewest samples along any axis of an image or a volume.
+pub const MIN_SIDE: usize = 4;

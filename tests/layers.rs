@@ -85,3 +85,98 @@ fn every_module_imports_only_from_lower_layers() {
     }
     assert!(violations.is_empty(), "imports against the layer order:\n{}", violations.join("\n"));
 }
+
+/// The sibling modules of a folder that `text` names (`super::x`, `crate::m::x`).
+fn sibling_uses(text: &str, module_path: &str, siblings: &[String]) -> Vec<String> {
+    let code = text.split("#[cfg(test)]").next().unwrap_or_default();
+    let mut out = Vec::new();
+    for line in code.lines() {
+        let line = line.split("//").next().unwrap_or_default();
+        for prefix in ["super::".to_string(), format!("crate::{module_path}::")] {
+            let mut rest = line;
+            while let Some(i) = rest.find(&prefix) {
+                let name: String =
+                    rest[i + prefix.len()..].chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_').collect();
+                if siblings.contains(&name) && !out.contains(&name) {
+                    out.push(name);
+                }
+                rest = &rest[i + prefix.len()..];
+            }
+        }
+    }
+    out
+}
+
+/// No import cycle between the files of one folder either: within every folder of
+/// `src/`, the graph of which sibling module names which (`super::x`,
+/// `crate::folder::x`; `mod.rs`, which declares and re-exports them, left out) has
+/// no cycle.
+#[test]
+fn no_import_cycle_between_the_files_of_a_folder() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut dirs = vec![root.clone()];
+    let mut cycles = Vec::new();
+    while let Some(dir) = dirs.pop() {
+        let mut siblings = Vec::new();
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                dirs.push(path.clone());
+                siblings.push(path.file_name().unwrap().to_string_lossy().to_string());
+            } else if path.extension().is_some_and(|e| e == "rs") && !path.ends_with("mod.rs") {
+                siblings.push(path.file_stem().unwrap().to_string_lossy().to_string());
+            }
+        }
+        if dir == root {
+            continue; // the crate root's folders are the layers, checked above
+        }
+        let module_path = dir.strip_prefix(&root).unwrap().to_string_lossy().replace('/', "::");
+        let source = |name: &str| {
+            let file = dir.join(format!("{name}.rs"));
+            std::fs::read_to_string(if file.exists() { file } else { dir.join(name).join("mod.rs") })
+                .unwrap_or_default()
+        };
+        let graph: HashMap<String, Vec<String>> = siblings
+            .iter()
+            .map(|s| (s.clone(), sibling_uses(&source(s), &module_path, &siblings)))
+            .map(|(s, mut uses)| {
+                uses.retain(|u| *u != s);
+                (s, uses)
+            })
+            .collect();
+        // depth-first search for a back edge
+        fn visit(
+            n: &str,
+            graph: &HashMap<String, Vec<String>>,
+            state: &mut HashMap<String, u8>,
+            stack: &mut Vec<String>,
+            found: &mut Vec<String>,
+        ) {
+            state.insert(n.to_string(), 1);
+            stack.push(n.to_string());
+            for m in &graph[n] {
+                match state.get(m.as_str()) {
+                    Some(1) => {
+                        let at = stack.iter().position(|s| s == m).unwrap();
+                        found.push([&stack[at..], &[m.clone()]].concat().join(" → "));
+                    }
+                    Some(_) => {}
+                    None => visit(m, graph, state, stack, found),
+                }
+            }
+            stack.pop();
+            state.insert(n.to_string(), 2);
+        }
+        let mut state = HashMap::new();
+        let mut names: Vec<&String> = graph.keys().collect();
+        names.sort();
+        for n in names {
+            if !state.contains_key(n.as_str()) {
+                let mut found = Vec::new();
+                visit(n, &graph, &mut state, &mut Vec::new(), &mut found);
+                cycles.extend(found.into_iter().map(|c| format!("src/{}: {c}", module_path.replace("::", "/"))));
+            }
+        }
+    }
+    assert!(cycles.is_empty(), "import cycles between files:\n{}", cycles.join("\n"));
+}

@@ -35,7 +35,7 @@
 
 use super::acceptance::{self as rules, Verdict};
 use super::contact::{advanced, first_contact};
-use super::mesh_management::{ManageOutcome, MeshManager};
+use super::mesh_management::MeshManager;
 use super::problem::Problem;
 use super::report::{Progress, Rejection, StepReport, StopReason};
 use super::settings::{check_bending, check_settings, FlowSettings};
@@ -355,17 +355,17 @@ impl<'p, const D: usize> Flow<'p, D> {
             if s.tolerance > 0.0 && (previous - energy).abs() <= s.tolerance * previous.abs() * scale {
                 report.stop = Some(StopReason::Converged);
             }
-            let managed = self.manage_mesh()?;
-            if managed == ManageOutcome::Vanished {
-                report.stop = Some(StopReason::Vanished);
-            }
-            if managed == ManageOutcome::PinchOff {
-                // a neck collapsed during this step, which the mesh no longer
-                // resolves: the run ends on the last good state, before the step
-                (self.mesh, self.time, self.tau, self.energy) = (before, time, last_tau, previous);
-                self.iteration -= 1;
-                report.accepted = false;
-                report.stop = Some(StopReason::PinchOff);
+            match self.manage_mesh()? {
+                Some(StopReason::PinchOff) => {
+                    // a neck collapsed during this step, which the mesh no longer
+                    // resolves: the run ends on the last good state, before the step
+                    (self.mesh, self.time, self.tau, self.energy) = (before, time, last_tau, previous);
+                    self.iteration -= 1;
+                    report.accepted = false;
+                    report.stop = Some(StopReason::PinchOff);
+                }
+                Some(stop) => report.stop = Some(stop),
+                None => {}
             }
             return Ok(report);
         }

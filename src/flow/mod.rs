@@ -8,6 +8,7 @@ mod contact;
 mod driver;
 mod error;
 mod linearize;
+mod managed;
 mod mesh_management;
 mod problem;
 mod report;

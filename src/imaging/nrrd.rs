@@ -3,8 +3,8 @@
 //! Read: `dimension: 3`, types uint8/uint16/float32 (any of their NRRD spellings),
 //! `raw` or `gzip` encoding, either endianness. Written: uint8 masks, gzip.
 
-use super::decode::ImageLimits;
 use super::grid::{Grid, SampleKind};
+use super::limits::ImageLimits;
 use super::ImageError;
 use flate2::read::GzDecoder;
 use flate2::write::GzEncoder;

@@ -7,8 +7,8 @@
 //! physical. The same limits and errors as the other readers: every error names
 //! the input.
 
-use super::decode::ImageLimits;
 use super::grid::{Grid, SampleKind};
+use super::limits::ImageLimits;
 use super::ImageError;
 use std::io::{Cursor, Read};
 

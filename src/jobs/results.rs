@@ -1,8 +1,8 @@
 //! glTF results of a job from its checkpoints: each state with its per-vertex
 //! curvature and normal velocity (recomputed from the job's problem on that state).
 
-use super::build::PreparedJob;
 use super::run::vertex_fields;
+use super::PreparedJob;
 use crate::export::{
     evolution_glb, labels_png, mask_nrrd, mask_png, objects, objects_csv, overlay_png, shape_glb, shape_json,
     GltfFrame, ObjectRow,

@@ -2,7 +2,7 @@
 //! iteration, checkpoints every `checkpoint_every` iterations (and at the start and
 //! the end), cancellation, and resumption from a checkpoint.
 
-use super::build::{AnyMesh, PreparedJob};
+use super::{AnyMesh, PreparedJob};
 use crate::flow::{Checkpoint, Flow, FlowError, MeshManager, Progress, StopReason};
 use crate::geometry::Mesh;
 use std::sync::atomic::AtomicBool;

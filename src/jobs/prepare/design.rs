@@ -2,10 +2,10 @@
 //! `∂D` at the requested spacing, the target, the bulk meshing options, and the
 //! admissibility of the initial curve.
 
-use super::build::{finite, positive};
-use super::spec::{BoundarySpec, ShapeDesignSpec, SpecError, TargetSpec};
+use super::checks::{finite, positive};
 use crate::bulk::{BulkError, DesignDomain, MeshingOptions, Polygon};
 use crate::geometry::{self, CurveMesh, Point};
+use crate::jobs::spec::{BoundarySpec, ShapeDesignSpec, SpecError, TargetSpec};
 use crate::problems::{ShapeDesign, Target};
 use std::sync::Arc;
 

@@ -4,14 +4,17 @@
 //! the functional (Chan–Vese, geodesic, or both). Every automatic choice is kept
 //! in a [`SegmentationSetup`] that the results report.
 
-use super::build::{in_range, load_image, positive, AnyMesh, ProblemKind};
+use super::checks::{in_range, positive};
 use super::image_shapes::{inscribed, seeds, threshold_mesh, threshold_objects, Levels};
-use super::spec::{
-    BackgroundModel, ImageSource, InitialSpec, MeansKind, Polarity, SegmentationModel, SegmentationSpec, SpecError,
-};
+use super::inputs::load_image;
+use super::ProblemKind;
+use crate::geometry::AnyMesh;
 use crate::imaging::{
     gaussian_smooth, histogram_mode, noise_level, otsu, percentile, quadratic_background, smoothed_noise,
     smoothing_for_noise, EdgeField, Grid, Normalization, PERCENTILES,
+};
+use crate::jobs::spec::{
+    BackgroundModel, ImageSource, InitialSpec, MeansKind, Polarity, SegmentationModel, SegmentationSpec, SpecError,
 };
 use crate::problems::{ChanVese, Segmentation};
 use serde::Serialize;
@@ -182,7 +185,7 @@ fn preprocess(spec: &SegmentationSpec, grid: &Grid, model: SegmentationModel) ->
         }
         None if model == SegmentationModel::ChanVese => smoothing_for_noise(noise, d),
         // the edge indicator's own default, raised for noisy images
-        None => smoothing_for_noise(noise, d).max(super::spec::default_sigma(d)),
+        None => smoothing_for_noise(noise, d).max(crate::jobs::spec::default_sigma(d)),
     };
     let smoothed = gaussian_smooth(&unit, sigma);
     let first = otsu(&smoothed.values).ok_or_else(constant)?;
@@ -300,10 +303,10 @@ fn functional(
     let geodesic = match model {
         SegmentationModel::ChanVese => None,
         _ => {
-            let epsilon = spec.epsilon.unwrap_or(super::spec::default_beta_epsilon(l));
+            let epsilon = spec.epsilon.unwrap_or(crate::jobs::spec::default_beta_epsilon(l));
             let lambda = spec.lambda.unwrap_or(match model {
                 SegmentationModel::Both => 0.0,
-                _ => super::spec::default_lambda(d, l),
+                _ => crate::jobs::spec::default_lambda(d, l),
             });
             let (field, k) =
                 EdgeField::with_contrast(grid, sigma, spec.edge_contrast).ok_or_else(|| constant_image(&spec.image))?;
@@ -315,7 +318,7 @@ fn functional(
         None => (None, None),
     };
     if let (SegmentationModel::Geodesic, Some(problem)) = (model, &geodesic) {
-        let lambda_final = spec.lambda_final.unwrap_or(super::spec::default_lambda_final(d, problem.lambda));
+        let lambda_final = spec.lambda_final.unwrap_or(crate::jobs::spec::default_lambda_final(d, problem.lambda));
         let second = (lambda_final != problem.lambda)
             .then(|| ProblemKind::Segmentation(Segmentation { lambda: lambda_final, ..problem.clone() }));
         let edges = spec.edge_refinement.unwrap_or(true).then(|| problem.field.clone());

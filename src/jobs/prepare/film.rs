@@ -1,10 +1,10 @@
 //! Building a stressed-film job from its spec: the cell, the boundary data and the
 //! initial film surface (which needs the cell width `L`).
 
-use super::build::{finite, positive};
-use super::spec::{FilmBoundarySpec, InitialSpec, SpecError, StressedFilmSpec};
+use super::checks::{finite, positive};
 use crate::film::{cosine_film, polyline_film, BoundaryData, FilmCell};
 use crate::geometry::{CurveMesh, MeshError, Point};
+use crate::jobs::spec::{FilmBoundarySpec, InitialSpec, SpecError, StressedFilmSpec};
 
 /// Most vertices of an initial film surface.
 use crate::limits::MAX_FILM_VERTICES;

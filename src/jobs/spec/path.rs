@@ -13,7 +13,7 @@
 //! trial deserializes the whole document, so the trials are capped
 //! ([`MAX_TRIALS`]): a long polygon costs a few dozen, not one per point.
 
-use super::spec::{JobSpec, SpecError};
+use super::{JobSpec, SpecError};
 use serde_json::Value;
 
 /// One step of a path into the document.

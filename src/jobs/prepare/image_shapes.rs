@@ -2,11 +2,13 @@
 //! objects split, dim objects found at a second threshold), a grid of seeds, and
 //! the circle or sphere inscribed in the image box.
 
-use super::build::{curve, positive, surface, AnyMesh};
-use super::spec::SpecError;
+use super::checks::{curve, positive, surface};
+use super::shapes::surface_union;
+use crate::geometry::AnyMesh;
 use crate::geometry::{self, Mesh, Point};
 use crate::imaging::labels::{clean_mask, components, distance_transform, separate, split_touching};
 use crate::imaging::{contours, isosurface, Grid};
+use crate::jobs::spec::SpecError;
 
 /// Relative depth of a neck that splits touching objects (see [`split_touching`]).
 const SPLIT_RELATIVE_DEPTH: f64 = 0.0;
@@ -28,11 +30,11 @@ pub(super) struct Levels {
 }
 
 impl Levels {
-    pub fn polarity(&self) -> super::spec::Polarity {
+    pub fn polarity(&self) -> crate::jobs::spec::Polarity {
         if self.sign > 0.0 {
-            super::spec::Polarity::Bright
+            crate::jobs::spec::Polarity::Bright
         } else {
-            super::spec::Polarity::Dark
+            crate::jobs::spec::Polarity::Dark
         }
     }
 
@@ -221,7 +223,7 @@ pub(super) fn seeds(grid: &Grid, spacing: Option<f64>, radius: Option<f64>) -> R
                 }
             }
         }
-        surface("initial", super::build::surface_union(&parts))
+        surface("initial", surface_union(&parts))
     }
 }
 

@@ -1,0 +1,75 @@
+//! A prepared job: the problem (one variant per application) and everything a run
+//! needs, validated.
+
+use super::SegmentationSetup;
+use crate::flow::{CurveManager, FlowSettings, Problem, SurfaceManager};
+use crate::geometry::AnyMesh;
+use crate::imaging::{EdgeField, Grid};
+use crate::jobs::spec::JobSpec;
+use crate::problems::{ChanVese, CurvatureFlow, Segmentation, ShapeDesign, StressedFilm, SurfaceDiffusion};
+use std::sync::Arc;
+
+/// A concrete problem (works in 2D and 3D).
+#[derive(Debug, Clone, PartialEq)]
+pub enum ProblemKind {
+    CurvatureFlow(CurvatureFlow),
+    SurfaceDiffusion(SurfaceDiffusion),
+    Segmentation(Segmentation),
+    /// Region-based segmentation (Chan–Vese), possibly with the geodesic term.
+    ChanVese(ChanVese),
+    ShapeDesign(ShapeDesign),
+    StressedFilm(StressedFilm),
+}
+
+impl PreparedJob {
+    /// The problem of stage `stage` (see [`Checkpoint::stage`](crate::flow::Checkpoint)).
+    pub fn stage_problem(&self, stage: usize) -> &ProblemKind {
+        match (stage, &self.second_stage) {
+            (1.., Some(p)) => p,
+            _ => &self.problem,
+        }
+    }
+}
+
+impl ProblemKind {
+    pub fn as_dyn<const D: usize>(&self) -> &dyn Problem<D> {
+        match self {
+            ProblemKind::CurvatureFlow(p) => p,
+            ProblemKind::SurfaceDiffusion(p) => p,
+            ProblemKind::Segmentation(p) => p,
+            ProblemKind::ChanVese(p) => p,
+            ProblemKind::ShapeDesign(p) => p,
+            ProblemKind::StressedFilm(p) => p,
+        }
+    }
+    /// A physical evolution (surface diffusion, the stressed film): no
+    /// backtracking, a tolerance per unit time.
+    pub(super) fn physical(&self) -> bool {
+        matches!(self, ProblemKind::SurfaceDiffusion(_) | ProblemKind::StressedFilm(_))
+    }
+}
+
+/// A validated job, ready to run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PreparedJob {
+    pub spec: JobSpec,
+    pub mesh: AnyMesh,
+    pub problem: ProblemKind,
+    /// (Addition) the problem of a second stage, run from where the first one
+    /// converged (segmentation with `lambda_final`).
+    pub second_stage: Option<ProblemKind>,
+    pub settings: FlowSettings,
+    pub checkpoint_every: usize,
+    /// Mesh management of curves, resolved from the spec and the initial mesh
+    /// (`None` for surfaces, or when every switch is off).
+    pub curve_manager: Option<CurveManager>,
+    /// Mesh management of surfaces, likewise.
+    pub surface_manager: Option<SurfaceManager>,
+    /// The decoded input image of a segmentation job (for masks and overlays).
+    pub image: Option<Arc<Grid>>,
+    /// (Addition) the edge field the results are refined onto: segmentation with
+    /// `problem.edge_refinement` (default on); see [`result_state`](crate::jobs::result_state).
+    pub edges: Option<Arc<EdgeField>>,
+    /// (Addition) the settings of a segmentation, automatic or given.
+    pub segmentation: Option<SegmentationSetup>,
+}

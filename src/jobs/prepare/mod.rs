@@ -1,0 +1,184 @@
+//! From a parsed spec to a runnable job (`prepare`): value checks naming their
+//! field, the initial mesh, the problem and the flow and mesh settings. One module
+//! per problem that needs more than its fields (`design`, `film`, `segment` with
+//! `image_shapes`), plus the explicit initial shapes, the flow settings and the
+//! mesh settings.
+
+mod checks;
+mod design;
+mod film;
+mod flow_settings;
+mod image_shapes;
+mod inputs;
+mod job;
+mod mesh_settings;
+mod segment;
+mod shapes;
+
+pub use job::{PreparedJob, ProblemKind};
+pub use segment::{default_min_size, default_mu, SegmentationSetup};
+
+use crate::flow::{CurveManager, ScalarProduct};
+use crate::geometry::AnyMesh;
+use crate::jobs::spec::{InitialSpec, JobSpec, ProblemSpec, SpecError};
+use crate::problems::{CurvatureFlow, StressedFilm, SurfaceDiffusion};
+use checks::{finite, positive};
+use flow_settings::flow_settings;
+use mesh_settings::{curve_manager, surface_manager};
+use shapes::build_initial;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// Validate `spec` and build the job. `inputs` maps `NAME` of `"input:NAME"` to the
+/// file's bytes.
+pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<PreparedJob, SpecError> {
+    let mut image = None;
+    let mut second_stage = None;
+    let mut edges = None;
+    let mut image_mesh = None;
+    let mut segmentation = None;
+    let early = match &spec.problem {
+        ProblemSpec::CurvatureFlow { gamma, lambda } => {
+            positive("problem.gamma", *gamma)?;
+            finite("problem.lambda", &[*lambda])
+                .map_err(|_| SpecError::new("problem.lambda", "must be a finite number"))?;
+            ProblemKind::CurvatureFlow(CurvatureFlow { gamma: *gamma, lambda: *lambda })
+        }
+        ProblemSpec::SurfaceDiffusion { gamma } => {
+            positive("problem.gamma", *gamma)?;
+            ProblemKind::SurfaceDiffusion(SurfaceDiffusion { gamma: *gamma })
+        }
+        ProblemSpec::Segmentation(seg) => {
+            let prepared = segment::prepare_segmentation(seg, spec.initial.as_ref(), inputs)?;
+            image = Some(Arc::new(prepared.grid));
+            (second_stage, edges, image_mesh, segmentation) =
+                (prepared.second_stage, prepared.edges, prepared.mesh, Some(prepared.setup));
+            prepared.problem
+        }
+        // needs the initial curve: built below
+        ProblemSpec::ShapeDesign(_) | ProblemSpec::StressedFilm(_) => {
+            ProblemKind::CurvatureFlow(CurvatureFlow { gamma: 1.0, lambda: 0.0 })
+        }
+    };
+    let film_cell = match &spec.problem {
+        ProblemSpec::StressedFilm(fs) => Some(film::film_cell(fs)?),
+        _ => None,
+    };
+    let mesh = match (&spec.initial, &image, &film_cell) {
+        _ if image_mesh.is_some() => image_mesh.take().expect("an image's initial shape"),
+        (Some(InitialSpec::Threshold {} | InitialSpec::Seeds { .. } | InitialSpec::Inscribed {}), _, _) => {
+            return Err(SpecError::new(
+                "initial.shape",
+                "this shape comes from an image: it needs problem.type `segmentation`",
+            ));
+        }
+        (initial, _, Some(cell)) => AnyMesh::Curve(film::initial_film(cell, initial.as_ref())?),
+        (Some(InitialSpec::Film { .. } | InitialSpec::FilmPolyline { .. }), _, None) => {
+            return Err(SpecError::new("initial.shape", "film shapes are for problem.type `stressed_film`"));
+        }
+        (Some(initial), _, None) => build_initial("initial", initial, inputs)?,
+        (None, _, None) => return Err(SpecError::new("initial", "missing field `initial`")),
+    };
+    if let Some(grid) = &image {
+        if grid.dimension != mesh.dimension() {
+            return Err(SpecError::new(
+                "initial",
+                format!(
+                    "a {}D image needs a {}",
+                    grid.dimension,
+                    if grid.dimension == 2 { "curve" } else { "surface" }
+                ),
+            ));
+        }
+    }
+    let (mut curve_manager, surface_manager) = match &mesh {
+        AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
+        AnyMesh::Surface(m) => {
+            let pinch_off = spec
+                .mesh
+                .pinch_off
+                .unwrap_or(!matches!(early, ProblemKind::Segmentation(_) | ProblemKind::ChanVese(_)));
+            (None, surface_manager(&spec.mesh, m, pinch_off)?)
+        }
+    };
+    if let (Some(m), Some(setup), Some(grid), None) =
+        (curve_manager.as_mut(), &segmentation, &image, spec.mesh.min_area)
+    {
+        // a contour that shrinks below a quarter of the smallest object kept at the
+        // start is gone
+        let l = grid.scale();
+        m.params.min_area = m.params.min_area.max(0.25 * setup.min_size / (l * l));
+    }
+    let problem = match (&spec.problem, &mesh) {
+        (ProblemSpec::ShapeDesign(sd), AnyMesh::Curve(c)) => {
+            let min_area = curve_manager.map_or(CurveManager::defaults_for(c).min_area, |m| m.params.min_area);
+            ProblemKind::ShapeDesign(design::shape_design(sd, c, spec.mesh.topology_changes, min_area)?)
+        }
+        (ProblemSpec::StressedFilm(fs), AnyMesh::Curve(c)) => {
+            // voids below (1.5 h)² are dropped: slivers cut off at a crack tip have
+            // a handful of vertices and move too fast to be followed
+            let h = c.boundary_measure() / c.num_elements() as f64;
+            let min_area = match spec.mesh.min_area {
+                Some(a) => positive("mesh.min_area", a)?,
+                None => 2.25 * h * h,
+            };
+            if let Some(m) = curve_manager.as_mut() {
+                m.params.min_area = min_area;
+            }
+            let cell = film_cell.expect("film cell");
+            let meshing = StressedFilm::meshing_for(h);
+            let wetting = match fs.wetting_layer {
+                Some(d) => {
+                    let d = positive("problem.wetting_layer", d)?;
+                    if c.positions().iter().any(|p| p.y <= d) {
+                        return Err(SpecError::new(
+                            "problem.wetting_layer",
+                            "the initial surface must lie above the wetting layer",
+                        ));
+                    }
+                    Some(d)
+                }
+                None => None,
+            };
+            if !(fs.bending.is_finite() && fs.bending >= 0.0) {
+                return Err(SpecError::new(
+                    "problem.bending",
+                    format!("must be a nonnegative number, got {}", fs.bending),
+                ));
+            }
+            ProblemKind::StressedFilm(
+                StressedFilm::new(cell, fs.gamma, meshing, spec.mesh.topology_changes, min_area)
+                    .with_wetting_layer(wetting)
+                    .with_bending(fs.bending),
+            )
+        }
+        (ProblemSpec::ShapeDesign(_), AnyMesh::Surface(_)) => {
+            return Err(SpecError::new("initial", "shape design is two-dimensional: it needs a curve"));
+        }
+        _ => early,
+    };
+    let settings = flow_settings(&spec.flow, &problem)?;
+    if let Some(m) = curve_manager.as_mut() {
+        m.params.keep_area = settings.scalar_product == ScalarProduct::HMinus1;
+        // a pocket of Ω closed off by Γ would have no Dirichlet boundary
+        m.params.fill_pockets = matches!(problem, ProblemKind::ShapeDesign(_));
+        m.params.keep_apart = matches!(&problem, ProblemKind::ChanVese(p) if p.separate);
+    }
+    let checkpoint_every = match spec.output.checkpoint_every {
+        0 => return Err(SpecError::new("output.checkpoint_every", "must be at least 1, got 0")),
+        n => n,
+    };
+    Ok(PreparedJob {
+        spec,
+        mesh,
+        problem,
+        second_stage,
+        settings,
+        checkpoint_every,
+        curve_manager,
+        surface_manager,
+        image,
+        edges,
+        segmentation,
+    })
+}
