@@ -15,21 +15,32 @@
 use super::bspline;
 use super::grid::Grid;
 use super::smooth::gaussian_smooth;
+use super::threshold::noise_level;
 use nalgebra::{SMatrix, SVector};
 
-/// The automatic contrast scale `k` of the edge indicator from the squared
-/// gradient magnitudes `g2` (of the image on [0, 100]): a twentieth of the strong
-/// edges' gradient, `max(p99, max/4)/20` of `|∇I_σ|` — the strong edges get
+/// The contrast scale `k` of the edge indicator that the strong edges give, from
+/// the squared gradient magnitudes `g2` (of the image on [0, 100]): a twentieth of
+/// their gradient, `max(p99, max/4)/20` of `|∇I_σ|` — the strong edges get
 /// `H ≈ 1/400` whatever the image's contrast, and the 99th percentile rather than
 /// the maximum lets a few very bright objects not set the scale (the `max/4`
-/// floor serves images whose edges are under 1 % of the samples). On a clean
-/// image mapped to [0, 100] this is about 1, the scale of the paper's figures.
+/// floor serves images whose edges are under 1 % of the samples). The automatic
+/// `k` of [`EdgeField::with_contrast`] is at least three times the noise's
+/// gradient ([`noise_gradient`]), so that noise keeps `H` near 1.
 pub fn contrast_scale(g2: &[f64]) -> f64 {
     let mut g: Vec<f64> = g2.iter().map(|v| v.sqrt()).collect();
     let max = g.iter().copied().fold(0.0, f64::max);
     let rank = ((g.len() as f64 - 1.0) * 0.99).round() as usize;
     let p99 = if g.is_empty() { 0.0 } else { *g.select_nth_unstable_by(rank, f64::total_cmp).1 };
     (p99.max(0.25 * max) / 20.0).max(1e-6)
+}
+
+/// Standard deviation of one component of the gradient of white noise of standard
+/// deviation `noise` after a Gaussian of `sigma` samples in `dimension` dimensions:
+/// `noise · (2σ² (4π)^{d/2} σ^d)^{-1/2}` (`∫ (∂_x G_σ)² = ∫ G_σ² / 2σ²`).
+pub fn noise_gradient(noise: f64, sigma: f64, dimension: usize) -> f64 {
+    let s = sigma.max(0.5);
+    let d = dimension as f64;
+    noise / (2.0 * s * s * (4.0 * std::f64::consts::PI).powf(d / 2.0) * s.powf(d)).sqrt()
 }
 
 /// Padding (in samples) of the row prefix sums on each side.
@@ -95,7 +106,10 @@ impl EdgeField {
                 }
             }
         }
-        let k = k.unwrap_or_else(|| contrast_scale(&coef));
+        let k = k.unwrap_or_else(|| {
+            let noise = noise_gradient(noise_level(&norm), sigma, grid.dimension);
+            contrast_scale(&coef).max(2.0 * noise)
+        });
         let inv = 1.0 / (k * k);
         for c in &mut coef {
             *c = 1.0 / (1.0 + *c * inv);

@@ -25,7 +25,7 @@ mod volumes;
 
 pub use background::quadratic_background;
 pub use decode::{decode_image, decode_slices, decode_volume};
-pub use edge::{contrast_scale, EdgeField, EdgeSample};
+pub use edge::{contrast_scale, noise_gradient, EdgeField, EdgeSample};
 pub use grid::{Grid, SampleKind};
 pub use limits::ImageLimits;
 pub use nrrd::{encode_nrrd_labels, encode_nrrd_mask, parse_nrrd};

@@ -46,8 +46,9 @@ pub struct SegmentationSpec {
     pub edge_refinement: Option<bool>,
     /// (Addition, geodesic model) contrast scale `k` of the edge indicator
     /// `H = 1/(1 + |∇I_σ|²/k²)`, the image mapped to [0, 100]; default from the
-    /// image's gradients, `max(p99, max/4)/20` of `|∇I_σ|` (about 1 on a clean
-    /// image, lower where the objects are dim).
+    /// image's gradients: `max(p99, max/4)/20` of `|∇I_σ|`, but at least twice the
+    /// noise's gradient (about 1 on the paper's images, lower where the objects
+    /// are dim and the noise is low).
     #[serde(default)]
     #[schemars(extend("exclusiveMinimum" = 0), range(max = 1000))]
     pub edge_contrast: Option<f64>,
