@@ -22,7 +22,7 @@ fn main() {
     for n in sizes {
         let spec = example
             .replace("\"resolution\": 128", &format!("\"resolution\": {n}"))
-            .replace("\"end_time\": 0.0068", "\"end_time\": 0.0085");
+            .replace("\"end_time\": 0.0067", "\"end_time\": 0.0085");
         let job = prepare(parse_spec(&spec).unwrap(), &HashMap::new()).unwrap();
         let (ProblemKind::StressedFilm(problem), AnyMesh::Curve(mesh)) = (&job.problem, &job.mesh) else {
             unreachable!()
