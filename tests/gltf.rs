@@ -1,4 +1,4 @@
-//! glTF results: layout (DESIGN.md §3), per-vertex fields with known values, and the
+//! glTF results: layout (docs/results.md), per-vertex fields with known values, and the
 //! Khronos glTF-Validator (npm `gltf-validator`, installed by `npm ci`) reporting no
 //! errors and no warnings on every file we write.
 
@@ -61,9 +61,17 @@ fn curves_surfaces_and_segmentations_validate_with_the_right_fields() {
     let (job, cps) = run(&spec, &[]);
     let evo = states_glb(&job, &cps).unwrap();
     let (doc, _) = parse_glb(&evo);
-    assert_eq!(doc["nodes"].as_array().unwrap().len(), cps.len());
-    assert_eq!(doc["meshes"][0]["primitives"].as_array().unwrap().len(), 2, "two components at the start");
-    assert_eq!(doc["meshes"].as_array().unwrap().last().unwrap()["primitives"].as_array().unwrap().len(), 1);
+    // one root node per checkpoint (its lines), each with its filled region as a child
+    let roots = doc["scenes"][0]["nodes"].as_array().unwrap();
+    assert_eq!(roots.len(), cps.len());
+    assert_eq!(doc["nodes"].as_array().unwrap().len(), 2 * cps.len());
+    let lines =
+        |root: &Value| &doc["meshes"][doc["nodes"][root.as_u64().unwrap() as usize]["mesh"].as_u64().unwrap() as usize];
+    assert_eq!(lines(&roots[0])["primitives"].as_array().unwrap().len(), 2, "two components at the start");
+    assert_eq!(lines(roots.last().unwrap())["primitives"].as_array().unwrap().len(), 1);
+    assert!(roots
+        .iter()
+        .all(|r| doc["nodes"][r.as_u64().unwrap() as usize]["children"].as_array().is_some_and(|c| c.len() == 1)));
     let anim = &doc["animations"][0];
     assert_eq!(anim["samplers"][0]["interpolation"], "STEP");
     assert_eq!(anim["channels"].as_array().unwrap().len(), cps.len());
@@ -85,6 +93,15 @@ fn curves_surfaces_and_segmentations_validate_with_the_right_fields() {
     assert_eq!(k.len(), 64);
     assert!(k.iter().all(|x| (x - 2.0).abs() < 1e-2), "{k:?}");
     assert!(v.iter().all(|x| (x + 2.0).abs() < 2e-2), "{v:?}");
+    // the filled region (triangles of the 64-gon, its area) and the ribbon, in a
+    // child node that the mesh readers skip
+    let child = doc["nodes"][0]["children"][0].as_u64().unwrap() as usize;
+    assert_eq!(doc["nodes"][child]["extras"]["shapeflow"], "display");
+    let filled = &doc["meshes"][doc["nodes"][child]["mesh"].as_u64().unwrap() as usize]["primitives"];
+    assert_eq!((filled[0]["mode"].as_u64(), filled[1]["mode"].as_u64()), (Some(4), Some(4)));
+    assert_eq!(doc["accessors"][filled[0]["indices"].as_u64().unwrap() as usize]["count"], 3 * 62);
+    assert_eq!(doc["accessors"][filled[1]["indices"].as_u64().unwrap() as usize]["count"], 6 * 64);
+    assert!(filled[1]["attributes"]["COLOR_0"].is_number());
     write("circle.glb", &glb);
     // a result can start a new job: shape.glb read back as an uploaded initial mesh
     let AnyMesh::Curve(c) = read_mesh_file("circle.glb", &glb).unwrap() else { panic!("a curve") };

@@ -1,7 +1,12 @@
 //! glTF 2.0 binary (.glb) results, laid out as docs/results.md describes:
 //!
 //! - curves: one `LINE_LOOP` primitive per component (z = 0), vertices in the
-//!   component's order (counter-clockwise for outer boundaries); on periodic curves
+//!   component's order (counter-clockwise for outer boundaries), and for closed
+//!   curves a child node `… (filled)` (extras `{"shapeflow": "display"}`: the mesh
+//!   readers skip it) whose mesh draws the enclosed region as
+//!   triangles (holes respected, material `region`) and each curve as a ribbon of
+//!   triangles with the vertex colours, so that renderers that draw no lines
+//!   (Blender) or only hairlines show the shape; on periodic curves
 //!   (the stressed film) a component winding around the period is a `LINE_STRIP`
 //!   over one period, its first vertex repeated at the end shifted by the period;
 //! - surfaces: one indexed `TRIANGLES` primitive with unit vertex `NORMAL`s;
@@ -45,8 +50,17 @@ struct Builder {
     views: Vec<Value>,
     accessors: Vec<Value>,
     meshes: Vec<Value>,
+    /// The frame nodes (the scene's roots).
     nodes: Vec<Value>,
+    /// Their children (filled regions), placed after them in `finish`.
+    children: Vec<Value>,
 }
+
+/// Width of the curve ribbons, relative to the diagonal of the curves' bounding box.
+const RIBBON_WIDTH: f64 = 0.004;
+
+/// Placeholder child index, replaced in [`Builder::finish`].
+const FILLED_CHILD: usize = usize::MAX;
 
 impl Builder {
     fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
@@ -151,19 +165,106 @@ impl Builder {
         self.meshes.len() - 1
     }
 
+    /// For closed curves (2D, not periodic): a mesh of the enclosed region and of a
+    /// ribbon along each curve (see the module documentation); `None` otherwise,
+    /// or when the curves cross (no region to fill).
+    fn filled(&mut self, frame: &GltfFrame<'_>) -> Option<usize> {
+        let m = frame.mesh;
+        if m.dimension != 2 || m.period.is_some() || m.elements.is_empty() {
+            return None;
+        }
+        let points: Vec<[f64; 2]> = m.positions.iter().map(|p| [p[0], p[1]]).collect();
+        let loops = segment_cycles(points.len(), m.elements.iter().map(|e| (e[0], e[1])));
+        let region = super::fill::region_triangles(&points, &loops)?;
+        let (lo, hi) = points.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
+            ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])
+        });
+        let width = RIBBON_WIDTH * (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
+        let mut primitives = Vec::new();
+        if !region.is_empty() {
+            let pos: Vec<f32> = points.iter().flat_map(|p| [p[0] as f32, p[1] as f32, 0.0]).collect();
+            let normals: Vec<f32> = points.iter().flat_map(|_| [0.0f32, 0.0, 1.0]).collect();
+            let idx: Vec<u32> = region.iter().flat_map(|t| t.map(|v| v as u32)).collect();
+            let position = self.floats(&pos, "VEC3", Some(ARRAY_BUFFER));
+            let normal = self.floats(&normals, "VEC3", Some(ARRAY_BUFFER));
+            let indices = self.indices(&idx);
+            primitives.push(json!({
+                "attributes": {"POSITION": position, "NORMAL": normal}, "indices": indices, "mode": 4, "material": 1,
+            }));
+        }
+        // the ribbons, a little above the region so that both show
+        let scale = curvature_scale(frame.curvature);
+        let (mut pos, mut color, mut idx) = (Vec::new(), Vec::new(), Vec::new());
+        for l in &loops {
+            let (v, t) = super::fill::ribbon(&points, l, width);
+            let base = (pos.len() / 3) as u32;
+            pos.extend(v.iter().flat_map(|p| [p[0] as f32, p[1] as f32, (0.5 * width) as f32]));
+            color.extend(
+                l.iter()
+                    .flat_map(|&i| {
+                        let c = colormap(frame.curvature[i] / scale);
+                        [c, c]
+                    })
+                    .flatten(),
+            );
+            idx.extend(t.iter().flat_map(|t| t.map(|i| i + base)));
+        }
+        let normals: Vec<f32> = (0..pos.len() / 3).flat_map(|_| [0.0f32, 0.0, 1.0]).collect();
+        let position = self.floats(&pos, "VEC3", Some(ARRAY_BUFFER));
+        let normal = self.floats(&normals, "VEC3", Some(ARRAY_BUFFER));
+        let colors = self.floats(&color, "VEC3", Some(ARRAY_BUFFER));
+        let indices = self.indices(&idx);
+        primitives.push(json!({
+            "attributes": {"POSITION": position, "NORMAL": normal, "COLOR_0": colors},
+            "indices": indices, "mode": 4, "material": 0,
+        }));
+        self.meshes.push(json!({"primitives": primitives}));
+        Some(self.meshes.len() - 1)
+    }
+
+    /// The node of `frame` (its lines or surface), with the filled region and the
+    /// ribbons of closed curves as a child; returns the node's index.
+    fn frame_node(&mut self, frame: &GltfFrame<'_>) -> usize {
+        let mesh = self.mesh(frame);
+        let name = format!("iteration {}", frame.iteration);
+        let mut node = json!({"mesh": mesh, "name": name, "extras": frame_extras(frame)});
+        if let Some(filled) = self.filled(frame) {
+            self.children
+                .push(json!({"mesh": filled, "name": format!("{name} (filled)"), "extras": {"shapeflow": "display"}}));
+            node["children"] = json!([FILLED_CHILD]);
+        }
+        self.nodes.push(node);
+        self.nodes.len() - 1
+    }
+
     fn finish(mut self, extras: Value, animations: Vec<Value>) -> Vec<u8> {
         while self.bin.len() % 4 != 0 {
             self.bin.push(0);
         }
-        let nodes: Vec<usize> = (0..self.nodes.len()).collect();
+        // the frame nodes are the scene's roots, their filled children follow them
+        let roots: Vec<usize> = (0..self.nodes.len()).collect();
+        let first_child = self.nodes.len();
+        let mut child = first_child;
+        for node in self.nodes.iter_mut() {
+            if node.get("children").is_some() {
+                node["children"] = json!([child]);
+                child += 1;
+            }
+        }
+        let mut nodes = self.nodes;
+        nodes.append(&mut self.children);
         let mut doc = json!({
             "asset": {"version": "2.0", "generator": concat!("shapeflow ", env!("CARGO_PKG_VERSION"))},
             "scene": 0,
-            "scenes": [{"nodes": nodes}],
-            "nodes": self.nodes,
+            "scenes": [{"nodes": roots}],
+            "nodes": nodes,
             "meshes": self.meshes,
             "materials": [{
                 "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8},
+                "doubleSided": true,
+            }, {
+                "name": "region",
+                "pbrMetallicRoughness": {"baseColorFactor": [0.55, 0.65, 0.8, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.9},
                 "doubleSided": true,
             }],
             "accessors": self.accessors,
@@ -260,9 +361,7 @@ fn frame_extras(f: &GltfFrame<'_>) -> Value {
 /// One state as a .glb (shape.glb, checkpoints/{n}.glb).
 pub fn shape_glb(frame: &GltfFrame<'_>, extras: Value) -> Vec<u8> {
     let mut b = Builder::default();
-    let mesh = b.mesh(frame);
-    b.nodes
-        .push(json!({"mesh": mesh, "name": format!("iteration {}", frame.iteration), "extras": frame_extras(frame)}));
+    b.frame_node(frame);
     b.finish(extras, Vec::new())
 }
 
@@ -270,12 +369,10 @@ pub fn shape_glb(frame: &GltfFrame<'_>, extras: Value) -> Vec<u8> {
 pub fn evolution_glb(frames: &[GltfFrame<'_>], extras: Value) -> Vec<u8> {
     let mut b = Builder::default();
     for (k, f) in frames.iter().enumerate() {
-        let mesh = b.mesh(f);
-        let mut node = json!({"mesh": mesh, "name": format!("iteration {}", f.iteration), "extras": frame_extras(f)});
+        let node = b.frame_node(f);
         if k > 0 {
-            node["scale"] = json!([0.0, 0.0, 0.0]);
+            b.nodes[node]["scale"] = json!([0.0, 0.0, 0.0]);
         }
-        b.nodes.push(node);
     }
     let n = frames.len();
     if n < 2 {

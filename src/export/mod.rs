@@ -3,6 +3,7 @@
 
 mod energy_csv;
 mod energy_svg;
+mod fill;
 mod gltf;
 mod image_results;
 mod objects;
@@ -10,6 +11,7 @@ mod shape_json;
 
 pub use energy_csv::energy_csv;
 pub use energy_svg::energy_svg;
+pub use fill::{region_triangles, ribbon};
 pub use gltf::{evolution_glb, shape_glb, GltfFrame, FRAME_SECONDS};
 pub use image_results::{mask, mask_nrrd, mask_png, overlay_png, to_pixel};
 pub use objects::{labels_png, objects, objects_csv, ObjectRow};

@@ -213,12 +213,21 @@ fn walk(
         }
         out.spend(name, 1)?;
         let transform = parent * matrix(&node);
-        if let Some(mesh) = node.mesh() {
+        if let Some(mesh) = node.mesh().filter(|_| !display_only(&node)) {
             collect(name, mesh, &transform, data, out)?;
         }
         stack.extend(node.children().map(|c| (c, transform)));
     }
     Ok(())
+}
+
+/// Whether `node` is marked as drawing only (`"extras": {"shapeflow": "display"}`:
+/// the filled region and ribbons that shapeflow adds to 2D results); its mesh is
+/// not part of the shape.
+fn display_only(node: &gltf::Node) -> bool {
+    node.extras()
+        .as_ref()
+        .is_some_and(|e| serde_json::from_str::<serde_json::Value>(e.get()).is_ok_and(|v| v["shapeflow"] == "display"))
 }
 
 /// Most bytes of a glTF JSON outside its strings (a mesh's document is a few

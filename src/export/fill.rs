@@ -1,0 +1,130 @@
+//! The geometry that makes a 2D result visible in every glTF viewer: the region a
+//! set of closed curves encloses, triangulated (holes respected), and each curve as
+//! a thin ribbon of triangles. Renderers draw no lines (Blender) or hairlines
+//! (model-viewer, three.js); triangles they all draw.
+
+use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
+use std::collections::VecDeque;
+
+/// The triangles of the region enclosed by the closed polygons `loops` (indices
+/// into `points`), by the even–odd rule: a constrained Delaunay triangulation of
+/// all the loops' segments, flood-filled from outside, crossing a segment toggling
+/// inside and outside. Triangles use the input indices only. `None` when the
+/// segments cross or touch (the triangulation would need new vertices).
+pub fn region_triangles(points: &[[f64; 2]], loops: &[Vec<usize>]) -> Option<Vec<[usize; 3]>> {
+    let n = points.len();
+    let edges: Vec<[usize; 2]> =
+        loops.iter().flat_map(|l| (0..l.len()).map(move |k| [l[k], l[(k + 1) % l.len()]])).collect();
+    let input: Vec<Point2<f64>> = points.iter().map(|p| Point2::new(p[0], p[1])).collect();
+    let mut conflicts = 0usize;
+    let cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
+        ConstrainedDelaunayTriangulation::try_bulk_load_cdt(input, edges, |_| conflicts += 1).ok()?;
+    if conflicts > 0 || cdt.num_vertices() != n {
+        return None;
+    }
+    let nf = cdt.num_all_faces();
+    let outer = spade::handles::OUTER_FACE.index();
+    let mut neighbours: Vec<[(usize, bool); 3]> = vec![[(outer, false); 3]; nf];
+    for face in cdt.inner_faces() {
+        neighbours[face.fix().index()] =
+            face.adjacent_edges().map(|e| (e.rev().face().fix().index(), e.is_constraint_edge()));
+    }
+    let mut inside: Vec<Option<bool>> = vec![None; nf];
+    inside[outer] = Some(false);
+    let mut queue = VecDeque::new();
+    for f in (0..nf).filter(|&f| f != outer) {
+        if let Some(&(_, crossing)) = neighbours[f].iter().find(|(g, _)| *g == outer) {
+            inside[f] = Some(crossing);
+            queue.push_back(f);
+        }
+    }
+    while let Some(f) = queue.pop_front() {
+        let s = inside[f].expect("visited");
+        for (g, crossing) in neighbours[f] {
+            if inside[g].is_none() {
+                inside[g] = Some(s ^ crossing);
+                queue.push_back(g);
+            }
+        }
+    }
+    let triangles: Vec<[usize; 3]> = cdt
+        .inner_faces()
+        .filter(|f| inside[f.fix().index()] == Some(true))
+        .map(|f| f.vertices().map(|v| v.fix().index()))
+        .collect();
+    Some(triangles)
+}
+
+/// A ribbon of width `width` along the closed polygon `l` of `points`: two
+/// vertices per polygon vertex, offset by `±width/2` along the vertex normal (the
+/// bisector of the two segments' normals), and two triangles per segment. Returns
+/// the ribbon's vertices (`2k` inner side, `2k + 1` outer side of vertex `k`) and
+/// triangles (counter-clockwise seen from `+z` for a counter-clockwise loop).
+pub fn ribbon(points: &[[f64; 2]], l: &[usize], width: f64) -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
+    let n = l.len();
+    let mut vertices = Vec::with_capacity(2 * n);
+    for k in 0..n {
+        let (a, b, c) = (points[l[(k + n - 1) % n]], points[l[k]], points[l[(k + 1) % n]]);
+        let (tx, ty) = (c[0] - a[0], c[1] - a[1]);
+        let len = tx.hypot(ty);
+        let (nx, ny) = if len > 0.0 { (ty / len, -tx / len) } else { (0.0, 0.0) };
+        let h = 0.5 * width;
+        vertices.push([b[0] - h * nx, b[1] - h * ny]);
+        vertices.push([b[0] + h * nx, b[1] + h * ny]);
+    }
+    let mut triangles = Vec::with_capacity(2 * n);
+    for k in 0..n {
+        let (i0, o0, i1, o1) = (2 * k, 2 * k + 1, 2 * ((k + 1) % n), 2 * ((k + 1) % n) + 1);
+        triangles.push([i0 as u32, o0 as u32, o1 as u32]);
+        triangles.push([i0 as u32, o1 as u32, i1 as u32]);
+    }
+    (vertices, triangles)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn area(points: &[[f64; 2]], tris: &[[usize; 3]]) -> f64 {
+        tris.iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| points[i]);
+                0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs()
+            })
+            .sum()
+    }
+
+    /// A square of side 4 with a square hole of side 2: the region has area 12, and
+    /// no triangle lies in the hole.
+    #[test]
+    fn a_square_with_a_hole() {
+        let points = [[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0], [1.0, 1.0], [1.0, 3.0], [3.0, 3.0], [3.0, 1.0]];
+        let loops = vec![vec![0, 1, 2, 3], vec![4, 5, 6, 7]];
+        let tris = region_triangles(&points, &loops).unwrap();
+        assert!((area(&points, &tris) - 12.0).abs() < 1e-12);
+        assert_eq!(tris.len(), 8);
+        // the outer square alone
+        let loops = vec![vec![0, 1, 2, 3]];
+        assert!((area(&points[..4], &region_triangles(&points[..4], &loops).unwrap()) - 16.0).abs() < 1e-12);
+        // crossing segments: no fill
+        let bow = [[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]];
+        assert!(region_triangles(&bow, &[vec![0, 1, 2, 3]]).is_none());
+    }
+
+    /// The ribbon of a square has its inner and outer sides at ±w/2 (on the
+    /// bisectors at the corners) and covers the band between them.
+    #[test]
+    fn a_ribbon_around_a_square() {
+        let points = [[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]];
+        let (v, t) = ribbon(&points, &[0, 1, 2, 3], 0.2);
+        assert_eq!((v.len(), t.len()), (8, 8));
+        let r = 0.1 / std::f64::consts::SQRT_2;
+        assert!((v[0][0] - r).abs() < 1e-12 && (v[0][1] - r).abs() < 1e-12, "{:?}", v[0]);
+        assert!((v[1][0] + r).abs() < 1e-12 && (v[1][1] + r).abs() < 1e-12, "{:?}", v[1]);
+        for tri in &t {
+            let [a, b, c] = tri.map(|i| v[i as usize]);
+            let cross = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
+            assert!(cross.abs() > 1e-6);
+        }
+    }
+}
