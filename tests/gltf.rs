@@ -102,6 +102,10 @@ fn curves_surfaces_and_segmentations_validate_with_the_right_fields() {
     assert_eq!(doc["accessors"][filled[0]["indices"].as_u64().unwrap() as usize]["count"], 3 * 62);
     assert_eq!(doc["accessors"][filled[1]["indices"].as_u64().unwrap() as usize]["count"], 6 * 64);
     assert!(filled[1]["attributes"]["COLOR_0"].is_number());
+    // the colours: white at the median curvature (2), recorded with the node
+    let colors = &doc["nodes"][0]["extras"]["colors"];
+    assert!((colors["white"].as_f64().unwrap() - 2.0).abs() < 1e-2, "{colors}");
+    assert_eq!(colors["field"], "_CURVATURE");
     write("circle.glb", &glb);
     // a result can start a new job: shape.glb read back as an uploaded initial mesh
     let AnyMesh::Curve(c) = read_mesh_file("circle.glb", &glb).unwrap() else { panic!("a curve") };

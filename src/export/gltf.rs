@@ -11,8 +11,9 @@
 //!   over one period, its first vertex repeated at the end shifted by the period;
 //! - surfaces: one indexed `TRIANGLES` primitive with unit vertex `NORMAL`s;
 //! - per vertex: `_CURVATURE` (the discrete κ), `_NORMAL_VELOCITY` (V of the next
-//!   step) and `COLOR_0`, the curvature through a blue–white–red map scaled by the
-//!   98th percentile of |κ|;
+//!   step) and `COLOR_0`, the curvature through a blue–white–red map, white at its
+//!   median and saturated at the 98th percentile of the deviations from it (at
+//!   least 5 % of the median), recorded in the node's `extras.colors`;
 //! - job metadata in the root `extras`, the frame's iteration/time/energy in the
 //!   node's `extras`;
 //! - evolution: one node per checkpoint, switched by a `STEP`-interpolated `scale`
@@ -111,7 +112,7 @@ impl Builder {
         frame: &GltfFrame<'_>,
         order: &[usize],
         dx: &[f64],
-        scale: f64,
+        scale: &ColorScale,
     ) -> serde_json::Map<String, Value> {
         let m = frame.mesh;
         let pos: Vec<f32> = order
@@ -127,7 +128,7 @@ impl Builder {
             .collect();
         let kappa: Vec<f32> = order.iter().map(|&v| finite(frame.curvature[v])).collect();
         let vel: Vec<f32> = order.iter().map(|&v| finite(frame.normal_velocity[v])).collect();
-        let color: Vec<f32> = order.iter().flat_map(|&v| colormap(frame.curvature[v] / scale)).collect();
+        let color: Vec<f32> = order.iter().flat_map(|&v| scale.color(frame.curvature[v])).collect();
         let mut a = serde_json::Map::new();
         a.insert("POSITION".into(), json!(self.floats(&pos, "VEC3", Some(ARRAY_BUFFER))));
         a.insert("_CURVATURE".into(), json!(self.floats(&kappa, "SCALAR", Some(ARRAY_BUFFER))));
@@ -137,9 +138,8 @@ impl Builder {
     }
 
     /// A mesh for `frame`; returns its index.
-    fn mesh(&mut self, frame: &GltfFrame<'_>) -> usize {
+    fn mesh(&mut self, frame: &GltfFrame<'_>, scale: &ColorScale) -> usize {
         let m = frame.mesh;
-        let scale = curvature_scale(frame.curvature);
         let mut primitives = Vec::new();
         if m.dimension == 2 {
             for mut cycle in segment_cycles(m.positions.len(), m.elements.iter().map(|e| (e[0], e[1]))) {
@@ -168,7 +168,7 @@ impl Builder {
     /// For closed curves (2D, not periodic): a mesh of the enclosed region and of a
     /// ribbon along each curve (see the module documentation); `None` otherwise,
     /// or when the curves cross (no region to fill).
-    fn filled(&mut self, frame: &GltfFrame<'_>) -> Option<usize> {
+    fn filled(&mut self, frame: &GltfFrame<'_>, scale: &ColorScale) -> Option<usize> {
         let m = frame.mesh;
         if m.dimension != 2 || m.period.is_some() || m.elements.is_empty() {
             return None;
@@ -193,7 +193,6 @@ impl Builder {
             }));
         }
         // the ribbons, a little above the region so that both show
-        let scale = curvature_scale(frame.curvature);
         let (mut pos, mut color, mut idx) = (Vec::new(), Vec::new(), Vec::new());
         for l in &loops {
             let (v, t) = super::fill::ribbon(&points, l, width);
@@ -202,7 +201,7 @@ impl Builder {
             color.extend(
                 l.iter()
                     .flat_map(|&i| {
-                        let c = colormap(frame.curvature[i] / scale);
+                        let c = scale.color(frame.curvature[i]);
                         [c, c]
                     })
                     .flatten(),
@@ -225,10 +224,13 @@ impl Builder {
     /// The node of `frame` (its lines or surface), with the filled region and the
     /// ribbons of closed curves as a child; returns the node's index.
     fn frame_node(&mut self, frame: &GltfFrame<'_>) -> usize {
-        let mesh = self.mesh(frame);
+        let scale = ColorScale::of(frame.curvature);
+        let mesh = self.mesh(frame, &scale);
         let name = format!("iteration {}", frame.iteration);
-        let mut node = json!({"mesh": mesh, "name": name, "extras": frame_extras(frame)});
-        if let Some(filled) = self.filled(frame) {
+        let mut extras = frame_extras(frame);
+        extras["colors"] = scale.extras();
+        let mut node = json!({"mesh": mesh, "name": name, "extras": extras});
+        if let Some(filled) = self.filled(frame, &scale) {
             self.children
                 .push(json!({"mesh": filled, "name": format!("{name} (filled)"), "extras": {"shapeflow": "display"}}));
             node["children"] = json!([FILLED_CHILD]);
@@ -287,15 +289,40 @@ fn finite(x: f64) -> f32 {
     }
 }
 
-/// The 98th percentile of `|κ|` (at least a tiny positive number).
-fn curvature_scale(k: &[f64]) -> f64 {
-    let mut a: Vec<f64> = k.iter().filter(|x| x.is_finite()).map(|x| x.abs()).collect();
-    if a.is_empty() {
-        return 1.0;
+/// How a field is coloured: `t = (x − center)/half_range` through the blue–white–red
+/// map, so the median is white and the 98th percentile of the deviations from it
+/// reaches the map's ends; the half range is at least 5 % of `|center|`, so that a
+/// near-constant field (a circle's curvature) is near-white with its variation
+/// still visible as faint tints, and a field of any sign keeps white at its median.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ColorScale {
+    center: f64,
+    half_range: f64,
+}
+
+impl ColorScale {
+    fn of(field: &[f64]) -> ColorScale {
+        let mut a: Vec<f64> = field.iter().copied().filter(|x| x.is_finite()).collect();
+        if a.is_empty() {
+            return ColorScale { center: 0.0, half_range: 1.0 };
+        }
+        let mid = (a.len() - 1) / 2;
+        let center = *a.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let mut dev: Vec<f64> = a.iter().map(|x| (x - center).abs()).collect();
+        let i = ((dev.len() - 1) as f64 * 0.98).round() as usize;
+        let spread = *dev.select_nth_unstable_by(i, f64::total_cmp).1;
+        ColorScale { center, half_range: spread.max(0.05 * center.abs()).max(1e-12) }
     }
-    let i = ((a.len() - 1) as f64 * 0.98).round() as usize;
-    let (_, v, _) = a.select_nth_unstable_by(i, |p, q| p.total_cmp(q));
-    v.max(1e-12)
+
+    fn color(&self, x: f64) -> [f32; 3] {
+        colormap((x - self.center) / self.half_range)
+    }
+
+    /// The record of the map in a node's extras.
+    fn extras(&self) -> Value {
+        json!({"field": "_CURVATURE", "map": "blue-white-red", "white": self.center,
+               "blue": self.center - self.half_range, "red": self.center + self.half_range})
+    }
 }
 
 /// Blue (−1) – white (0) – red (+1), linear RGB in [0, 1].
@@ -425,5 +452,23 @@ mod tests {
         let doc: Value = serde_json::from_slice(&g[20..20 + jl]).unwrap();
         assert_eq!(doc["nodes"].as_array().unwrap().len(), 3);
         assert_eq!(doc["animations"][0]["channels"].as_array().unwrap().len(), 3);
+    }
+
+    /// A near-constant field (a circle's curvature, 2 ± 1 %) is near-white with its
+    /// variation visible; a varying one spans the map from its median.
+    #[test]
+    fn colors_show_variation_around_the_median() {
+        let circle: Vec<f64> = (0..100).map(|k| 2.0 + 0.02 * ((k as f64) * 0.3).sin()).collect();
+        let s = ColorScale::of(&circle);
+        assert!((s.center - 2.0).abs() < 0.02 && (s.half_range - 0.05 * s.center).abs() < 1e-12, "{s:?}");
+        let white = colormap(0.0);
+        let c = s.color(2.02);
+        assert!(c != white && (c[1] - white[1]).abs() < 0.2, "{c:?}");
+        let varied: Vec<f64> = (0..101).map(|k| k as f64 - 50.0).collect();
+        let s = ColorScale::of(&varied);
+        assert_eq!(s.center, 0.0);
+        assert!((s.half_range - 49.0).abs() < 1.0, "{s:?}");
+        assert_eq!(s.color(50.0), colormap(1.0));
+        assert_eq!(s.extras()["white"], 0.0);
     }
 }
