@@ -37,28 +37,26 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     let mut edges = None;
     let mut image_mesh = None;
     let mut segmentation = None;
+    // the problems that need the initial curve are built once it is there
     let early = match &spec.problem {
         ProblemSpec::CurvatureFlow { gamma, lambda } => {
             positive("problem.gamma", *gamma)?;
             finite("problem.lambda", &[*lambda])
                 .map_err(|_| SpecError::new("problem.lambda", "must be a finite number"))?;
-            ProblemKind::CurvatureFlow(CurvatureFlow { gamma: *gamma, lambda: *lambda })
+            Some(ProblemKind::CurvatureFlow(CurvatureFlow { gamma: *gamma, lambda: *lambda }))
         }
         ProblemSpec::SurfaceDiffusion { gamma } => {
             positive("problem.gamma", *gamma)?;
-            ProblemKind::SurfaceDiffusion(SurfaceDiffusion { gamma: *gamma })
+            Some(ProblemKind::SurfaceDiffusion(SurfaceDiffusion { gamma: *gamma }))
         }
         ProblemSpec::Segmentation(seg) => {
             let prepared = segment::prepare_segmentation(seg, spec.initial.as_ref(), inputs)?;
             image = Some(Arc::new(prepared.grid));
             (second_stage, edges, image_mesh, segmentation) =
                 (prepared.second_stage, prepared.edges, prepared.mesh, Some(prepared.setup));
-            prepared.problem
+            Some(prepared.problem)
         }
-        // needs the initial curve: built below
-        ProblemSpec::ShapeDesign(_) | ProblemSpec::StressedFilm(_) => {
-            ProblemKind::CurvatureFlow(CurvatureFlow { gamma: 1.0, lambda: 0.0 })
-        }
+        ProblemSpec::ShapeDesign(_) | ProblemSpec::StressedFilm(_) => None,
     };
     let film_cell = match &spec.problem {
         ProblemSpec::StressedFilm(fs) => Some(film::film_cell(fs)?),
@@ -97,7 +95,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             let pinch_off = spec
                 .mesh
                 .pinch_off
-                .unwrap_or(!matches!(early, ProblemKind::Segmentation(_) | ProblemKind::ChanVese(_)));
+                .unwrap_or(!matches!(spec.problem, ProblemSpec::Segmentation(_)));
             (None, surface_manager(&spec.mesh, m, pinch_off)?)
         }
     };
@@ -155,7 +153,10 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         (ProblemSpec::ShapeDesign(_), AnyMesh::Surface(_)) => {
             return Err(SpecError::new("initial", "shape design is two-dimensional: it needs a curve"));
         }
-        _ => early,
+        (ProblemSpec::StressedFilm(_), AnyMesh::Surface(_)) => {
+            return Err(SpecError::new("initial", "the stressed film is two-dimensional: it needs a curve"));
+        }
+        _ => early.expect("every other problem is built from its fields"),
     };
     let settings = flow_settings(&spec.flow, &problem)?;
     if let Some(m) = curve_manager.as_mut() {
