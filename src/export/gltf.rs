@@ -21,7 +21,7 @@
 //!   trailing hold key so that the last frame is shown).
 
 use crate::flow::MeshData;
-use crate::geometry::segment_cycles;
+use crate::geometry::{segment_cycles, vertex_normals, Point};
 use serde_json::{json, Value};
 
 /// One state to draw.
@@ -155,7 +155,7 @@ impl Builder {
         } else {
             let order: Vec<usize> = (0..m.positions.len()).collect();
             let mut attributes = self.attributes(frame, &order, &[], scale);
-            let normals = vertex_normals(m);
+            let normals = surface_normals(m);
             attributes.insert("NORMAL".into(), json!(self.floats(&normals, "VEC3", Some(ARRAY_BUFFER))));
             let idx: Vec<u32> = m.elements.iter().flat_map(|t| t.iter().map(|&v| v as u32)).collect();
             let indices = self.indices(&idx);
@@ -333,28 +333,14 @@ fn colormap(t: f64) -> [f32; 3] {
     std::array::from_fn(|k| (a[k] + (b[k] - a[k]) * s) as f32)
 }
 
-/// Unit area-weighted vertex normals of a triangle surface, as f32 (renormalized in f32).
-fn vertex_normals(m: &MeshData) -> Vec<f32> {
-    let mut n = vec![[0.0f64; 3]; m.positions.len()];
-    for t in &m.elements {
-        let p = |k: usize| &m.positions[t[k]];
-        let (u, v) = ([0, 1, 2].map(|c| p(1)[c] - p(0)[c]), [0, 1, 2].map(|c| p(2)[c] - p(0)[c]));
-        let c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
-        for &i in t {
-            for k in 0..3 {
-                n[i][k] += c[k];
-            }
-        }
-    }
-    n.iter()
-        .flat_map(|v| {
-            let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-            if len > 0.0 {
-                [(v[0] / len) as f32, (v[1] / len) as f32, (v[2] / len) as f32]
-            } else {
-                [0.0, 0.0, 1.0]
-            }
-        })
+/// Unit area-weighted vertex normals of a triangle surface ([`vertex_normals`]), as
+/// f32; `+z` where a vertex has none.
+fn surface_normals(m: &MeshData) -> Vec<f32> {
+    let points: Vec<Point<3>> = m.positions.iter().map(|p| Point::<3>::new(p[0], p[1], p[2])).collect();
+    let triangles: Vec<[usize; 3]> = m.elements.iter().map(|t| [t[0], t[1], t[2]]).collect();
+    vertex_normals(&points, &triangles)
+        .iter()
+        .flat_map(|n| if n.norm() > 0.0 { [n.x as f32, n.y as f32, n.z as f32] } else { [0.0, 0.0, 1.0] })
         .collect()
 }
 

@@ -110,22 +110,11 @@ impl<const D: usize> Mesh<D> {
         (0..self.num_elements()).map(|e| self.element_geometry(e).1).collect()
     }
 
-    /// Unit vertex normals: the normalized lumped `N⃗_i = ∫_Γ φ_i ν = Σ_{T∋i} |T| ν_T / D`.
+    /// Unit vertex normals: the normalized lumped `N⃗_i = ∫_Γ φ_i ν = Σ_{T∋i} |T| ν_T / D`
+    /// ([`vertex_normals`]).
     pub fn vertex_normals(&self) -> Vec<Point<D>> {
-        let mut n = vec![Point::<D>::zeros(); self.num_vertices()];
-        for (e, el) in self.elements().iter().enumerate() {
-            let (m, nu) = self.element_geometry(e);
-            for &v in el {
-                n[v] += nu * m;
-            }
-        }
-        for v in &mut n {
-            let l = v.norm();
-            if l > 0.0 {
-                *v /= l;
-            }
-        }
-        n
+        // element_geometry: periodic segments run to the nearest image of their end
+        vertex_normals_by(self.num_vertices(), self.elements(), |e| self.element_geometry(e))
     }
 
     /// Centroid of the vertices.
@@ -157,6 +146,37 @@ impl<const D: usize> Mesh<D> {
         }
         q
     }
+}
+
+/// Unit vertex normals of the elements `elements` over `positions`: each vertex's
+/// `Σ_{T∋i} |T| ν_T` (the lumped `∫_Γ φ_i ν` up to the factor `1/D`: area-weighted
+/// on surfaces, length-weighted on curves), normalized; zero where it vanishes.
+/// The one computation of vertex normals (meshes, remeshing, glTF).
+pub fn vertex_normals<const D: usize>(positions: &[Point<D>], elements: &[[usize; D]]) -> Vec<Point<D>> {
+    vertex_normals_by(positions.len(), elements, |e| simplex::measure_and_normal(&elements[e].map(|v| positions[v])))
+}
+
+/// [`vertex_normals`] with each element's measure and unit normal given by
+/// `geometry(e)`.
+fn vertex_normals_by<const D: usize>(
+    vertices: usize,
+    elements: &[[usize; D]],
+    geometry: impl Fn(usize) -> (f64, Point<D>),
+) -> Vec<Point<D>> {
+    let mut n = vec![Point::<D>::zeros(); vertices];
+    for (e, el) in elements.iter().enumerate() {
+        let (m, nu) = geometry(e);
+        for &v in el {
+            n[v] += nu * m;
+        }
+    }
+    for v in &mut n {
+        let l = v.norm();
+        if l > 0.0 {
+            *v /= l;
+        }
+    }
+    n
 }
 
 #[cfg(test)]

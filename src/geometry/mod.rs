@@ -25,7 +25,7 @@ pub use curve_remesh::{adapt_curve, manage_curve, regularize_curve, CurveRemeshS
 pub use curve_topology::{mesh_winding_number, resolve_crossings, resolve_intersections, winding_number};
 pub use curves::{all_loops_below, circle, curves_from_loops, drop_small_loops, ellipse, polygon, rectangle, union};
 pub use intersect::{find_periodic_intersections, find_segment_intersections, SegmentHit};
-pub use measures::MeshQuality;
+pub use measures::{vertex_normals, MeshQuality};
 pub use mesh::{segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};
 pub use objects::Objects;
 pub use surface_remesh::{

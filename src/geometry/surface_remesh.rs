@@ -2,6 +2,7 @@
 //! tangential regularization, and adaptivity by edge split, collapse and flip with
 //! angle-width control. Pure functions from a surface mesh to a surface mesh.
 
+use super::measures::vertex_normals;
 use super::{Mesh, Point, SurfaceMesh};
 use std::collections::HashSet;
 
@@ -97,18 +98,6 @@ pub fn regularize_surface(mesh: &SurfaceMesh, sweeps: usize) -> SurfaceMesh {
         }
     }
     mesh.with_positions(p)
-}
-
-/// Unit vertex normals (area weighted).
-fn vertex_normals(p: &[Point<3>], tris: &[[usize; 3]]) -> Vec<Point<3>> {
-    let mut n = vec![Point::<3>::zeros(); p.len()];
-    for t in tris {
-        let nt = tri_normal(p, t);
-        for &v in t {
-            n[v] += nt;
-        }
-    }
-    n.iter().map(|x| x.normalize()).collect()
 }
 
 fn angle_at(p: &[Point<3>], a: usize, b: usize, c: usize) -> f64 {

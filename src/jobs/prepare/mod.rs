@@ -92,10 +92,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     let (mut curve_manager, surface_manager) = match &mesh {
         AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
         AnyMesh::Surface(m) => {
-            let pinch_off = spec
-                .mesh
-                .pinch_off
-                .unwrap_or(!matches!(spec.problem, ProblemSpec::Segmentation(_)));
+            let pinch_off = spec.mesh.pinch_off.unwrap_or(!matches!(spec.problem, ProblemSpec::Segmentation(_)));
             (None, surface_manager(&spec.mesh, m, pinch_off)?)
         }
     };
