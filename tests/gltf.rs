@@ -75,6 +75,8 @@ fn curves_surfaces_and_segmentations_validate_with_the_right_fields() {
     let anim = &doc["animations"][0];
     assert_eq!(anim["samplers"][0]["interpolation"], "STEP");
     assert_eq!(anim["channels"].as_array().unwrap().len(), cps.len());
+    let seconds = doc["extras"]["animation_seconds"].as_f64().unwrap();
+    assert!((seconds - 0.2 * cps.len() as f64).abs() < 1e-6, "{seconds}");
     assert_eq!(doc["extras"]["problem"], "curvature_flow");
     write("merge_evolution.glb", &evo);
     write("merge_shape.glb", &state_glb(&job, cps.last().unwrap()));

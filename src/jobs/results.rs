@@ -198,5 +198,8 @@ pub fn states_glb(job: &PreparedJob, states: &[Checkpoint]) -> Option<Vec<u8>> {
     let mut extras = job_extras(job);
     extras["frames"] = json!(frames.len());
     extras["seconds_per_frame"] = json!(crate::export::FRAME_SECONDS);
+    // the animation's length, for importers that set a scene's frame range (the
+    // last frame is held for one more frame time)
+    extras["animation_seconds"] = json!(frames.len() as f64 * crate::export::FRAME_SECONDS as f64);
     Some(evolution_glb(&frames, extras))
 }
