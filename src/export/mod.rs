@@ -1,6 +1,7 @@
 //! Result formats (pure functions to strings/bytes): shape.json (docs/user-guide.md), the
 //! energy history as CSV and as an SVG plot; masks and overlays of image jobs; glTF (.glb) shapes and evolutions.
 
+mod colors;
 mod energy_csv;
 mod energy_svg;
 mod fill;
