@@ -163,6 +163,26 @@ fn curves_surfaces_and_segmentations_validate_with_the_right_fields() {
     let n = pos.len() / 3;
     assert!((pos[3 * (n - 1)] - pos[0] - 1.0).abs() < 1e-6 && pos[3 * (n - 1) + 1] == pos[1], "closing vertex");
     assert!(pos[0] >= 0.0 && pos[0] < 0.05, "starts at the left wall: {}", pos[0]);
+    // the film itself filled over the period, down to the substrate: its area
+    let child = doc["nodes"][0]["children"][0].as_u64().unwrap() as usize;
+    let filled = &doc["meshes"][doc["nodes"][child]["mesh"].as_u64().unwrap() as usize]["primitives"][0];
+    let p = floats(&doc, bin, filled["attributes"]["POSITION"].as_u64().unwrap() as usize);
+    let idx = &doc["accessors"][filled["indices"].as_u64().unwrap() as usize];
+    let view = &doc["bufferViews"][idx["bufferView"].as_u64().unwrap() as usize];
+    let off = view["byteOffset"].as_u64().unwrap() as usize;
+    let tris: Vec<u32> = bin[off..off + view["byteLength"].as_u64().unwrap() as usize]
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    let area: f64 = tris
+        .chunks_exact(3)
+        .map(|t| {
+            let q = |k: usize| (p[3 * t[k] as usize] as f64, p[3 * t[k] as usize + 1] as f64);
+            let (a, b, c) = (q(0), q(1), q(2));
+            0.5 * ((b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1)).abs()
+        })
+        .sum();
+    assert!((area - 0.5).abs() < 2e-3, "film area {area}");
     write("film.glb", &glb);
     write("film_evolution.glb", &states_glb(&job, &cps).unwrap());
 

@@ -55,16 +55,22 @@ pub fn region_triangles(points: &[[f64; 2]], loops: &[Vec<usize>]) -> Option<Vec
     Some(triangles)
 }
 
-/// A ribbon of width `width` along the closed polygon `l` of `points`: two
+/// A ribbon of width `width` along the polygon `l` of `points` (closed, or an open
+/// polyline): two
 /// vertices per polygon vertex, offset by `±width/2` along the vertex normal (the
 /// bisector of the two segments' normals), and two triangles per segment. Returns
 /// the ribbon's vertices (`2k` inner side, `2k + 1` outer side of vertex `k`) and
 /// triangles (counter-clockwise seen from `+z` for a counter-clockwise loop).
-pub fn ribbon(points: &[[f64; 2]], l: &[usize], width: f64) -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
+pub fn ribbon(points: &[[f64; 2]], l: &[usize], width: f64, closed: bool) -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
     let n = l.len();
     let mut vertices = Vec::with_capacity(2 * n);
     for k in 0..n {
-        let (a, b, c) = (points[l[(k + n - 1) % n]], points[l[k]], points[l[(k + 1) % n]]);
+        // an open polyline's ends take the tangent of their one segment
+        let (before, after) = match closed {
+            true => ((k + n - 1) % n, (k + 1) % n),
+            false => (k.saturating_sub(1), (k + 1).min(n - 1)),
+        };
+        let (a, b, c) = (points[l[before]], points[l[k]], points[l[after]]);
         let (tx, ty) = (c[0] - a[0], c[1] - a[1]);
         let len = tx.hypot(ty);
         let (nx, ny) = if len > 0.0 { (ty / len, -tx / len) } else { (0.0, 0.0) };
@@ -73,7 +79,7 @@ pub fn ribbon(points: &[[f64; 2]], l: &[usize], width: f64) -> (Vec<[f64; 2]>, V
         vertices.push([b[0] + h * nx, b[1] + h * ny]);
     }
     let mut triangles = Vec::with_capacity(2 * n);
-    for k in 0..n {
+    for k in 0..if closed { n } else { n.saturating_sub(1) } {
         let (i0, o0, i1, o1) = (2 * k, 2 * k + 1, 2 * ((k + 1) % n), 2 * ((k + 1) % n) + 1);
         triangles.push([i0 as u32, o0 as u32, o1 as u32]);
         triangles.push([i0 as u32, o1 as u32, i1 as u32]);
@@ -116,11 +122,13 @@ mod tests {
     #[test]
     fn a_ribbon_around_a_square() {
         let points = [[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]];
-        let (v, t) = ribbon(&points, &[0, 1, 2, 3], 0.2);
+        let (v, t) = ribbon(&points, &[0, 1, 2, 3], 0.2, true);
         assert_eq!((v.len(), t.len()), (8, 8));
         let r = 0.1 / std::f64::consts::SQRT_2;
         assert!((v[0][0] - r).abs() < 1e-12 && (v[0][1] - r).abs() < 1e-12, "{:?}", v[0]);
         assert!((v[1][0] + r).abs() < 1e-12 && (v[1][1] + r).abs() < 1e-12, "{:?}", v[1]);
+        let (_, open) = ribbon(&points, &[0, 1, 2, 3], 0.2, false);
+        assert_eq!(open.len(), 6);
         for tri in &t {
             let [a, b, c] = tri.map(|i| v[i as usize]);
             let cross = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);

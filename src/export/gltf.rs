@@ -2,7 +2,7 @@
 //!
 //! - curves: one `LINE_LOOP` primitive per component (z = 0), vertices in the
 //!   component's order (counter-clockwise for outer boundaries), and for closed
-//!   curves a child node `… (filled)` (extras `{"shapeflow": "display"}`: the mesh
+//!   and periodic curves a child node `… (filled)` (extras `{"shapeflow": "display"}`: the mesh
 //!   readers skip it) whose mesh draws the enclosed region as
 //!   triangles (holes respected, material `region`) and each curve as a ribbon of
 //!   triangles with the vertex colours, so that renderers that draw no lines
@@ -60,6 +60,50 @@ struct Builder {
 
 /// Width of the curve ribbons, relative to the diagonal of the curves' bounding box.
 const RIBBON_WIDTH: f64 = 0.004;
+
+/// The curves of a 2D state as drawn in the plane: points (periodic components
+/// lifted over one period), each curve with whether it is closed, the polygons
+/// whose even–odd interior is the region, and the state's vertex behind each point.
+struct Drawing {
+    points: Vec<[f64; 2]>,
+    source: Vec<usize>,
+    curves: Vec<(Vec<usize>, bool)>,
+    region: Vec<Vec<usize>>,
+}
+
+impl Drawing {
+    fn of(m: &MeshData) -> Drawing {
+        let cycles = segment_cycles(m.positions.len(), m.elements.iter().map(|e| (e[0], e[1])));
+        let Some(period) = m.period else {
+            let points = m.positions.iter().map(|p| [p[0], p[1]]).collect();
+            let curves = cycles.iter().map(|c| (c.clone(), true)).collect();
+            return Drawing { points, source: (0..m.positions.len()).collect(), curves, region: cycles };
+        };
+        let mut d = Drawing { points: Vec::new(), source: Vec::new(), curves: Vec::new(), region: Vec::new() };
+        for mut cycle in cycles {
+            let (dx, winds) = super::lift_component(m, &mut cycle, period);
+            let start = d.points.len();
+            for (k, &v) in cycle.iter().enumerate() {
+                d.points.push([m.positions[v][0] + dx[k], m.positions[v][1]]);
+                d.source.push(v);
+            }
+            let l: Vec<usize> = (start..d.points.len()).collect();
+            d.curves.push((l.clone(), !winds));
+            let mut polygon = l;
+            if winds {
+                // down to the substrate at both ends of the period
+                let (first, last) = (d.points[start], d.points[d.points.len() - 1]);
+                for (p, v) in [([last[0], 0.0], cycle[cycle.len() - 1]), ([first[0], 0.0], cycle[0])] {
+                    polygon.push(d.points.len());
+                    d.points.push(p);
+                    d.source.push(v);
+                }
+            }
+            d.region.push(polygon);
+        }
+        d
+    }
+}
 
 /// Placeholder child index, replaced in [`Builder::finish`].
 const FILLED_CHILD: usize = usize::MAX;
@@ -166,25 +210,26 @@ impl Builder {
         self.meshes.len() - 1
     }
 
-    /// For closed curves (2D, not periodic): a mesh of the enclosed region and of a
-    /// ribbon along each curve (see the module documentation); `None` otherwise,
-    /// or when the curves cross (no region to fill).
+    /// For curves (2D): a mesh of the enclosed region and of a ribbon along each
+    /// curve (see the module documentation); `None` for surfaces, or when the
+    /// curves cross (no region to fill). Periodic curves (the stressed film) are
+    /// drawn over one period, lifted as their `LINE_STRIP`s are: the region is the
+    /// film between its surface and the substrate `y = 0`, voids left open.
     fn filled(&mut self, frame: &GltfFrame<'_>, scale: &ColorScale) -> Option<usize> {
         let m = frame.mesh;
-        if m.dimension != 2 || m.period.is_some() || m.elements.is_empty() {
+        if m.dimension != 2 || m.elements.is_empty() {
             return None;
         }
-        let points: Vec<[f64; 2]> = m.positions.iter().map(|p| [p[0], p[1]]).collect();
-        let loops = segment_cycles(points.len(), m.elements.iter().map(|e| (e[0], e[1])));
-        let region = super::fill::region_triangles(&points, &loops)?;
-        let (lo, hi) = points.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
+        let drawing = Drawing::of(m);
+        let region = super::fill::region_triangles(&drawing.points, &drawing.region)?;
+        let (lo, hi) = drawing.points.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
             ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])
         });
         let width = RIBBON_WIDTH * (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
         let mut primitives = Vec::new();
         if !region.is_empty() {
-            let pos: Vec<f32> = points.iter().flat_map(|p| [p[0] as f32, p[1] as f32, 0.0]).collect();
-            let normals: Vec<f32> = points.iter().flat_map(|_| [0.0f32, 0.0, 1.0]).collect();
+            let pos: Vec<f32> = drawing.points.iter().flat_map(|p| [p[0] as f32, p[1] as f32, 0.0]).collect();
+            let normals: Vec<f32> = drawing.points.iter().flat_map(|_| [0.0f32, 0.0, 1.0]).collect();
             let idx: Vec<u32> = region.iter().flat_map(|t| t.map(|v| v as u32)).collect();
             let position = self.floats(&pos, "VEC3", Some(ARRAY_BUFFER));
             let normal = self.floats(&normals, "VEC3", Some(ARRAY_BUFFER));
@@ -195,14 +240,14 @@ impl Builder {
         }
         // the ribbons, a little above the region so that both show
         let (mut pos, mut color, mut idx) = (Vec::new(), Vec::new(), Vec::new());
-        for l in &loops {
-            let (v, t) = super::fill::ribbon(&points, l, width);
+        for (l, closed) in &drawing.curves {
+            let (v, t) = super::fill::ribbon(&drawing.points, l, width, *closed);
             let base = (pos.len() / 3) as u32;
             pos.extend(v.iter().flat_map(|p| [p[0] as f32, p[1] as f32, (0.5 * width) as f32]));
             color.extend(
                 l.iter()
                     .flat_map(|&i| {
-                        let c = scale.color(frame.curvature[i]);
+                        let c = scale.color(frame.curvature[drawing.source[i]]);
                         [c, c]
                     })
                     .flatten(),
