@@ -108,6 +108,16 @@ fn curves_surfaces_and_segmentations_validate_with_the_right_fields() {
     let colors = &doc["nodes"][0]["extras"]["colors"];
     assert!((colors["white"].as_f64().unwrap() - 2.0).abs() < 1e-2, "{colors}");
     assert_eq!(colors["field"], "_CURVATURE");
+    // coloured by the normal velocity instead (V = −2 on this circle)
+    let (job, cps) = run(
+        r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 0.5, "resolution": 64},
+            "flow": {"max_iterations": 1}, "output": {"color_by": "normal_velocity"}}"#,
+        &[],
+    );
+    let (doc_v, _) = parse_glb(&state_glb(&job, &cps[0]));
+    let colors = &doc_v["nodes"][0]["extras"]["colors"];
+    assert_eq!(colors["field"], "_NORMAL_VELOCITY");
+    assert!((colors["white"].as_f64().unwrap() + 2.0).abs() < 2e-2, "{colors}");
     write("circle.glb", &glb);
     // a result can start a new job: shape.glb read back as an uploaded initial mesh
     let AnyMesh::Curve(c) = read_mesh_file("circle.glb", &glb).unwrap() else { panic!("a curve") };

@@ -10,22 +10,24 @@ use serde_json::{json, Value};
 /// still visible as faint tints, and a field of any sign keeps white at its median.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct ColorScale {
+    /// The attribute of the coloured field (`_CURVATURE`, `_NORMAL_VELOCITY`).
+    field: &'static str,
     center: f64,
     half_range: f64,
 }
 
 impl ColorScale {
-    pub(super) fn of(field: &[f64]) -> ColorScale {
-        let mut a: Vec<f64> = field.iter().copied().filter(|x| x.is_finite()).collect();
+    pub(super) fn of(values: &[f64], field: &'static str) -> ColorScale {
+        let mut a: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
         if a.is_empty() {
-            return ColorScale { center: 0.0, half_range: 1.0 };
+            return ColorScale { field, center: 0.0, half_range: 1.0 };
         }
         let mid = (a.len() - 1) / 2;
         let center = *a.select_nth_unstable_by(mid, f64::total_cmp).1;
         let mut dev: Vec<f64> = a.iter().map(|x| (x - center).abs()).collect();
         let i = ((dev.len() - 1) as f64 * 0.98).round() as usize;
         let spread = *dev.select_nth_unstable_by(i, f64::total_cmp).1;
-        ColorScale { center, half_range: spread.max(0.05 * center.abs()).max(1e-12) }
+        ColorScale { field, center, half_range: spread.max(0.05 * center.abs()).max(1e-12) }
     }
 
     pub(super) fn color(&self, x: f64) -> [f32; 3] {
@@ -34,7 +36,7 @@ impl ColorScale {
 
     /// The record of the map in a node's extras.
     pub(super) fn extras(&self) -> Value {
-        json!({"field": "_CURVATURE", "map": "blue-white-red", "white": self.center,
+        json!({"field": self.field, "map": "blue-white-red", "white": self.center,
                "blue": self.center - self.half_range, "red": self.center + self.half_range})
     }
 }
@@ -56,13 +58,13 @@ mod tests {
     #[test]
     fn colors_show_variation_around_the_median() {
         let circle: Vec<f64> = (0..100).map(|k| 2.0 + 0.02 * ((k as f64) * 0.3).sin()).collect();
-        let s = ColorScale::of(&circle);
+        let s = ColorScale::of(&circle, "_CURVATURE");
         assert!((s.center - 2.0).abs() < 0.02 && (s.half_range - 0.05 * s.center).abs() < 1e-12, "{s:?}");
         let white = colormap(0.0);
         let c = s.color(2.02);
         assert!(c != white && (c[1] - white[1]).abs() < 0.2, "{c:?}");
         let varied: Vec<f64> = (0..101).map(|k| k as f64 - 50.0).collect();
-        let s = ColorScale::of(&varied);
+        let s = ColorScale::of(&varied, "_CURVATURE");
         assert_eq!(s.center, 0.0);
         assert!((s.half_range - 49.0).abs() < 1.0, "{s:?}");
         assert_eq!(s.color(50.0), colormap(1.0));

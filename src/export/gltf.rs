@@ -25,6 +25,16 @@ use crate::flow::MeshData;
 use crate::geometry::{segment_cycles, vertex_normals, Point};
 use serde_json::{json, Value};
 
+/// The per-vertex field that `COLOR_0` shows.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum ColorField {
+    /// The discrete curvature `κ` (`_CURVATURE`).
+    #[default]
+    Curvature,
+    /// The normal velocity `V` of the next step (`_NORMAL_VELOCITY`).
+    NormalVelocity,
+}
+
 /// One state to draw.
 #[derive(Debug, Clone, Copy)]
 pub struct GltfFrame<'a> {
@@ -36,6 +46,18 @@ pub struct GltfFrame<'a> {
     pub iteration: usize,
     pub time: f64,
     pub energy: f64,
+    /// The field `COLOR_0` shows.
+    pub color_by: ColorField,
+}
+
+impl GltfFrame<'_> {
+    /// The values of the coloured field and its attribute's name.
+    fn colored(&self) -> (&[f64], &'static str) {
+        match self.color_by {
+            ColorField::Curvature => (self.curvature, "_CURVATURE"),
+            ColorField::NormalVelocity => (self.normal_velocity, "_NORMAL_VELOCITY"),
+        }
+    }
 }
 
 /// Seconds per checkpoint in evolution.glb.
@@ -173,7 +195,8 @@ impl Builder {
             .collect();
         let kappa: Vec<f32> = order.iter().map(|&v| finite(frame.curvature[v])).collect();
         let vel: Vec<f32> = order.iter().map(|&v| finite(frame.normal_velocity[v])).collect();
-        let color: Vec<f32> = order.iter().flat_map(|&v| scale.color(frame.curvature[v])).collect();
+        let field = frame.colored().0;
+        let color: Vec<f32> = order.iter().flat_map(|&v| scale.color(field[v])).collect();
         let mut a = serde_json::Map::new();
         a.insert("POSITION".into(), json!(self.floats(&pos, "VEC3", Some(ARRAY_BUFFER))));
         a.insert("_CURVATURE".into(), json!(self.floats(&kappa, "SCALAR", Some(ARRAY_BUFFER))));
@@ -247,7 +270,7 @@ impl Builder {
             color.extend(
                 l.iter()
                     .flat_map(|&i| {
-                        let c = scale.color(frame.curvature[drawing.source[i]]);
+                        let c = scale.color(frame.colored().0[drawing.source[i]]);
                         [c, c]
                     })
                     .flatten(),
@@ -270,7 +293,8 @@ impl Builder {
     /// The node of `frame` (its lines or surface), with the filled region and the
     /// ribbons of closed curves as a child; returns the node's index.
     fn frame_node(&mut self, frame: &GltfFrame<'_>) -> usize {
-        let scale = ColorScale::of(frame.curvature);
+        let (field, name) = frame.colored();
+        let scale = ColorScale::of(field, name);
         let mesh = self.mesh(frame, &scale);
         let name = format!("iteration {}", frame.iteration);
         let mut extras = frame_extras(frame);
@@ -423,7 +447,15 @@ mod tests {
         let c = MeshData::from(&circle([0.0, 0.0], 1.0, 16).unwrap());
         let k = vec![1.0; 16];
         let g = shape_glb(
-            &GltfFrame { mesh: &c, curvature: &k, normal_velocity: &k, iteration: 3, time: 0.1, energy: 2.0 },
+            &GltfFrame {
+                mesh: &c,
+                curvature: &k,
+                normal_velocity: &k,
+                iteration: 3,
+                time: 0.1,
+                energy: 2.0,
+                color_by: ColorField::Curvature,
+            },
             json!({}),
         );
         assert_eq!(&g[0..4], b"glTF");
@@ -434,7 +466,15 @@ mod tests {
         assert_eq!(doc["meshes"][0]["primitives"][0]["mode"], 2);
         let s = MeshData::from(&icosphere([0.0; 3], 1.0, 1).unwrap());
         let k = vec![2.0; s.positions.len()];
-        let f = GltfFrame { mesh: &s, curvature: &k, normal_velocity: &k, iteration: 0, time: 0.0, energy: 1.0 };
+        let f = GltfFrame {
+            mesh: &s,
+            curvature: &k,
+            normal_velocity: &k,
+            iteration: 0,
+            time: 0.0,
+            energy: 1.0,
+            color_by: ColorField::Curvature,
+        };
         let g = evolution_glb(&[f, f, f], json!({"problem": "x"}));
         let jl = u32::from_le_bytes(g[12..16].try_into().unwrap()) as usize;
         let doc: Value = serde_json::from_slice(&g[20..20 + jl]).unwrap();

@@ -19,6 +19,7 @@ pub use run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
 pub use schema::{job_spec_schema, openapi_schemas};
 pub use schema_doc::job_spec_reference;
 pub use spec::{
-    parse_spec, BoundarySpec, ControlSpec, FlowSpec, InitialSpec, JobSpec, MeansKind, MeshSpec, OutputSpec, Polarity,
-    ProblemSpec, SegmentationModel, SegmentationSpec, ShapeDesignSpec, SpecError, StressedFilmSpec, TargetSpec,
+    parse_spec, BoundarySpec, ColorBy, ControlSpec, FlowSpec, InitialSpec, JobSpec, MeansKind, MeshSpec, OutputSpec,
+    Polarity, ProblemSpec, SegmentationModel, SegmentationSpec, ShapeDesignSpec, SpecError, StressedFilmSpec,
+    TargetSpec,
 };

@@ -2,10 +2,11 @@
 //! curvature and normal velocity (recomputed from the job's problem on that state).
 
 use super::run::vertex_fields;
+use super::spec::ColorBy;
 use super::PreparedJob;
 use crate::export::{
     evolution_glb, labels_png, mask_nrrd, mask_png, objects, objects_csv, overlay_png, shape_glb, shape_json,
-    GltfFrame, ObjectRow,
+    ColorField, GltfFrame, ObjectRow,
 };
 use crate::flow::{Checkpoint, MeshData};
 use crate::geometry::{loop_area, Point};
@@ -157,6 +158,14 @@ fn fields(job: &PreparedJob, state: &Checkpoint) -> (Vec<f64>, Vec<f64>) {
     }
 }
 
+/// The field the job's glTF results colour (`output.color_by`).
+fn color_field(job: &PreparedJob) -> ColorField {
+    match job.spec.output.color_by {
+        ColorBy::Curvature => ColorField::Curvature,
+        ColorBy::NormalVelocity => ColorField::NormalVelocity,
+    }
+}
+
 /// shape.glb / checkpoints/{n}.glb of one state.
 pub fn state_glb(job: &PreparedJob, state: &Checkpoint) -> Vec<u8> {
     let (k, v) = fields(job, state);
@@ -167,6 +176,7 @@ pub fn state_glb(job: &PreparedJob, state: &Checkpoint) -> Vec<u8> {
         iteration: state.iteration,
         time: state.time,
         energy: state.energy,
+        color_by: color_field(job),
     };
     shape_glb(&frame, job_extras(job))
 }
@@ -193,6 +203,7 @@ pub fn states_glb(job: &PreparedJob, states: &[Checkpoint]) -> Option<Vec<u8>> {
             iteration: s.iteration,
             time: s.time,
             energy: s.energy,
+            color_by: color_field(job),
         })
         .collect();
     let mut extras = job_extras(job);

@@ -162,10 +162,22 @@ pub struct OutputSpec {
     /// Keep a checkpoint every this many iterations (and at the end); at least 1.
     #[schemars(range(min = 1))]
     pub checkpoint_every: usize,
+    /// (Addition) the per-vertex field the glTF results colour: `curvature` (the
+    /// default) or `normal_velocity` (`V` of the next step).
+    pub color_by: ColorBy,
 }
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        OutputSpec { checkpoint_every: 10 }
+        OutputSpec { checkpoint_every: 10, color_by: ColorBy::Curvature }
     }
+}
+
+/// `output.color_by`: the field the glTF results colour.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ColorBy {
+    #[default]
+    Curvature,
+    NormalVelocity,
 }
