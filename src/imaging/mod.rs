@@ -11,6 +11,7 @@
 mod background;
 mod bspline;
 pub mod contours;
+mod contrast;
 mod decode;
 mod edge;
 mod grid;
@@ -24,8 +25,9 @@ mod threshold;
 mod volumes;
 
 pub use background::quadratic_background;
+pub use contrast::{contrast_scale, noise_gradient};
 pub use decode::{decode_image, decode_slices, decode_volume};
-pub use edge::{contrast_scale, noise_gradient, EdgeField, EdgeSample};
+pub use edge::{EdgeField, EdgeSample};
 pub use grid::{Grid, SampleKind};
 pub use limits::ImageLimits;
 pub use nrrd::{encode_nrrd_labels, encode_nrrd_mask, parse_nrrd};
