@@ -193,6 +193,46 @@ pub(crate) struct Triangulated {
     pub constraint_edges: Vec<(usize, usize)>,
 }
 
+/// The two region parities of every face of `cdt` (indexed by face; `None` for a
+/// face not reached): a flood fill from the outer face (parities `(false, false)`)
+/// in which crossing an edge toggles them by `crossing(is_constraint, a, b)`, `a`
+/// and `b` the edge's vertex indices.
+pub(crate) fn region_parities(
+    cdt: &ConstrainedDelaunayTriangulation<Point2<f64>>,
+    crossing: impl Fn(bool, usize, usize) -> (bool, bool),
+) -> Vec<Option<(bool, bool)>> {
+    let nf = cdt.num_all_faces();
+    let outer_face = spade::handles::OUTER_FACE.index();
+    // per inner face: the face across each edge (possibly the outer one) and the flips
+    let mut neighbours: Vec<[(usize, (bool, bool)); 3]> = vec![[(outer_face, (false, false)); 3]; nf];
+    for face in cdt.inner_faces() {
+        neighbours[face.fix().index()] = face.adjacent_edges().map(|e| {
+            let [a, b] = e.vertices().map(|v| v.fix().index());
+            (e.rev().face().fix().index(), crossing(e.is_constraint_edge(), a, b))
+        });
+    }
+    let mut state: Vec<Option<(bool, bool)>> = vec![None; nf];
+    state[outer_face] = Some((false, false));
+    // the outer face's neighbours are the inner faces that name it
+    let mut queue: VecDeque<usize> = VecDeque::new();
+    for f in (0..nf).filter(|&f| f != outer_face) {
+        if let Some(&(_, c)) = neighbours[f].iter().find(|(g, _)| *g == outer_face) {
+            state[f] = Some(c);
+            queue.push_back(f);
+        }
+    }
+    while let Some(f) = queue.pop_front() {
+        let s = state[f].expect("visited");
+        for (g, c) in neighbours[f] {
+            if state[g].is_none() {
+                state[g] = Some((s.0 ^ c.0, s.1 ^ c.1));
+                queue.push_back(g);
+            }
+        }
+    }
+    state
+}
+
 /// Triangulates the regions bounded by the constraint `edges` among `vertices`:
 /// spade's constrained Delaunay triangulation, refined to `opts` with the
 /// constraint edges kept whole (so every boundary vertex is an input vertex), and
@@ -236,35 +276,7 @@ pub(crate) fn triangulate(
             (false, false)
         }
     };
-    let nf = cdt.num_all_faces();
-    let outer_face = spade::handles::OUTER_FACE.index();
-    // per inner face: the face across each edge (possibly the outer one) and the flips
-    let mut neighbours: Vec<[(usize, (bool, bool)); 3]> = vec![[(outer_face, (false, false)); 3]; nf];
-    for face in cdt.inner_faces() {
-        neighbours[face.fix().index()] = face.adjacent_edges().map(|e| {
-            let [a, b] = e.vertices().map(|v| v.fix().index());
-            (e.rev().face().fix().index(), crossing(e.is_constraint_edge(), a, b))
-        });
-    }
-    let mut state: Vec<Option<(bool, bool)>> = vec![None; nf];
-    state[outer_face] = Some((false, false));
-    // the outer face's neighbours are the inner faces that name it
-    let mut queue: VecDeque<usize> = VecDeque::new();
-    for f in (0..nf).filter(|&f| f != outer_face) {
-        if let Some(&(_, c)) = neighbours[f].iter().find(|(g, _)| *g == outer_face) {
-            state[f] = Some(c);
-            queue.push_back(f);
-        }
-    }
-    while let Some(f) = queue.pop_front() {
-        let s = state[f].expect("visited");
-        for (g, c) in neighbours[f] {
-            if state[g].is_none() {
-                state[g] = Some((s.0 ^ c.0, s.1 ^ c.1));
-                queue.push_back(g);
-            }
-        }
-    }
+    let state = region_parities(&cdt, crossing);
     // keep the triangles of the first region, renumber (the first n_keep first)
     let nv = cdt.num_vertices();
     let mut index = vec![usize::MAX; nv];

@@ -9,7 +9,7 @@ mod mesh;
 
 pub use domain::{DesignDomain, Polygon};
 pub use laplace::{curve_sensitivity, solve_design_fields, DesignFields};
-pub(crate) use mesh::triangulate;
+pub(crate) use mesh::{region_parities, triangulate};
 pub use mesh::{triangle_area, BulkMesh, MeshingOptions};
 
 /// Errors of bulk meshing and solving.

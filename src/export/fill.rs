@@ -3,8 +3,53 @@
 //! a thin ribbon of triangles. Renderers draw no lines (Blender) or hairlines
 //! (model-viewer, three.js); triangles they all draw.
 
+use crate::flow::MeshData;
+use crate::geometry::segment_cycles;
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
-use std::collections::VecDeque;
+
+/// The curves of a 2D state as drawn in the plane: points (periodic components
+/// lifted over one period), each curve with whether it is closed, the polygons
+/// whose even–odd interior is the region, and the state's vertex behind each point.
+pub(super) struct Drawing {
+    pub points: Vec<[f64; 2]>,
+    pub source: Vec<usize>,
+    pub curves: Vec<(Vec<usize>, bool)>,
+    pub region: Vec<Vec<usize>>,
+}
+
+impl Drawing {
+    pub(super) fn of(m: &MeshData) -> Drawing {
+        let cycles = segment_cycles(m.positions.len(), m.elements.iter().map(|e| (e[0], e[1])));
+        let Some(period) = m.period else {
+            let points = m.positions.iter().map(|p| [p[0], p[1]]).collect();
+            let curves = cycles.iter().map(|c| (c.clone(), true)).collect();
+            return Drawing { points, source: (0..m.positions.len()).collect(), curves, region: cycles };
+        };
+        let mut d = Drawing { points: Vec::new(), source: Vec::new(), curves: Vec::new(), region: Vec::new() };
+        for mut cycle in cycles {
+            let (dx, winds) = super::lift_component(m, &mut cycle, period);
+            let start = d.points.len();
+            for (k, &v) in cycle.iter().enumerate() {
+                d.points.push([m.positions[v][0] + dx[k], m.positions[v][1]]);
+                d.source.push(v);
+            }
+            let l: Vec<usize> = (start..d.points.len()).collect();
+            d.curves.push((l.clone(), !winds));
+            let mut polygon = l;
+            if winds {
+                // down to the substrate at both ends of the period
+                let (first, last) = (d.points[start], d.points[d.points.len() - 1]);
+                for (p, v) in [([last[0], 0.0], cycle[cycle.len() - 1]), ([first[0], 0.0], cycle[0])] {
+                    polygon.push(d.points.len());
+                    d.points.push(p);
+                    d.source.push(v);
+                }
+            }
+            d.region.push(polygon);
+        }
+        d
+    }
+}
 
 /// The triangles of the region enclosed by the closed polygons `loops` (indices
 /// into `points`), by the even–odd rule: a constrained Delaunay triangulation of
@@ -22,34 +67,11 @@ pub fn region_triangles(points: &[[f64; 2]], loops: &[Vec<usize>]) -> Option<Vec
     if conflicts > 0 || cdt.num_vertices() != n {
         return None;
     }
-    let nf = cdt.num_all_faces();
-    let outer = spade::handles::OUTER_FACE.index();
-    let mut neighbours: Vec<[(usize, bool); 3]> = vec![[(outer, false); 3]; nf];
-    for face in cdt.inner_faces() {
-        neighbours[face.fix().index()] =
-            face.adjacent_edges().map(|e| (e.rev().face().fix().index(), e.is_constraint_edge()));
-    }
-    let mut inside: Vec<Option<bool>> = vec![None; nf];
-    inside[outer] = Some(false);
-    let mut queue = VecDeque::new();
-    for f in (0..nf).filter(|&f| f != outer) {
-        if let Some(&(_, crossing)) = neighbours[f].iter().find(|(g, _)| *g == outer) {
-            inside[f] = Some(crossing);
-            queue.push_back(f);
-        }
-    }
-    while let Some(f) = queue.pop_front() {
-        let s = inside[f].expect("visited");
-        for (g, crossing) in neighbours[f] {
-            if inside[g].is_none() {
-                inside[g] = Some(s ^ crossing);
-                queue.push_back(g);
-            }
-        }
-    }
+    // crossing a curve's segment toggles inside and outside
+    let inside = crate::bulk::region_parities(&cdt, |constraint, _, _| (constraint, false));
     let triangles: Vec<[usize; 3]> = cdt
         .inner_faces()
-        .filter(|f| inside[f.fix().index()] == Some(true))
+        .filter(|f| inside[f.fix().index()].is_some_and(|(i, _)| i))
         .map(|f| f.vertices().map(|v| v.fix().index()))
         .collect();
     Some(triangles)

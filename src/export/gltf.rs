@@ -83,50 +83,6 @@ struct Builder {
 /// Width of the curve ribbons, relative to the diagonal of the curves' bounding box.
 const RIBBON_WIDTH: f64 = 0.004;
 
-/// The curves of a 2D state as drawn in the plane: points (periodic components
-/// lifted over one period), each curve with whether it is closed, the polygons
-/// whose even–odd interior is the region, and the state's vertex behind each point.
-struct Drawing {
-    points: Vec<[f64; 2]>,
-    source: Vec<usize>,
-    curves: Vec<(Vec<usize>, bool)>,
-    region: Vec<Vec<usize>>,
-}
-
-impl Drawing {
-    fn of(m: &MeshData) -> Drawing {
-        let cycles = segment_cycles(m.positions.len(), m.elements.iter().map(|e| (e[0], e[1])));
-        let Some(period) = m.period else {
-            let points = m.positions.iter().map(|p| [p[0], p[1]]).collect();
-            let curves = cycles.iter().map(|c| (c.clone(), true)).collect();
-            return Drawing { points, source: (0..m.positions.len()).collect(), curves, region: cycles };
-        };
-        let mut d = Drawing { points: Vec::new(), source: Vec::new(), curves: Vec::new(), region: Vec::new() };
-        for mut cycle in cycles {
-            let (dx, winds) = super::lift_component(m, &mut cycle, period);
-            let start = d.points.len();
-            for (k, &v) in cycle.iter().enumerate() {
-                d.points.push([m.positions[v][0] + dx[k], m.positions[v][1]]);
-                d.source.push(v);
-            }
-            let l: Vec<usize> = (start..d.points.len()).collect();
-            d.curves.push((l.clone(), !winds));
-            let mut polygon = l;
-            if winds {
-                // down to the substrate at both ends of the period
-                let (first, last) = (d.points[start], d.points[d.points.len() - 1]);
-                for (p, v) in [([last[0], 0.0], cycle[cycle.len() - 1]), ([first[0], 0.0], cycle[0])] {
-                    polygon.push(d.points.len());
-                    d.points.push(p);
-                    d.source.push(v);
-                }
-            }
-            d.region.push(polygon);
-        }
-        d
-    }
-}
-
 /// Placeholder child index, replaced in [`Builder::finish`].
 const FILLED_CHILD: usize = usize::MAX;
 
@@ -243,7 +199,7 @@ impl Builder {
         if m.dimension != 2 || m.elements.is_empty() {
             return None;
         }
-        let drawing = Drawing::of(m);
+        let drawing = super::fill::Drawing::of(m);
         let region = super::fill::region_triangles(&drawing.points, &drawing.region)?;
         let (lo, hi) = drawing.points.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
             ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])

@@ -103,24 +103,14 @@ impl<'p, const D: usize> Flow<'p, D> {
         Ok(Self::assemble_state(problem, mesh, settings, 0, 0.0, tau, energy))
     }
 
-    /// Continue from a checkpoint.
+    /// Continue from a checkpoint (its mesh validated: it may come from a file).
     pub fn resume(
         problem: &'p dyn Problem<D>,
         checkpoint: &Checkpoint,
         settings: FlowSettings,
     ) -> Result<Self, FlowError> {
-        check_settings(&settings)?;
-        check_bending(problem, &settings)?;
-        let mesh = checkpoint.mesh.to_mesh::<D>().map_err(|e| FlowError::Checkpoint(e.to_string()))?;
-        Ok(Self::assemble_state(
-            problem,
-            mesh,
-            settings,
-            checkpoint.iteration,
-            checkpoint.time,
-            checkpoint.tau,
-            checkpoint.energy,
-        ))
+        let mesh = checkpoint.mesh.to_mesh::<D>().map_err(|e| FlowError::Checkpoint(e.to_string()));
+        Self::from_checkpoint(problem, checkpoint, mesh, settings)
     }
 
     /// Continue a state this process's own flow produced (the next stage of a job)
@@ -132,15 +122,25 @@ impl<'p, const D: usize> Flow<'p, D> {
         checkpoint: &Checkpoint,
         settings: FlowSettings,
     ) -> Result<Self, FlowError> {
-        check_settings(&settings)?;
-        check_bending(problem, &settings)?;
         let mesh = checkpoint
             .mesh
             .to_mesh_unvalidated::<D>()
-            .ok_or_else(|| FlowError::Checkpoint(format!("not a mesh of dimension {D}")))?;
+            .ok_or_else(|| FlowError::Checkpoint(format!("not a mesh of dimension {D}")));
+        Self::from_checkpoint(problem, checkpoint, mesh, settings)
+    }
+
+    /// The flow at `checkpoint`'s iteration, time, τ and energy on `mesh`.
+    fn from_checkpoint(
+        problem: &'p dyn Problem<D>,
+        checkpoint: &Checkpoint,
+        mesh: Result<Mesh<D>, FlowError>,
+        settings: FlowSettings,
+    ) -> Result<Self, FlowError> {
+        check_settings(&settings)?;
+        check_bending(problem, &settings)?;
         Ok(Self::assemble_state(
             problem,
-            mesh,
+            mesh?,
             settings,
             checkpoint.iteration,
             checkpoint.time,
