@@ -7,6 +7,7 @@ COPY migrations migrations
 COPY api api
 COPY benches benches
 COPY examples examples
+COPY web web
 # --locked: the image builds exactly the dependency versions of Cargo.lock;
 # the release profile keeps line tables for backtraces, which the image does not need
 RUN cargo build --release --locked --bin shapeflow && strip target/release/shapeflow

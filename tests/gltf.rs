@@ -198,3 +198,118 @@ fn curves_surfaces_and_segmentations_validate_with_the_right_fields() {
 
     validate_gltf(&files);
 }
+
+/// The triangles of primitive `prim` (indexed `TRIANGLES`): their total area in the
+/// plane z = const.
+fn triangle_area(doc: &Value, bin: &[u8], prim: &Value) -> f64 {
+    let p = floats(doc, bin, prim["attributes"]["POSITION"].as_u64().unwrap() as usize);
+    let idx = &doc["accessors"][prim["indices"].as_u64().unwrap() as usize];
+    let view = &doc["bufferViews"][idx["bufferView"].as_u64().unwrap() as usize];
+    let off = view["byteOffset"].as_u64().unwrap() as usize;
+    let tris: Vec<u32> = bin[off..off + view["byteLength"].as_u64().unwrap() as usize]
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    tris.chunks_exact(3)
+        .map(|t| {
+            let q = |k: usize| (p[3 * t[k] as usize] as f64, p[3 * t[k] as usize + 1] as f64);
+            let (a, b, c) = (q(0), q(1), q(2));
+            0.5 * ((b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1)).abs()
+        })
+        .sum()
+}
+
+/// `output.color_by: "problem_field"`: segmentation's edge indicator `H` and the
+/// film's `|∇y|²` as attributes, coloured and named; refused for a problem without
+/// a field. The shape-design domain (Σ and D) as its own node.
+#[test]
+fn problem_fields_and_the_design_domain_are_drawn() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    let mut write = |name: &str, bytes: &[u8]| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, bytes).unwrap();
+        files.push(p);
+    };
+    let values = |glb: &[u8], name: &str| {
+        let (doc, bin) = parse_glb(glb);
+        let prim = &doc["meshes"][0]["primitives"][0];
+        assert_eq!(doc["nodes"][0]["extras"]["colors"]["field"], name);
+        floats(&doc, bin, prim["attributes"][name].as_u64().unwrap() as usize)
+    };
+
+    // segmentation, geodesic model: H = 1/(1 + |∇I|²/k²) in (0, 1], low on the edges
+    // the contour found; Chan–Vese: the normalized image, mid-way on the edges
+    let spec = std::fs::read_to_string("examples/segment_four.json").unwrap();
+    let mut spec: Value = serde_json::from_str(&spec).unwrap();
+    spec["output"]["color_by"] = "problem_field".into();
+    let image = [("image", std::fs::read("examples/data/four.png").unwrap())];
+    let (job, cps) = run(&spec.to_string(), &image);
+    let glb = state_glb(&job, cps.last().unwrap());
+    let mut i = values(&glb, "_INTENSITY");
+    i.sort_by(f32::total_cmp);
+    assert!(i[i.len() / 2] > 0.2 && i[i.len() / 2] < 0.8, "median I on the found contour {}", i[i.len() / 2]);
+    write("four_intensity.glb", &glb);
+    spec["problem"]["model"] = "geodesic".into();
+    let (job, cps) = run(&spec.to_string(), &image);
+    let glb = state_glb(&job, cps.last().unwrap());
+    let mut h = values(&glb, "_EDGE_INDICATOR");
+    assert!(h.iter().all(|&x| x > 0.0 && x <= 1.0), "{h:?}");
+    h.sort_by(f32::total_cmp);
+    assert!(h[h.len() / 2] < 0.2, "median H on the found contour {}", h[h.len() / 2]);
+    write("four_h.glb", &glb);
+
+    // the film: |∇y|² ≥ 0, largest in the troughs (where the stress concentrates)
+    let (job, cps) = run(
+        r#"{"problem": {"type": "stressed_film", "length": 1.0, "gamma": 0.2},
+            "initial": {"shape": "film", "height": 0.5, "amplitude": 0.05, "resolution": 32},
+            "flow": {"end_time": 2e-4}, "output": {"checkpoint_every": 5, "color_by": "problem_field"}}"#,
+        &[],
+    );
+    let glb = state_glb(&job, cps.last().unwrap());
+    let e = values(&glb, "_ELASTIC_ENERGY_DENSITY");
+    let (doc, bin) = parse_glb(&glb);
+    let pos = floats(&doc, bin, doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap() as usize);
+    assert!(e.iter().all(|&x| x >= 0.0) && e.iter().any(|&x| x > 0.0), "{e:?}");
+    let lowest = (0..e.len()).min_by(|&a, &b| pos[3 * a + 1].total_cmp(&pos[3 * b + 1])).unwrap();
+    let highest = (0..e.len()).max_by(|&a, &b| pos[3 * a + 1].total_cmp(&pos[3 * b + 1])).unwrap();
+    assert!(e[lowest] > e[highest], "trough {} crest {}", e[lowest], e[highest]);
+    write("film_energy_density.glb", &states_glb(&job, &cps).unwrap());
+
+    // a problem without a field of its own: the spec is refused, naming the field
+    let spec = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 0.5},
+        "output": {"color_by": "problem_field"}}"#;
+    let err = prepare(parse_spec(spec).unwrap(), &HashMap::new()).unwrap_err();
+    assert_eq!(err.field, "output.color_by", "{err}");
+    assert!(err.to_string().contains("curvature_flow"), "{err}");
+
+    // shape design: Σ and D in a node of their own, D filled, not animated; a result
+    // read back as a mesh is the curve alone
+    let spec = std::fs::read_to_string("examples/design_ellipse.json").unwrap();
+    let mut spec: Value = serde_json::from_str(&spec).unwrap();
+    spec["flow"]["max_iterations"] = 3.into();
+    spec["output"]["checkpoint_every"] = 1.into();
+    let (job, cps) = run(&spec.to_string(), &[]);
+    let glb = state_glb(&job, cps.last().unwrap());
+    let (doc, bin) = parse_glb(&glb);
+    let domain = doc["nodes"].as_array().unwrap().iter().find(|n| n["name"] == "domain: Σ and D").unwrap();
+    assert_eq!(domain["extras"]["shapeflow"], "display");
+    let prims = doc["meshes"][domain["mesh"].as_u64().unwrap() as usize]["primitives"].as_array().unwrap();
+    assert_eq!(prims.iter().filter(|p| p["mode"] == 2).count(), 3, "Σ, and the two curves of ∂D");
+    let control = prims.iter().find(|p| p["material"] == 3).unwrap();
+    let (r_in, r_out) = (spec["problem"]["control"]["inner"]["radius"].as_f64().unwrap(), 2.5);
+    assert_eq!(spec["problem"]["control"]["outer"]["radius"].as_f64(), Some(r_out));
+    let annulus = std::f64::consts::PI * (r_out * r_out - r_in * r_in);
+    let area = triangle_area(&doc, bin, control);
+    assert!((area - annulus).abs() < 2e-3 * annulus, "D: {area} vs {annulus}");
+    let AnyMesh::Curve(c) = read_mesh_file("design.glb", &glb).unwrap() else { panic!("a curve") };
+    assert_eq!(c.num_vertices(), cps.last().unwrap().mesh.positions.len());
+    write("design.glb", &glb);
+    let evo = states_glb(&job, &cps).unwrap();
+    let (doc, _) = parse_glb(&evo);
+    assert_eq!(doc["scenes"][0]["nodes"].as_array().unwrap().len(), cps.len() + 1, "a root per frame, and the domain");
+    assert_eq!(doc["animations"][0]["channels"].as_array().unwrap().len(), cps.len(), "the domain stays");
+    write("design_evolution.glb", &evo);
+
+    validate_gltf(&files);
+}

@@ -21,6 +21,7 @@
 //!   trailing hold key so that the last frame is shown).
 
 use super::colors::ColorScale;
+use super::domain_node::{bounding_diagonal, domain_primitives, DomainOutline, Part, DOMAIN_NODE};
 use crate::flow::MeshData;
 use crate::geometry::{segment_cycles, vertex_normals, Point};
 use serde_json::{json, Value};
@@ -33,6 +34,8 @@ pub enum ColorField {
     Curvature,
     /// The normal velocity `V` of the next step (`_NORMAL_VELOCITY`).
     NormalVelocity,
+    /// The problem's own field ([`GltfFrame::own`]; the curvature if it has none).
+    ProblemField,
 }
 
 /// One state to draw.
@@ -46,6 +49,9 @@ pub struct GltfFrame<'a> {
     pub iteration: usize,
     pub time: f64,
     pub energy: f64,
+    /// The problem's own field, if it has one: its attribute name and its values
+    /// per vertex of `mesh`.
+    pub own: Option<(&'static str, &'a [f64])>,
     /// The field `COLOR_0` shows.
     pub color_by: ColorField,
 }
@@ -53,9 +59,10 @@ pub struct GltfFrame<'a> {
 impl GltfFrame<'_> {
     /// The values of the coloured field and its attribute's name.
     fn colored(&self) -> (&[f64], &'static str) {
-        match self.color_by {
-            ColorField::Curvature => (self.curvature, "_CURVATURE"),
-            ColorField::NormalVelocity => (self.normal_velocity, "_NORMAL_VELOCITY"),
+        match (self.color_by, self.own) {
+            (ColorField::NormalVelocity, _) => (self.normal_velocity, "_NORMAL_VELOCITY"),
+            (ColorField::ProblemField, Some((name, values))) => (values, name),
+            _ => (self.curvature, "_CURVATURE"),
         }
     }
 }
@@ -74,7 +81,7 @@ struct Builder {
     views: Vec<Value>,
     accessors: Vec<Value>,
     meshes: Vec<Value>,
-    /// The frame nodes (the scene's roots).
+    /// The frame nodes and the domain's (the scene's roots).
     nodes: Vec<Value>,
     /// Their children (filled regions), placed after them in `finish`.
     children: Vec<Value>,
@@ -82,6 +89,10 @@ struct Builder {
 
 /// Width of the curve ribbons, relative to the diagonal of the curves' bounding box.
 const RIBBON_WIDTH: f64 = 0.004;
+
+/// Materials of the shape-design domain (indices into the document's materials).
+const DOMAIN_MATERIAL: usize = 2;
+const CONTROL_MATERIAL: usize = 3;
 
 /// Placeholder child index, replaced in [`Builder::finish`].
 const FILLED_CHILD: usize = usize::MAX;
@@ -157,6 +168,10 @@ impl Builder {
         a.insert("POSITION".into(), json!(self.floats(&pos, "VEC3", Some(ARRAY_BUFFER))));
         a.insert("_CURVATURE".into(), json!(self.floats(&kappa, "SCALAR", Some(ARRAY_BUFFER))));
         a.insert("_NORMAL_VELOCITY".into(), json!(self.floats(&vel, "SCALAR", Some(ARRAY_BUFFER))));
+        if let Some((name, values)) = frame.own {
+            let own: Vec<f32> = order.iter().map(|&v| finite(values[v])).collect();
+            a.insert(name.into(), json!(self.floats(&own, "SCALAR", Some(ARRAY_BUFFER))));
+        }
         a.insert("COLOR_0".into(), json!(self.floats(&color, "VEC3", Some(ARRAY_BUFFER))));
         a
     }
@@ -246,6 +261,32 @@ impl Builder {
         Some(self.meshes.len() - 1)
     }
 
+    /// The node of a shape-design domain (docs/results.md); returns its index.
+    fn domain_node(&mut self, domain: &DomainOutline) -> usize {
+        let width = RIBBON_WIDTH * bounding_diagonal(&domain.outer);
+        let mut primitives = Vec::new();
+        for p in domain_primitives(domain, width) {
+            let pos: Vec<f32> = p.points.iter().flat_map(|q| [q[0] as f32, q[1] as f32, p.z as f32]).collect();
+            let position = self.floats(&pos, "VEC3", Some(ARRAY_BUFFER));
+            let material = if p.part == Part::Control { CONTROL_MATERIAL } else { DOMAIN_MATERIAL };
+            if p.part == Part::Loop {
+                primitives.push(json!({"attributes": {"POSITION": position}, "mode": 2, "material": material}));
+                continue;
+            }
+            let normals: Vec<f32> = p.points.iter().flat_map(|_| [0.0f32, 0.0, 1.0]).collect();
+            let normal = self.floats(&normals, "VEC3", Some(ARRAY_BUFFER));
+            let idx: Vec<u32> = p.triangles.iter().flatten().copied().collect();
+            let indices = self.indices(&idx);
+            primitives.push(json!({
+                "attributes": {"POSITION": position, "NORMAL": normal}, "indices": indices, "mode": 4, "material": material,
+            }));
+        }
+        self.meshes.push(json!({"primitives": primitives}));
+        let mesh = self.meshes.len() - 1;
+        self.nodes.push(json!({"mesh": mesh, "name": DOMAIN_NODE, "extras": {"shapeflow": "display"}}));
+        self.nodes.len() - 1
+    }
+
     /// The node of `frame` (its lines or surface), with the filled region and the
     /// ribbons of closed curves as a child; returns the node's index.
     fn frame_node(&mut self, frame: &GltfFrame<'_>) -> usize {
@@ -293,6 +334,14 @@ impl Builder {
             }, {
                 "name": "region",
                 "pbrMetallicRoughness": {"baseColorFactor": [0.55, 0.65, 0.8, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.9},
+                "doubleSided": true,
+            }, {
+                "name": "domain",
+                "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.2, 0.2, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.9},
+                "doubleSided": true,
+            }, {
+                "name": "control region",
+                "pbrMetallicRoughness": {"baseColorFactor": [0.95, 0.8, 0.35, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.9},
                 "doubleSided": true,
             }],
             "accessors": self.accessors,
@@ -353,21 +402,29 @@ fn frame_extras(f: &GltfFrame<'_>) -> Value {
     json!({"iteration": f.iteration, "time": f.time, "energy": energy})
 }
 
-/// One state as a .glb (shape.glb, checkpoints/{n}.glb).
-pub fn shape_glb(frame: &GltfFrame<'_>, extras: Value) -> Vec<u8> {
+/// One state as a .glb (shape.glb, checkpoints/{n}.glb), with the fixed domain of a
+/// shape-design job if given.
+pub fn shape_glb(frame: &GltfFrame<'_>, domain: Option<&DomainOutline>, extras: Value) -> Vec<u8> {
     let mut b = Builder::default();
     b.frame_node(frame);
+    if let Some(d) = domain {
+        b.domain_node(d);
+    }
     b.finish(extras, Vec::new())
 }
 
-/// Every checkpoint as an animated .glb (evolution.glb). `frames` must not be empty.
-pub fn evolution_glb(frames: &[GltfFrame<'_>], extras: Value) -> Vec<u8> {
+/// Every checkpoint as an animated .glb (evolution.glb), with the fixed domain of a
+/// shape-design job if given (not animated). `frames` must not be empty.
+pub fn evolution_glb(frames: &[GltfFrame<'_>], domain: Option<&DomainOutline>, extras: Value) -> Vec<u8> {
     let mut b = Builder::default();
     for (k, f) in frames.iter().enumerate() {
         let node = b.frame_node(f);
         if k > 0 {
             b.nodes[node]["scale"] = json!([0.0, 0.0, 0.0]);
         }
+    }
+    if let Some(d) = domain {
+        b.domain_node(d);
     }
     let n = frames.len();
     if n < 2 {
@@ -410,8 +467,10 @@ mod tests {
                 iteration: 3,
                 time: 0.1,
                 energy: 2.0,
+                own: None,
                 color_by: ColorField::Curvature,
             },
+            None,
             json!({}),
         );
         assert_eq!(&g[0..4], b"glTF");
@@ -429,9 +488,10 @@ mod tests {
             iteration: 0,
             time: 0.0,
             energy: 1.0,
+            own: None,
             color_by: ColorField::Curvature,
         };
-        let g = evolution_glb(&[f, f, f], json!({"problem": "x"}));
+        let g = evolution_glb(&[f, f, f], None, json!({"problem": "x"}));
         let jl = u32::from_le_bytes(g[12..16].try_into().unwrap()) as usize;
         let doc: Value = serde_json::from_slice(&g[20..20 + jl]).unwrap();
         assert_eq!(doc["nodes"].as_array().unwrap().len(), 3);

@@ -2,6 +2,7 @@
 //! energy history as CSV and as an SVG plot; masks and overlays of image jobs; glTF (.glb) shapes and evolutions.
 
 mod colors;
+mod domain_node;
 mod energy_csv;
 mod energy_svg;
 mod fill;
@@ -10,6 +11,7 @@ mod image_results;
 mod objects;
 mod shape_json;
 
+pub use domain_node::{DomainOutline, DOMAIN_NODE};
 pub use energy_csv::energy_csv;
 pub use energy_svg::energy_svg;
 pub use fill::{region_triangles, ribbon};

@@ -3,17 +3,27 @@
 //! and the per-vertex fields of a state for output.
 
 use super::driver::Flow;
-use super::problem::{curvature_and_normals, SurfaceState};
+use super::problem::{curvature_and_normals, OwnField, SurfaceState};
 use super::step::SolverKind;
 use super::system::{LinearSystem, ProductWeights, ScalarProduct};
 use super::FlowError;
 use crate::fem::Weight;
 use crate::geometry::Point;
 
+/// Per-vertex fields of a state for output ([`Flow::vertex_fields`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct VertexFields {
+    pub curvature: Vec<f64>,
+    pub normal_velocity: Vec<f64>,
+    pub own: Option<OwnField>,
+}
+
 /// What a step needs from `Γ_n`.
 pub(super) struct Linearization<const D: usize> {
     pub ax: Vec<Point<D>>,
     pub curvature: Vec<f64>,
+    /// Unit vertex normals (those of the curvature).
+    pub normals: Vec<Point<D>>,
     pub grad: super::problem::ShapeGradient,
     pub product: ProductWeights,
 }
@@ -47,13 +57,13 @@ impl<const D: usize> Flow<'_, D> {
                 None => ProductWeights::H1 { alpha: Weight::Constant(s.alpha), beta: Weight::Constant(s.beta) },
             },
         };
-        Ok(Linearization { ax, curvature, grad, product })
+        Ok(Linearization { ax, curvature, normals, grad, product })
     }
 
     /// Per-vertex fields of the current state for output: the discrete curvature
-    /// `κ_i` and the normal velocity `V_i` of the next step with the last `τ`
-    /// (nothing moves).
-    pub fn vertex_fields(&mut self) -> Result<(Vec<f64>, Vec<f64>), FlowError> {
+    /// `κ_i`, the normal velocity `V_i` of the next step with the last `τ` (nothing
+    /// moves) and the problem's own field, if it has one.
+    pub fn vertex_fields(&mut self) -> Result<VertexFields, FlowError> {
         let lin = self.linearize()?;
         let sys = LinearSystem {
             mesh: &self.mesh,
@@ -67,7 +77,14 @@ impl<const D: usize> Flow<'_, D> {
             bending: self.problem.bending(),
         };
         let vel = self.solver.velocity(&sys)?;
-        Ok((lin.curvature, vel.normal))
+        let state = SurfaceState {
+            mesh: &self.mesh,
+            matrices: &self.matrices,
+            curvature: &lin.curvature,
+            normals: &lin.normals,
+        };
+        let own = self.problem.own_field(&state, &lin.grad).filter(|f| f.values.len() == lin.curvature.len());
+        Ok(VertexFields { curvature: lin.curvature, normal_velocity: vel.normal, own })
     }
 }
 

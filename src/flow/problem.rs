@@ -15,6 +15,14 @@ pub struct ShapeGradient {
     pub aux: Vec<f64>,
 }
 
+/// A problem's own per-vertex field ([`Problem::own_field`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OwnField {
+    /// The glTF attribute name (`_EDGE_INDICATOR`, `_ELASTIC_ENERGY_DENSITY`, …).
+    pub name: &'static str,
+    pub values: Vec<f64>,
+}
+
 /// Weights of the weighted H1 product `b(V, W) = ∫ α ∇V·∇W + β V W`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct H1Weights {
@@ -46,6 +54,13 @@ pub trait Problem<const D: usize>: Send {
     fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError>;
     /// α and β of the problem's own weighted H1 product (`h1_newton`), if it has one.
     fn h1_weights(&self, _state: &SurfaceState<'_, D>, _grad: &ShapeGradient) -> Option<H1Weights> {
+        None
+    }
+    /// The problem's own per-vertex field for output (the glTF attribute it is
+    /// written as, and its values), if it has one: segmentation's edge indicator
+    /// `H`, the stressed film's elastic energy density `|∇y|²`. From the samples
+    /// taken for the gradient `grad`.
+    fn own_field(&self, _state: &SurfaceState<'_, D>, _grad: &ShapeGradient) -> Option<OwnField> {
         None
     }
     /// The scalar product used when the spec does not name one.

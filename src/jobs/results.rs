@@ -3,12 +3,13 @@
 
 use super::run::vertex_fields;
 use super::spec::ColorBy;
-use super::PreparedJob;
+use super::{PreparedJob, ProblemKind};
+use crate::bulk::Polygon;
 use crate::export::{
     evolution_glb, labels_png, mask_nrrd, mask_png, objects, objects_csv, overlay_png, shape_glb, shape_json,
-    ColorField, GltfFrame, ObjectRow,
+    ColorField, DomainOutline, GltfFrame, ObjectRow,
 };
-use crate::flow::{Checkpoint, MeshData};
+use crate::flow::{Checkpoint, MeshData, VertexFields};
 use crate::geometry::{loop_area, Point};
 use crate::imaging::{encode_nrrd_labels, Grid};
 use crate::problems::refine_to_edges;
@@ -148,13 +149,28 @@ pub fn job_extras(job: &PreparedJob) -> Value {
     json!({"generator": "shapeflow", "problem": spec["problem"]["type"], "spec": spec})
 }
 
-/// Curvature and normal velocity of `state`; zeros where they cannot be computed
-/// (e.g. the last state of a failed run), so that the geometry is still shown.
-fn fields(job: &PreparedJob, state: &Checkpoint) -> (Vec<f64>, Vec<f64>) {
+/// Curvature, normal velocity and the problem's own field of `state`; zeros (and
+/// no own field) where they cannot be computed (e.g. the last state of a failed
+/// run), so that the geometry is still shown.
+fn fields(job: &PreparedJob, state: &Checkpoint) -> VertexFields {
     let n = state.mesh.positions.len();
     match vertex_fields(job, state) {
-        Ok((k, v)) if k.len() == n && v.len() == n => (k, v),
-        _ => (vec![0.0; n], vec![0.0; n]),
+        Ok(f) if f.curvature.len() == n && f.normal_velocity.len() == n => f,
+        _ => VertexFields { curvature: vec![0.0; n], normal_velocity: vec![0.0; n], own: None },
+    }
+}
+
+/// One state to draw, with its fields.
+fn frame<'a>(job: &PreparedJob, state: &'a Checkpoint, fields: &'a VertexFields) -> GltfFrame<'a> {
+    GltfFrame {
+        mesh: &state.mesh,
+        curvature: &fields.curvature,
+        normal_velocity: &fields.normal_velocity,
+        own: fields.own.as_ref().map(|f| (f.name, f.values.as_slice())),
+        iteration: state.iteration,
+        time: state.time,
+        energy: state.energy,
+        color_by: color_field(job),
     }
 }
 
@@ -163,22 +179,22 @@ fn color_field(job: &PreparedJob) -> ColorField {
     match job.spec.output.color_by {
         ColorBy::Curvature => ColorField::Curvature,
         ColorBy::NormalVelocity => ColorField::NormalVelocity,
+        ColorBy::ProblemField => ColorField::ProblemField,
     }
+}
+
+/// The fixed domain (`Σ` and `D`) of a shape-design job.
+fn domain_outline(job: &PreparedJob) -> Option<DomainOutline> {
+    let ProblemKind::ShapeDesign(p) = &job.problem else { return None };
+    let points = |q: &Polygon| q.points().iter().map(|x| [x[0], x[1]]).collect::<Vec<_>>();
+    let [inner, outer] = p.domain.control();
+    Some(DomainOutline { outer: points(p.domain.outer()), control: [points(inner), points(outer)] })
 }
 
 /// shape.glb / checkpoints/{n}.glb of one state.
 pub fn state_glb(job: &PreparedJob, state: &Checkpoint) -> Vec<u8> {
-    let (k, v) = fields(job, state);
-    let frame = GltfFrame {
-        mesh: &state.mesh,
-        curvature: &k,
-        normal_velocity: &v,
-        iteration: state.iteration,
-        time: state.time,
-        energy: state.energy,
-        color_by: color_field(job),
-    };
-    shape_glb(&frame, job_extras(job))
+    let fields = fields(job, state);
+    shape_glb(&frame(job, state, &fields), domain_outline(job).as_ref(), job_extras(job))
 }
 
 /// evolution.glb of the checkpoints (in iteration order). `None` if there are none.
@@ -192,25 +208,13 @@ pub fn states_glb(job: &PreparedJob, states: &[Checkpoint]) -> Option<Vec<u8>> {
         let last = states.len() - 1;
         (0..MAX_FRAMES).map(|k| &states[k * last / (MAX_FRAMES - 1)]).collect()
     };
-    let fields: Vec<(Vec<f64>, Vec<f64>)> = picked.iter().map(|s| fields(job, s)).collect();
-    let frames: Vec<GltfFrame<'_>> = picked
-        .iter()
-        .zip(&fields)
-        .map(|(s, (k, v))| GltfFrame {
-            mesh: &s.mesh,
-            curvature: k,
-            normal_velocity: v,
-            iteration: s.iteration,
-            time: s.time,
-            energy: s.energy,
-            color_by: color_field(job),
-        })
-        .collect();
+    let fields: Vec<VertexFields> = picked.iter().map(|s| fields(job, s)).collect();
+    let frames: Vec<GltfFrame<'_>> = picked.iter().zip(&fields).map(|(s, f)| frame(job, s, f)).collect();
     let mut extras = job_extras(job);
     extras["frames"] = json!(frames.len());
     extras["seconds_per_frame"] = json!(crate::export::FRAME_SECONDS);
     // the animation's length, for importers that set a scene's frame range (the
     // last frame is held for one more frame time)
     extras["animation_seconds"] = json!(frames.len() as f64 * crate::export::FRAME_SECONDS as f64);
-    Some(evolution_glb(&frames, extras))
+    Some(evolution_glb(&frames, domain_outline(job).as_ref(), extras))
 }

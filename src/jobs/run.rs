@@ -3,7 +3,7 @@
 //! the end), cancellation, and resumption from a checkpoint.
 
 use super::{AnyMesh, PreparedJob};
-use crate::flow::{Checkpoint, Flow, FlowError, MeshManager, Progress, StopReason};
+use crate::flow::{Checkpoint, Flow, FlowError, MeshManager, Progress, StopReason, VertexFields};
 use crate::geometry::Mesh;
 use std::sync::atomic::AtomicBool;
 
@@ -164,10 +164,11 @@ fn run_stage<const D: usize>(
     }
 }
 
-/// Per-vertex output fields of a state of `job`: the discrete curvature and the
-/// normal velocity of the next step (see [`Flow::vertex_fields`]).
-pub fn vertex_fields(job: &PreparedJob, state: &Checkpoint) -> Result<(Vec<f64>, Vec<f64>), FlowError> {
-    fn in_dim<const D: usize>(job: &PreparedJob, state: &Checkpoint) -> Result<(Vec<f64>, Vec<f64>), FlowError> {
+/// Per-vertex output fields of a state of `job`: the discrete curvature, the
+/// normal velocity of the next step and the problem's own field (see
+/// [`Flow::vertex_fields`]).
+pub fn vertex_fields(job: &PreparedJob, state: &Checkpoint) -> Result<VertexFields, FlowError> {
+    fn in_dim<const D: usize>(job: &PreparedJob, state: &Checkpoint) -> Result<VertexFields, FlowError> {
         Flow::resume(job.stage_problem(state.stage).as_dyn::<D>(), state, job.settings.clone())?.vertex_fields()
     }
     match state.mesh.dimension {

@@ -21,7 +21,7 @@
 
 use super::Segmentation;
 use crate::fem::Weight;
-use crate::flow::{H1Weights, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
+use crate::flow::{H1Weights, OwnField, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
 use crate::geometry::{Mesh, Point};
 use crate::imaging::EdgeField;
 use std::sync::Arc;
@@ -355,6 +355,18 @@ impl<const D: usize> Problem<D> for ChanVese {
         let floor = 0.01 * (self.lambda_in + self.lambda_out) * l;
         let beta = grad.aux.iter().map(|&b| b.max(floor)).collect();
         Some(H1Weights { alpha: Weight::Constant(self.mu.max(1e-12)), beta: Weight::Vertex(beta) })
+    }
+
+    /// With the geodesic term (model `both`) its edge indicator `H = g − μ`; otherwise
+    /// the normalized image `I` the means are taken of.
+    fn own_field(&self, state: &SurfaceState<'_, D>, grad: &ShapeGradient) -> Option<OwnField> {
+        Some(match &self.geodesic {
+            Some(_) => OwnField { name: "_EDGE_INDICATOR", values: grad.g.iter().map(|g| g - self.mu).collect() },
+            None => OwnField {
+                name: "_INTENSITY",
+                values: state.mesh.positions().iter().map(|x| self.intensity.sample(x).h).collect(),
+            },
+        })
     }
 
     fn default_scalar_product(&self) -> ScalarProduct {

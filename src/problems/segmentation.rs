@@ -13,7 +13,7 @@
 //! in `x₁`.
 
 use crate::fem::Weight;
-use crate::flow::{H1Weights, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
+use crate::flow::{H1Weights, OwnField, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
 use crate::geometry::{Mesh, Point};
 use crate::imaging::{EdgeField, EdgeSample};
 use std::sync::Arc;
@@ -232,6 +232,11 @@ impl<const D: usize> Problem<D> for Segmentation {
 
     fn default_scalar_product(&self) -> ScalarProduct {
         ScalarProduct::H1Newton
+    }
+
+    /// The edge indicator `H` (`g` of the gradient).
+    fn own_field(&self, _state: &SurfaceState<'_, D>, grad: &ShapeGradient) -> Option<OwnField> {
+        Some(OwnField { name: "_EDGE_INDICATOR", values: grad.g.clone() })
     }
 }
 

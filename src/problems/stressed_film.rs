@@ -21,7 +21,7 @@
 use crate::bulk::{BulkError, MeshingOptions};
 use crate::fem::{tangential_derivative, Matrices, Pattern};
 use crate::film::{solve_stress, FilmCell, FilmMesh, StressField};
-use crate::flow::{curvature_and_normals, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
+use crate::flow::{curvature_and_normals, OwnField, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
 use crate::geometry::{resolve_intersections, CurveMesh, Mesh, Point};
 use std::sync::{Arc, Mutex};
 
@@ -216,6 +216,13 @@ impl<const D: usize> Problem<D> for StressedFilm {
 
     fn default_scalar_product(&self) -> ScalarProduct {
         ScalarProduct::HMinus1
+    }
+
+    /// The elastic energy density `|∇y|²` on `Γ` (`f` without the bending term).
+    fn own_field(&self, state: &SurfaceState<'_, D>, grad: &ShapeGradient) -> Option<OwnField> {
+        let e = self.bending;
+        let values = grad.f.iter().zip(state.curvature).map(|(f, k)| -(f + 0.5 * e * k.powi(3))).collect();
+        Some(OwnField { name: "_ELASTIC_ENERGY_DENSITY", values })
     }
 
     /// The wetting layer as an obstacle: vertices of the trial step below `y = δ`

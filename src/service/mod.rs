@@ -10,6 +10,7 @@ mod error;
 mod results;
 pub mod store;
 mod submit;
+mod ui;
 pub mod worker;
 
 use crate::export::{energy_csv, energy_svg, shape_json};
@@ -38,7 +39,7 @@ pub struct AppState {
     pub store: Store,
     pub registry: Registry,
     pub wake: Arc<Notify>,
-    /// With a token, every route but `/healthz` needs `Authorization: Bearer <token>`.
+    /// With a token, every route but `/healthz` and the viewer page's needs `Authorization: Bearer <token>`.
     pub token: Option<Arc<str>>,
     /// Set when the server shuts down: open event streams end.
     pub closing: Arc<AtomicBool>,
@@ -48,6 +49,9 @@ pub struct AppState {
 /// `api/openapi.yaml` and against the router itself.
 pub const ROUTES: &[(&str, &str)] = &[
     ("GET", "/healthz"),
+    ("GET", "/"),
+    ("GET", "/jobs/{id}"),
+    ("GET", "/ui/{path}"),
     ("GET", "/v1/openapi.json"),
     ("POST", "/v1/jobs"),
     ("GET", "/v1/jobs"),
@@ -75,6 +79,9 @@ pub const ROUTES: &[(&str, &str)] = &[
 pub fn router(state: AppState) -> Router {
     Router::new()
         .route("/healthz", get(|| async { "ok" }))
+        .route("/", get(ui::index))
+        .route("/jobs/{id}", get(ui::job_page))
+        .route("/ui/{*path}", get(ui::asset))
         .route("/v1/openapi.json", get(openapi))
         .route("/v1/jobs", post(submit::create_job).get(list_jobs))
         .route("/v1/jobs/{id}", get(get_job).delete(delete_job))
@@ -112,7 +119,7 @@ fn query<T>(q: Result<Query<T>, QueryRejection>) -> Result<T, ApiError> {
 
 async fn authorize(State(state): State<AppState>, req: Request, next: Next) -> Result<Response, ApiError> {
     if let Some(token) = &state.token {
-        if req.uri().path() != "/healthz" {
+        if req.uri().path() != "/healthz" && !ui::is_page(req.uri().path()) {
             let given = req.headers().get(header::AUTHORIZATION).and_then(|v| v.to_str().ok());
             if given.and_then(|g| g.strip_prefix("Bearer ")) != Some(token.as_ref()) {
                 return Err(ApiError::Unauthorized);

@@ -20,7 +20,7 @@ pub use segment::{default_min_size, default_mu, SegmentationSetup};
 
 use crate::flow::{CurveManager, ScalarProduct};
 use crate::geometry::AnyMesh;
-use crate::jobs::spec::{InitialSpec, JobSpec, ProblemSpec, SpecError};
+use crate::jobs::spec::{ColorBy, InitialSpec, JobSpec, ProblemSpec, SpecError};
 use crate::problems::{CurvatureFlow, StressedFilm, SurfaceDiffusion};
 use checks::{finite, positive};
 use flow_settings::flow_settings;
@@ -161,6 +161,18 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         // a pocket of Ω closed off by Γ would have no Dirichlet boundary
         m.params.fill_pockets = matches!(problem, ProblemKind::ShapeDesign(_));
         m.params.keep_apart = matches!(&problem, ProblemKind::ChanVese(p) if p.separate);
+    }
+    let has_own_field = matches!(spec.problem, ProblemSpec::Segmentation(_) | ProblemSpec::StressedFilm(_));
+    if spec.output.color_by == ColorBy::ProblemField && !has_own_field {
+        let kind = serde_json::to_value(&spec.problem).map(|v| v["type"].to_string()).unwrap_or_default();
+        return Err(SpecError::new(
+            "output.color_by",
+            format!(
+                "the problem {} has no field of its own to colour (segmentation and stressed_film have); \
+                 use curvature or normal_velocity",
+                kind
+            ),
+        ));
     }
     let checkpoint_every = match spec.output.checkpoint_every {
         0 => return Err(SpecError::new("output.checkpoint_every", "must be at least 1, got 0")),

@@ -163,7 +163,9 @@ pub struct OutputSpec {
     #[schemars(range(min = 1))]
     pub checkpoint_every: usize,
     /// (Addition) the per-vertex field the glTF results colour: `curvature` (the
-    /// default) or `normal_velocity` (`V` of the next step).
+    /// default), `normal_velocity` (`V` of the next step) or `problem_field` (the
+    /// problem's own: segmentation's edge indicator `H`, or the image `I` for the
+    /// model `chan_vese`; the stressed film's elastic energy density `|∇y|²`).
     pub color_by: ColorBy,
 }
 
@@ -180,4 +182,5 @@ pub enum ColorBy {
     #[default]
     Curvature,
     NormalVelocity,
+    ProblemField,
 }

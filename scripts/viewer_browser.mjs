@@ -1,0 +1,72 @@
+// Drive the viewer page in headless Chromium (playwright-core, Debian's chromium;
+// run by tests/viewer.rs): with the server's token unknown, the page must show the
+// 401 message; with the token typed in, submit SPEC through the form, wait for the
+// job to end, and report what the page drew (energy points and ink, rendered
+// meshes and ink of the 3D canvas). A screenshot goes to OUT.
+//
+//   node scripts/viewer_browser.mjs URL TOKEN SPEC_FILE OUT.png
+import { chromium } from 'playwright-core';
+import { readFileSync } from 'node:fs';
+
+const [base, token, specFile, shot] = process.argv.slice(2);
+const spec = readFileSync(specFile, 'utf8');
+const browser = await chromium.launch({
+  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+  args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
+    '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+});
+const report = {};
+try {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 1000 } });
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  page.on('console', (m) => m.type() === 'error' && !m.text().includes('401') && errors.push(m.text()));
+  await page.goto(base + '/');
+  // no token yet: the list answers 401 and the page says so
+  await page.waitForSelector('#alert:not([hidden])', { timeout: 20000 });
+  report.unauthorized = await page.textContent('#alert');
+  report.tokenFormShown = await page.isVisible('#token-form');
+  await page.fill('#token', token);
+  await page.click('#token-form button');
+  await page.waitForSelector('#jobs', { timeout: 20000 });
+  await page.fill('#spec', spec);
+  await page.click('#submit button[type=submit]');
+  await page.waitForURL(/\/jobs\/[0-9a-f-]+$/, { timeout: 20000 });
+  report.job = page.url().split('/').pop();
+  await page.waitForFunction(() => ['successful', 'failed', 'dismissed'].includes(document.querySelector('#status')?.textContent),
+    null, { timeout: 120000 });
+  report.status = await page.textContent('#status');
+  // the final frame (shape.glb) drawn, the slider over every frame
+  await page.waitForFunction(() => document.querySelector('#frame-label')?.textContent.startsWith('result')
+    && Number(document.querySelector('#shape')?.dataset.meshes) > 0, null, { timeout: 60000 });
+  Object.assign(report, await page.evaluate(() => {
+    // pixels of a canvas that differ from its corner (the background)
+    const ink = (canvas) => {
+      const c = document.createElement('canvas');
+      c.width = canvas.width; c.height = canvas.height;
+      const g = c.getContext('2d');
+      g.drawImage(canvas, 0, 0);
+      const d = g.getImageData(0, 0, c.width, c.height).data;
+      let n = 0;
+      for (let k = 0; k < d.length; k += 4) {
+        if (Math.abs(d[k] - d[0]) + Math.abs(d[k + 1] - d[1]) + Math.abs(d[k + 2] - d[2]) + Math.abs(d[k + 3] - d[3]) > 24) n++;
+      }
+      return n;
+    };
+    const shape = document.querySelector('#shape');
+    return {
+      points: Number(document.querySelector('#energy').dataset.points),
+      energyInk: ink(document.querySelector('#energy')),
+      meshes: Number(shape.dataset.meshes),
+      shapeInk: ink(shape.querySelector('canvas')),
+      frames: Number(document.querySelector('#frame').max) + 1,
+      legend: document.querySelector('#legend').textContent,
+      files: [...document.querySelectorAll('#files a')].map((a) => a.textContent),
+    };
+  }));
+  await page.screenshot({ path: shot, fullPage: true });
+  report.errors = errors;
+} finally {
+  await browser.close();
+}
+console.log(JSON.stringify(report));

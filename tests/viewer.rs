@@ -1,0 +1,121 @@
+//! The viewer page in a real headless browser (Debian's Chromium driven by
+//! playwright-core, scripts/viewer_browser.mjs) against the service on 127.0.0.1
+//! with a token: the 401 message, a job submitted through the form, its energy
+//! plot and its shape drawn. CI installs Chromium (.ci/run) and sets
+//! `SHAPEFLOW_REQUIRE_BROWSER=1`; elsewhere the test is skipped, saying so, when no
+//! Chromium is installed.
+
+use serde_json::Value;
+use shapeflow::service::Service;
+use std::io::{Read, Write};
+use std::net::{SocketAddr, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const TOKEN: &str = "viewer-secret";
+
+/// A circle under curvature flow, checkpointed every 10 iterations.
+const SPEC: &str = r#"{"problem": {"type": "curvature_flow"},
+  "initial": {"shape": "circle", "radius": 1.0, "resolution": 64},
+  "flow": {"tau": 1e-3, "end_time": 0.1, "tolerance": 0},
+  "output": {"checkpoint_every": 10}}"#;
+
+fn chromium() -> Option<PathBuf> {
+    let path = PathBuf::from(std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into()));
+    path.exists().then_some(path)
+}
+
+/// `GET path` with the token: status and body bytes.
+fn get(addr: SocketAddr, path: &str) -> (u16, Vec<u8>) {
+    let mut s = TcpStream::connect(addr).unwrap();
+    let req =
+        format!("GET {path} HTTP/1.1\r\nHost: {addr}\r\nAuthorization: Bearer {TOKEN}\r\nConnection: close\r\n\r\n");
+    s.write_all(req.as_bytes()).unwrap();
+    let mut out = Vec::new();
+    s.read_to_end(&mut out).unwrap();
+    let cut = out.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+    let head = String::from_utf8_lossy(&out[..cut]).to_string();
+    assert!(!head.to_ascii_lowercase().contains("transfer-encoding: chunked"), "{head}");
+    (head.split_whitespace().nth(1).unwrap().parse().unwrap(), out[cut + 4..].to_vec())
+}
+
+/// The number of primitives of a .glb: the meshes three.js draws for it.
+fn primitives(glb: &[u8]) -> usize {
+    let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let doc: Value = serde_json::from_slice(&glb[20..20 + len]).unwrap();
+    doc["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|n| n["mesh"].as_u64())
+        .map(|m| doc["meshes"][m as usize]["primitives"].as_array().unwrap().len())
+        .sum()
+}
+
+#[test]
+fn the_page_submits_a_job_and_draws_its_energy_and_shape() {
+    let Some(chromium) = chromium() else {
+        assert!(
+            std::env::var("SHAPEFLOW_REQUIRE_BROWSER").is_err(),
+            "SHAPEFLOW_REQUIRE_BROWSER is set but there is no Chromium at /usr/bin/chromium ($CHROMIUM)"
+        );
+        eprintln!("SKIPPED: no Chromium (apt-get install chromium, or set CHROMIUM); the viewer page was not tested");
+        return;
+    };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    assert!(root.join("node_modules/playwright-core").exists(), "playwright-core is missing: run `npm ci` first");
+    let dir = tempfile::tempdir().unwrap();
+    let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
+    let service = rt.block_on(Service::start(&dir.path().join("jobs.db"), 1, Some(TOKEN.into()))).unwrap();
+    let listener = rt.block_on(tokio::net::TcpListener::bind("127.0.0.1:0")).unwrap();
+    let addr = listener.local_addr().unwrap();
+    let app = service.router();
+    let server = rt.spawn(async move { axum::serve(listener, app).await.unwrap() });
+
+    let spec_file = dir.path().join("spec.json");
+    std::fs::write(&spec_file, SPEC).unwrap();
+    let shots = root.join("target/viewer");
+    std::fs::create_dir_all(&shots).unwrap();
+    let out = Command::new("node")
+        .arg(root.join("scripts/viewer_browser.mjs"))
+        .arg(format!("http://{addr}"))
+        .arg(TOKEN)
+        .arg(&spec_file)
+        .arg(shots.join("job.png"))
+        .env("CHROMIUM", &chromium)
+        .output()
+        .expect("node");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "browser: {stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    let report: Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
+
+    // without the token the page says why it shows nothing, and asks for it
+    assert!(report["unauthorized"].as_str().unwrap().contains("401"), "{report}");
+    assert_eq!(report["tokenFormShown"], true, "{report}");
+    // the job ran to its end
+    let id = report["job"].as_str().unwrap();
+    assert_eq!(report["status"], "successful", "{report}");
+    let (s, body) = get(addr, &format!("/v1/jobs/{id}/energy"));
+    assert_eq!(s, 200);
+    let history: Value = serde_json::from_slice(&body).unwrap();
+    let iterations = history["history"].as_array().unwrap().len();
+    assert!(iterations >= 100, "{iterations}");
+    // the energy plot holds every iteration and is drawn
+    assert_eq!(report["points"].as_u64().unwrap() as usize, iterations, "{report}");
+    assert!(report["energyInk"].as_u64().unwrap() > 500, "{report}");
+    // the shape: every primitive of shape.glb rendered, the canvas not empty
+    let (s, glb) = get(addr, &format!("/v1/jobs/{id}/results/shape.glb"));
+    assert_eq!(s, 200);
+    assert_eq!(report["meshes"].as_u64().unwrap() as usize, primitives(&glb), "{report}");
+    assert!(report["shapeInk"].as_u64().unwrap() > 2000, "{report}");
+    // one frame per checkpoint plus the result, the legend names the field
+    let (_, list) = get(addr, &format!("/v1/jobs/{id}/checkpoints"));
+    let checkpoints = serde_json::from_slice::<Value>(&list).unwrap()["checkpoints"].as_array().unwrap().len();
+    assert_eq!(report["frames"].as_u64().unwrap() as usize, checkpoints + 1, "{report}");
+    assert!(report["legend"].as_str().unwrap().contains("curvature"), "{report}");
+    assert!(report["files"].as_array().unwrap().iter().any(|f| f == "shape.glb"), "{report}");
+    assert_eq!(report["errors"], serde_json::json!([]), "{report}");
+
+    rt.block_on(service.stop());
+    server.abort();
+}
