@@ -2,14 +2,18 @@
 // run by tests/viewer.rs): with the server's token unknown, the page must show the
 // 401 message; with the token typed in, submit SPEC through the form, wait for the
 // job to end, and report what the page drew (energy points and ink, rendered
-// meshes and ink of the 3D canvas). A screenshot goes to OUT.
+// meshes and ink of the 3D canvas). Then an image job: the example EXAMPLE picked
+// from the list, IMAGE dropped on the form, its overlay shown. Screenshots go to
+// OUT_DIR (job.png, image-job.png).
 //
-//   node scripts/viewer_browser.mjs URL TOKEN SPEC_FILE OUT.png
+//   node scripts/viewer_browser.mjs URL TOKEN SPEC_FILE OUT_DIR EXAMPLE IMAGE
 import { chromium } from 'playwright-core';
 import { readFileSync } from 'node:fs';
+import { basename, join } from 'node:path';
 
-const [base, token, specFile, shot] = process.argv.slice(2);
+const [base, token, specFile, shots, example, imageFile] = process.argv.slice(2);
 const spec = readFileSync(specFile, 'utf8');
+const FINAL = ['successful', 'failed', 'dismissed'];
 const browser = await chromium.launch({
   executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
   args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
@@ -33,8 +37,8 @@ try {
   await page.click('#submit button[type=submit]');
   await page.waitForURL(/\/jobs\/[0-9a-f-]+$/, { timeout: 20000 });
   report.job = page.url().split('/').pop();
-  await page.waitForFunction(() => ['successful', 'failed', 'dismissed'].includes(document.querySelector('#status')?.textContent),
-    null, { timeout: 120000 });
+  await page.waitForFunction((final) => final.includes(document.querySelector('#status')?.textContent),
+    FINAL, { timeout: 120000 });
   report.status = await page.textContent('#status');
   // the final frame (shape.glb) drawn, the slider over every frame
   await page.waitForFunction(() => document.querySelector('#frame-label')?.textContent.startsWith('result')
@@ -64,7 +68,33 @@ try {
       files: [...document.querySelectorAll('#files a')].map((a) => a.textContent),
     };
   }));
-  await page.screenshot({ path: shot, fullPage: true });
+  await page.screenshot({ path: join(shots, 'job.png'), fullPage: true });
+
+  // an image job: an example from the list, the image dropped on the form
+  await page.click('a.brand');
+  await page.waitForSelector(`#example option:text("${example}")`, { state: 'attached', timeout: 20000 });
+  await page.selectOption('#example', { label: example });
+  const bytes = readFileSync(imageFile).toString('base64');
+  await page.evaluate(([name, b64]) => {
+    const data = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
+    const dt = new DataTransfer();
+    dt.items.add(new File([data], name, { type: 'image/png' }));
+    const drop = document.querySelector('#drop');
+    drop.dispatchEvent(new DragEvent('dragover', { dataTransfer: dt, bubbles: true, cancelable: true }));
+    drop.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+  }, [basename(imageFile), bytes]);
+  report.dropped = await page.inputValue('#files li input');
+  await page.click('#submit button[type=submit]');
+  await page.waitForURL((u) => /\/jobs\/[0-9a-f-]+$/.test(u.pathname) && !u.pathname.endsWith(report.job), { timeout: 20000 });
+  report.imageJob = page.url().split('/').pop();
+  await page.waitForFunction((final) => final.includes(document.querySelector('#status')?.textContent),
+    FINAL, { timeout: 120000 });
+  report.imageStatus = await page.textContent('#status');
+  await page.waitForFunction(() => document.querySelector('#overlay')?.complete
+    && document.querySelector('#overlay').naturalWidth > 0
+    && Number(document.querySelector('#shape')?.dataset.meshes) > 0, null, { timeout: 60000 });
+  report.overlayWidth = await page.evaluate(() => document.querySelector('#overlay').naturalWidth);
+  await page.screenshot({ path: join(shots, 'image-job.png'), fullPage: true });
   report.errors = errors;
 } finally {
   await browser.close();

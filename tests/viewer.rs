@@ -1,7 +1,8 @@
 //! The viewer page in a real headless browser (Debian's Chromium driven by
 //! playwright-core, scripts/viewer_browser.mjs) against the service on 127.0.0.1
 //! with a token: the 401 message, a job submitted through the form, its energy
-//! plot and its shape drawn. CI installs Chromium (.ci/run) and sets
+//! plot and its shape drawn; an image job from the examples list with its image
+//! dropped on the form, and its overlay. CI installs Chromium (.ci/run) and sets
 //! `SHAPEFLOW_REQUIRE_BROWSER=1`; elsewhere the test is skipped, saying so, when no
 //! Chromium is installed.
 
@@ -81,7 +82,9 @@ fn the_page_submits_a_job_and_draws_its_energy_and_shape() {
         .arg(format!("http://{addr}"))
         .arg(TOKEN)
         .arg(&spec_file)
-        .arg(shots.join("job.png"))
+        .arg(&shots)
+        .arg("segment_star")
+        .arg(root.join("examples/data/star.png"))
         .env("CHROMIUM", &chromium)
         .output()
         .expect("node");
@@ -114,6 +117,14 @@ fn the_page_submits_a_job_and_draws_its_energy_and_shape() {
     assert_eq!(report["frames"].as_u64().unwrap() as usize, checkpoints + 1, "{report}");
     assert!(report["legend"].as_str().unwrap().contains("curvature"), "{report}");
     assert!(report["files"].as_array().unwrap().iter().any(|f| f == "shape.glb"), "{report}");
+    // the image job: the example from the list, star.png dropped and named after its
+    // input, the overlay at the image's size
+    assert_eq!(report["dropped"], "image", "{report}");
+    assert_eq!(report["imageStatus"], "successful", "{report}");
+    let (s, _) = get(addr, &format!("/v1/jobs/{}/results/overlay.png", report["imageJob"].as_str().unwrap()));
+    assert_eq!(s, 200);
+    let star = image::image_dimensions(root.join("examples/data/star.png")).unwrap();
+    assert_eq!(report["overlayWidth"].as_u64(), Some(star.0 as u64), "{report}");
     assert_eq!(report["errors"], serde_json::json!([]), "{report}");
 
     rt.block_on(service.stop());

@@ -1,5 +1,6 @@
 // The submit form: a spec as JSON text (typed, or one of the examples), and input
-// files dropped on it. Each file is sent as the multipart part named in its box;
+// files dropped on it. Each file is sent as the multipart part named in its box
+// (the first "input:NAME" of the spec still without a file, else the file's stem);
 // the spec refers to it as "input:NAME".
 
 import { getJson, request } from './api.js';
@@ -36,8 +37,13 @@ export function submitForm() {
       return el('li', {}, 'input:', box, ` ← ${file.name} (${file.size} bytes) `, remove);
     }));
   }
+  /** Each file takes the first "input:NAME" of the spec that no file has yet, else its stem. */
   function add(list) {
-    for (const f of list) chosen.set(stem(f.name), f);
+    const wanted = [...spec.value.matchAll(/"input:([^"]+)"/g)].map((m) => m[1]);
+    for (const f of list) {
+      const free = wanted.find((n) => !chosen.has(n));
+      chosen.set(free || stem(f.name), f);
+    }
     listFiles();
   }
   drop.addEventListener('click', () => picker.click());

@@ -79,10 +79,18 @@ export function showJob(main, id) {
     }));
     const hasOverlay = manifest.files.some((f) => f.name === 'overlay.png');
     document.getElementById('overlay-panel').hidden = !hasOverlay;
-    if (hasOverlay) overlay.src = await objectUrl(`/v1/jobs/${id}/results/overlay.png`);
     overlay.hidden = !hasOverlay;
+    // fetched again only when the state it shows changed
+    const key = `${frames.length} ${manifest.final}`;
+    if (hasOverlay && key !== overlayKey) {
+      overlayKey = key;
+      const url = await objectUrl(`/v1/jobs/${id}/results/overlay.png`);
+      if (overlay.src.startsWith('blob:')) URL.revokeObjectURL(overlay.src);
+      overlay.src = url;
+    }
   }
 
+  let overlayKey = null;
   let loading = null;
   let again = false;
   /** Read the manifest and the checkpoints; show the newest frame if following. */
