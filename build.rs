@@ -5,7 +5,8 @@
 use std::fmt::Write;
 
 fn main() {
-    println!("cargo:rerun-if-changed=migrations");
+    println!("cargo:rerun-if-changed=migrations/sqlite");
+    println!("cargo:rerun-if-changed=migrations/postgres");
     println!("cargo:rerun-if-changed=examples");
     let mut names: Vec<_> = std::fs::read_dir("examples")
         .expect("examples/")

@@ -36,25 +36,22 @@ enum Command {
         #[arg(long)]
         resume: Option<PathBuf>,
     },
-    /// Start the HTTP job service.
+    /// Start the HTTP job service (API and workers).
     Serve {
         /// Address to listen on.
         #[arg(long, default_value = "127.0.0.1:8080")]
         bind: String,
-        /// SQLite database file (created if missing); a relative path is taken
-        /// inside --data-dir.
-        #[arg(long, default_value = "shapeflow.db")]
-        database: PathBuf,
-        /// Directory for the service's data (the database, with its WAL files);
-        /// created if missing.
-        #[arg(long, default_value = ".")]
-        data_dir: PathBuf,
-        /// Worker threads running jobs (default: number of cores).
-        #[arg(long)]
-        workers: Option<usize>,
-        /// Require `Authorization: Bearer TOKEN` on every route but /healthz.
+        #[command(flatten)]
+        node: NodeArgs,
+        /// Require `Authorization: Bearer TOKEN` on every route but /healthz and
+        /// the viewer page.
         #[arg(long)]
         token: Option<String>,
+    },
+    /// Run workers only (no HTTP), against the shared database of a cluster.
+    Worker {
+        #[command(flatten)]
+        node: NodeArgs,
     },
     /// Print the JSON Schema of the job spec (api/job-spec.schema.json).
     Schema {
@@ -63,6 +60,53 @@ enum Command {
         #[arg(long)]
         markdown: bool,
     },
+}
+
+/// What a node of the service needs: where the jobs are and how many it runs.
+#[derive(clap::Args)]
+struct NodeArgs {
+    /// The job store: a SQLite file (created if missing; a relative path is taken
+    /// inside --data-dir), a `sqlite:` URL, or a `postgres://user@host/db` URL
+    /// shared by the nodes of a cluster.
+    #[arg(long, default_value = "shapeflow.db")]
+    database: String,
+    /// Directory for the service's data (a SQLite database, with its WAL files);
+    /// created if missing.
+    #[arg(long, default_value = ".")]
+    data_dir: PathBuf,
+    /// Worker threads running jobs (default: number of cores).
+    #[arg(long)]
+    workers: Option<usize>,
+    /// Length of a running job's lease in seconds (renewed every third of it); a
+    /// job whose node stops renewing is taken over after it.
+    #[arg(long, default_value_t = 15.0)]
+    lease_seconds: f64,
+}
+
+impl NodeArgs {
+    /// The configuration of a node, or why not.
+    fn config(self, token: Option<String>, api: bool) -> Result<shapeflow::service::ServiceConfig> {
+        use shapeflow::service::store::ClaimPolicy;
+        anyhow::ensure!(
+            self.lease_seconds.is_finite() && (1.0..=30.0).contains(&self.lease_seconds),
+            "--lease-seconds must be between 1 and 30, got {}",
+            self.lease_seconds
+        );
+        let shared = self.database.contains("://") && !self.database.starts_with("sqlite:");
+        let database = if shared || self.database.starts_with("sqlite:") {
+            self.database
+        } else {
+            std::fs::create_dir_all(&self.data_dir)
+                .with_context(|| format!("cannot create data directory {}", self.data_dir.display()))?;
+            self.data_dir.join(&self.database).to_string_lossy().into_owned()
+        };
+        let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
+        let workers = self.workers.unwrap_or(cores);
+        anyhow::ensure!(api || workers > 0, "a worker node needs --workers of at least 1");
+        let policy =
+            ClaimPolicy { lease: std::time::Duration::from_secs_f64(self.lease_seconds), ..ClaimPolicy::default() };
+        Ok(shapeflow::service::ServiceConfig { database, workers: workers.max(!api as usize), token, policy })
+    }
 }
 
 fn main() -> ExitCode {
@@ -90,18 +134,24 @@ fn main() -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        Command::Serve { bind, database, data_dir, workers, token } => {
-            if let Err(e) = std::fs::create_dir_all(&data_dir) {
-                eprintln!("error: cannot create data directory {}: {e}", data_dir.display());
-                return ExitCode::from(1);
+        Command::Serve { bind, node, token } => {
+            let result = node.config(token, true).and_then(|config| {
+                let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
+                rt.block_on(serve(Some(&bind), config))
+            });
+            match result {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::from(1)
+                }
             }
-            let database = data_dir.join(database);
-            let workers = workers.unwrap_or_else(|| std::thread::available_parallelism().map_or(2, |n| n.get()));
-            let result = tokio::runtime::Builder::new_multi_thread()
-                .enable_all()
-                .build()
-                .map_err(anyhow::Error::from)
-                .and_then(|rt| rt.block_on(serve(&bind, &database, workers, token)));
+        }
+        Command::Worker { node } => {
+            let result = node.config(None, false).and_then(|config| {
+                let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
+                rt.block_on(serve(None, config))
+            });
             match result {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
@@ -113,23 +163,48 @@ fn main() -> ExitCode {
     }
 }
 
-async fn serve(bind: &str, database: &Path, workers: usize, token: Option<String>) -> Result<()> {
-    let service = shapeflow::service::Service::start(database, workers, token)
+/// Run a node: the HTTP API on `bind` (none: workers only) and the workers, until
+/// SIGINT/SIGTERM.
+async fn serve(bind: Option<&str>, config: shapeflow::service::ServiceConfig) -> Result<()> {
+    let shown = redact(&config.database);
+    let workers = config.workers;
+    let service = shapeflow::service::Service::start_with(config)
         .await
-        .with_context(|| format!("cannot open database {}", database.display()))?;
-    let listener = tokio::net::TcpListener::bind(bind).await.with_context(|| format!("cannot listen on {bind}"))?;
-    tracing::info!(address = %listener.local_addr()?, database = %database.display(), workers, "shapeflow serving");
-    let closing = service.state.closing.clone();
-    axum::serve(listener, service.router())
-        .with_graceful_shutdown(async move {
+        .with_context(|| format!("cannot open database {shown}"))?;
+    match bind {
+        Some(bind) => {
+            let listener =
+                tokio::net::TcpListener::bind(bind).await.with_context(|| format!("cannot listen on {bind}"))?;
+            tracing::info!(address = %listener.local_addr()?, database = %shown, workers, "shapeflow serving");
+            let closing = service.state.closing.clone();
+            axum::serve(listener, service.router())
+                .with_graceful_shutdown(async move {
+                    shutdown_signal().await;
+                    // end open event streams, or graceful shutdown would wait for them
+                    closing.store(true, std::sync::atomic::Ordering::Relaxed);
+                })
+                .await?;
+        }
+        None => {
+            tracing::info!(database = %shown, workers, "shapeflow worker running");
             shutdown_signal().await;
-            // end open event streams, or graceful shutdown would wait for them
-            closing.store(true, std::sync::atomic::Ordering::Relaxed);
-        })
-        .await?;
-    tracing::info!("shutting down: running jobs checkpoint and resume at the next start");
+        }
+    }
+    tracing::info!("shutting down: running jobs checkpoint and resume later");
     service.stop().await;
     Ok(())
+}
+
+/// A database URL without its password, for messages.
+fn redact(database: &str) -> String {
+    match (database.find("://"), database.rfind('@')) {
+        (Some(scheme), Some(at)) if at > scheme => {
+            let userinfo = &database[scheme + 3..at];
+            let user = userinfo.split(':').next().unwrap_or("");
+            format!("{}{user}:***{}", &database[..scheme + 3], &database[at..])
+        }
+        _ => database.to_string(),
+    }
 }
 
 async fn shutdown_signal() {

@@ -1,5 +1,5 @@
-//! The job service (docs/user-guide.md): axum routes over a SQLite store
-//! and a fixed pool of worker threads. Routes so far: `POST /v1/jobs` (JSON),
+//! The job service (docs/user-guide.md): axum routes over a job store (SQLite on
+//! one node, PostgreSQL for many; [`store`]) and a fixed pool of worker threads. Routes so far: `POST /v1/jobs` (JSON),
 //! `GET /v1/jobs`, `GET|DELETE /v1/jobs/{id}`, `POST /v1/jobs/{id}/cancel`,
 //! `GET /v1/jobs/{id}/events` (SSE), `GET /v1/jobs/{id}/energy` (JSON or `?format=csv`),
 //! `GET /v1/jobs/{id}/results` (manifest), `.../results/{shape.json, shape.glb,
@@ -27,8 +27,8 @@ use serde_json::{json, Value};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
-use store::{JobRow, Store};
-use tokio::sync::Notify;
+use store::{ClaimPolicy, JobRow, Store};
+use tokio::sync::{broadcast, Notify};
 use worker::{Registry, Worker};
 
 pub use crate::limits::{MAX_BODY_BYTES, MAX_UPLOAD_BYTES};
@@ -43,6 +43,9 @@ pub struct AppState {
     pub token: Option<Arc<str>>,
     /// Set when the server shuts down: open event streams end.
     pub closing: Arc<AtomicBool>,
+    /// A job's id after each of its history batches and its outcome, from this
+    /// node's workers and (PostgreSQL) other nodes' notifications; `"*"`: re-read.
+    pub events: broadcast::Sender<Arc<str>>,
 }
 
 /// Every route of [`router`] as (method, path): the contract test checks it against
@@ -267,8 +270,13 @@ async fn events(
         next: usize,
         pending: std::collections::VecDeque<Event>,
         done: bool,
+        /// Subscribed before the first read, so that no batch falls between a read
+        /// and the wait.
+        events: broadcast::Receiver<Arc<str>>,
     }
-    let cursor = Cursor { state, id, next: after.map_or(0, |a| a + 1), pending: Default::default(), done: false };
+    let events = state.events.subscribe();
+    let next = after.map_or(0, |a| a + 1);
+    let cursor = Cursor { state, id, next, pending: Default::default(), done: false, events };
     let stream = futures_util::stream::unfold(cursor, |mut c| async move {
         loop {
             if let Some(e) = c.pending.pop_front() {
@@ -290,16 +298,34 @@ async fn events(
                     c.done = true;
                 }
                 None => c.done = true,
-                _ => {
-                    if c.pending.is_empty() {
-                        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
-                    }
-                }
+                _ if c.pending.is_empty() => wait_for_job(&mut c.events, &c.id, &c.state.closing).await,
+                _ => {}
             }
         }
     });
     let sse = Sse::new(stream).keep_alive(KeepAlive::new().interval(std::time::Duration::from_secs(15)));
     Ok(([("x-accel-buffering", "no")], sse).into_response())
+}
+
+/// Wait until `events` announces job `id` (or asks every stream to re-read), the
+/// server closes, or 5 s pass (a safety net for a missed notification).
+async fn wait_for_job(events: &mut broadcast::Receiver<Arc<str>>, id: &str, closing: &AtomicBool) {
+    let deadline = tokio::time::Instant::now() + std::time::Duration::from_secs(5);
+    loop {
+        let wait = tokio::time::timeout_at(
+            deadline.min(tokio::time::Instant::now() + std::time::Duration::from_millis(250)),
+            events.recv(),
+        );
+        match wait.await {
+            Ok(Ok(e)) if &*e == id || &*e == "*" => return,
+            Ok(Ok(_)) => {}
+            // lagged behind: some announcement may have been ours
+            Ok(Err(broadcast::error::RecvError::Lagged(_))) => return,
+            Ok(Err(broadcast::error::RecvError::Closed)) => return,
+            Err(_) if closing.load(Ordering::Relaxed) || tokio::time::Instant::now() >= deadline => return,
+            Err(_) => {}
+        }
+    }
 }
 
 #[derive(Deserialize)]
@@ -355,6 +381,18 @@ async fn shape(State(state): State<AppState>, Path(id): Path<String>) -> Result<
     Ok(Json(doc))
 }
 
+/// How a node runs.
+#[derive(Debug, Clone)]
+pub struct ServiceConfig {
+    /// A SQLite file path or `sqlite:` URL, or a `postgres://` URL ([`store::open`]).
+    pub database: String,
+    /// Worker threads (0: none, an API-only node).
+    pub workers: usize,
+    /// With a token, every route but `/healthz` and the viewer page's needs it.
+    pub token: Option<String>,
+    pub policy: ClaimPolicy,
+}
+
 /// A running service: the HTTP state and the worker threads.
 pub struct Service {
     pub state: AppState,
@@ -363,24 +401,41 @@ pub struct Service {
 }
 
 impl Service {
-    /// Open the database (jobs left running by a crash go back to the queue) and
-    /// start `workers` worker threads. Call from within a tokio runtime.
-    pub async fn start(database: &std::path::Path, workers: usize, token: Option<String>) -> Result<Self, sqlx::Error> {
-        let store = Store::open(database).await?;
+    /// [`Service::start_with`] on a SQLite file with `workers` (at least one) worker
+    /// threads and the default leases.
+    pub async fn start(
+        database: &std::path::Path,
+        workers: usize,
+        token: Option<String>,
+    ) -> Result<Self, store::StoreError> {
+        let database = database.to_string_lossy().into_owned();
+        Self::start_with(ServiceConfig { database, workers: workers.max(1), token, policy: ClaimPolicy::default() })
+            .await
+    }
+
+    /// Open the store (on SQLite, jobs left running by a stop or crash go back to
+    /// the queue; on PostgreSQL their leases expire) and start the worker threads.
+    /// Call from within a tokio runtime.
+    pub async fn start_with(config: ServiceConfig) -> Result<Self, store::StoreError> {
+        let store = store::open(&config.database).await?;
         let requeued = store.requeue_running().await?;
         if requeued > 0 {
             tracing::info!(requeued, "jobs interrupted by a previous stop go back to the queue");
         }
+        let (events, _) = broadcast::channel(1024);
+        store.watch(events.clone());
         let state = AppState {
             store,
             registry: Arc::new(Mutex::new(HashMap::new())),
             wake: Arc::new(Notify::new()),
-            token: token.map(Arc::from),
+            token: config.token.map(Arc::from),
             closing: Arc::new(AtomicBool::new(false)),
+            events,
         };
         let shutdown = Arc::new(AtomicBool::new(false));
         let rt = tokio::runtime::Handle::current();
-        let workers = (0..workers.max(1))
+        let node = format!("{}-{}", std::process::id(), &uuid::Uuid::new_v4().simple().to_string()[..8]);
+        let workers = (0..config.workers)
             .map(|k| {
                 let w = Worker {
                     store: state.store.clone(),
@@ -388,6 +443,9 @@ impl Service {
                     registry: state.registry.clone(),
                     wake: state.wake.clone(),
                     shutdown: shutdown.clone(),
+                    events: state.events.clone(),
+                    owner: format!("{node}/{k}"),
+                    policy: config.policy,
                 };
                 std::thread::Builder::new()
                     .name(format!("worker-{k}"))
@@ -402,8 +460,9 @@ impl Service {
         router(self.state.clone())
     }
 
-    /// Stop the workers: running jobs stop at their next step, write a checkpoint and
-    /// stay `running` in the store, to resume at the next start.
+    /// Stop the workers: running jobs stop at their next step and write a
+    /// checkpoint; on SQLite they stay `running`, to resume at the next start, on
+    /// PostgreSQL they go back to the queue for another node.
     pub async fn stop(self) {
         self.state.closing.store(true, Ordering::Relaxed);
         self.shutdown.store(true, Ordering::Relaxed);

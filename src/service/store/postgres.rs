@@ -1,0 +1,444 @@
+//! The PostgreSQL store: any number of nodes on one database. Jobs are claimed
+//! with `FOR UPDATE SKIP LOCKED` in short transactions, leases expire on the
+//! database's clock, and every batch of history rows sends one notification on
+//! the channel [`CHANNEL`] (the job's id: a wake-up hint for event streams on
+//! every node, [`PgStore::watch`]).
+
+use super::{crash_message, now, ClaimPolicy, Claimed, JobRow, JobStore, Lease, StoreError, StoreResult};
+use crate::flow::{Checkpoint, Progress};
+use sqlx::postgres::{PgConnectOptions, PgListener, PgPool, PgPoolOptions, PgRow};
+use sqlx::{Postgres, Row, Transaction};
+use std::collections::HashMap;
+use std::str::FromStr;
+use std::sync::Arc;
+use std::time::Duration;
+use tokio::sync::broadcast;
+
+/// The notification channel of history batches and outcomes.
+pub const CHANNEL: &str = "shapeflow_jobs";
+
+/// The database clock in ms since the Unix epoch, as SQL.
+macro_rules! clock_ms {
+    () => {
+        "(extract(epoch from clock_timestamp()) * 1000)::bigint"
+    };
+}
+
+#[derive(Clone)]
+pub struct PgStore {
+    pool: PgPool,
+}
+
+fn job_from_row(r: &PgRow) -> JobRow {
+    let iteration: Option<i64> = r.get("iteration");
+    JobRow {
+        id: r.get("id"),
+        seq: r.get("seq"),
+        status: r.get("status"),
+        spec: r.get("spec"),
+        created_at: r.get("created_at"),
+        started_at: r.get("started_at"),
+        finished_at: r.get("finished_at"),
+        message: r.get("message"),
+        stop_reason: r.get("stop_reason"),
+        progress: iteration.map(|it| Progress {
+            iteration: it as usize,
+            time: r.get("time"),
+            tau: r.get("tau"),
+            energy: r.get("energy"),
+            vertices: r.get::<i64, _>("vertices") as usize,
+            components: r.get::<i64, _>("components") as usize,
+        }),
+    }
+}
+
+/// Within `tx`: lock the job's row and refuse unless `lease` is still its lease.
+async fn fence(tx: &mut Transaction<'_, Postgres>, id: &str, lease: &Lease) -> StoreResult<()> {
+    let held = sqlx::query("SELECT 1 FROM jobs WHERE id = $1 AND lease_epoch = $2 AND status = 'running' FOR UPDATE")
+        .bind(id)
+        .bind(lease.epoch)
+        .fetch_optional(&mut **tx)
+        .await?;
+    held.map(|_| ()).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
+}
+
+impl PgStore {
+    /// Connect (a small pool; connections are re-established after a database
+    /// restart) and migrate. A transaction left idle for 5 s (its node paused or cut
+    /// off in the middle of one) is aborted by the server, so that the job rows it
+    /// locked can be claimed again.
+    pub async fn open(url: &str) -> StoreResult<Self> {
+        let options = PgConnectOptions::from_str(url)?.options([("idle_in_transaction_session_timeout", "5s")]);
+        let pool = PgPoolOptions::new()
+            .max_connections(8)
+            .acquire_timeout(Duration::from_secs(10))
+            .test_before_acquire(true)
+            .connect_with(options)
+            .await?;
+        sqlx::migrate!("./migrations/postgres").run(&pool).await?;
+        Ok(PgStore { pool })
+    }
+
+    async fn checkpoint_rows(&self, sql: &'static str, id: &str, iteration: i64) -> StoreResult<Vec<Checkpoint>> {
+        let rows = sqlx::query(sql).bind(id).bind(iteration).fetch_all(&self.pool).await?;
+        Ok(rows.iter().filter_map(|r| serde_json::from_str(&r.get::<String, _>("data")).ok()).collect())
+    }
+}
+
+#[async_trait::async_trait]
+impl JobStore for PgStore {
+    fn backend(&self) -> &'static str {
+        "postgres"
+    }
+
+    /// Forward the notifications of [`CHANNEL`] to `events` (the job's id), from a
+    /// task that listens on its own connection; after a lost connection (which may
+    /// have dropped notifications) it sends `"*"`, on which every stream re-reads.
+    fn watch(&self, events: broadcast::Sender<Arc<str>>) {
+        let pool = self.pool.clone();
+        tokio::spawn(async move {
+            loop {
+                let mut listener = match PgListener::connect_with(&pool).await {
+                    Ok(l) => l,
+                    Err(e) => {
+                        tracing::warn!("event listener: {e}; retrying");
+                        tokio::time::sleep(Duration::from_millis(500)).await;
+                        continue;
+                    }
+                };
+                if let Err(e) = listener.listen(CHANNEL).await {
+                    tracing::warn!("event listener: {e}; retrying");
+                    tokio::time::sleep(Duration::from_millis(500)).await;
+                    continue;
+                }
+                let _ = events.send(Arc::from("*"));
+                loop {
+                    match listener.try_recv().await {
+                        Ok(Some(n)) => {
+                            let _ = events.send(Arc::from(n.payload()));
+                        }
+                        // reconnected: notifications may have been missed
+                        Ok(None) => {
+                            let _ = events.send(Arc::from("*"));
+                        }
+                        Err(e) => {
+                            tracing::warn!("event listener: {e}; reconnecting");
+                            let _ = events.send(Arc::from("*"));
+                            tokio::time::sleep(Duration::from_millis(200)).await;
+                            break;
+                        }
+                    }
+                }
+            }
+        });
+    }
+
+    async fn insert_job(&self, id: &str, spec: &str, inputs: &HashMap<String, Vec<u8>>) -> StoreResult<JobRow> {
+        let mut tx = self.pool.begin().await?;
+        let r =
+            sqlx::query("INSERT INTO jobs (id, status, spec, created_at) VALUES ($1, 'accepted', $2, $3) RETURNING *")
+                .bind(id)
+                .bind(spec)
+                .bind(now())
+                .fetch_one(&mut *tx)
+                .await?;
+        for (name, data) in inputs {
+            sqlx::query("INSERT INTO inputs (job_id, name, data) VALUES ($1, $2, $3)")
+                .bind(id)
+                .bind(name)
+                .bind(data.as_slice())
+                .execute(&mut *tx)
+                .await?;
+        }
+        sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind("queue").execute(&mut *tx).await?;
+        tx.commit().await?;
+        Ok(job_from_row(&r))
+    }
+
+    async fn input_magics(&self, id: &str) -> StoreResult<Vec<Vec<u8>>> {
+        let rows = sqlx::query("SELECT substring(data from 1 for 8) AS head FROM inputs WHERE job_id = $1")
+            .bind(id)
+            .fetch_all(&self.pool)
+            .await?;
+        Ok(rows.iter().map(|r| r.get::<Vec<u8>, _>("head")).collect())
+    }
+
+    async fn inputs(&self, id: &str) -> StoreResult<HashMap<String, Vec<u8>>> {
+        let rows =
+            sqlx::query("SELECT name, data FROM inputs WHERE job_id = $1").bind(id).fetch_all(&self.pool).await?;
+        Ok(rows.iter().map(|r| (r.get::<String, _>("name"), r.get::<Vec<u8>, _>("data"))).collect())
+    }
+
+    async fn job(&self, id: &str) -> StoreResult<Option<JobRow>> {
+        let r = sqlx::query("SELECT * FROM jobs WHERE id = $1").bind(id).fetch_optional(&self.pool).await?;
+        Ok(r.as_ref().map(job_from_row))
+    }
+
+    async fn list(&self, status: Option<&str>, before: Option<i64>, limit: i64) -> StoreResult<Vec<JobRow>> {
+        let rows = sqlx::query(
+            "SELECT * FROM jobs WHERE ($1::text IS NULL OR status = $1) AND ($2::bigint IS NULL OR seq < $2) \
+             ORDER BY seq DESC LIMIT $3",
+        )
+        .bind(status)
+        .bind(before)
+        .bind(limit)
+        .fetch_all(&self.pool)
+        .await?;
+        Ok(rows.iter().map(job_from_row).collect())
+    }
+
+    /// Nodes share the database: a running job belongs to its lease holder until
+    /// the lease expires.
+    async fn requeue_running(&self) -> StoreResult<u64> {
+        Ok(0)
+    }
+
+    async fn claim_next(&self, owner: &str, policy: &ClaimPolicy) -> StoreResult<Option<Claimed>> {
+        let lease_ms = policy.lease.as_millis() as i64;
+        loop {
+            let mut tx = self.pool.begin().await?;
+            let pick = sqlx::query(concat!(
+                "SELECT id, status, takeovers FROM jobs WHERE status = 'accepted' \
+                 OR (status = 'running' AND lease_expires < ",
+                clock_ms!(),
+                ") ORDER BY seq LIMIT 1 FOR UPDATE SKIP LOCKED"
+            ))
+            .fetch_optional(&mut *tx)
+            .await?;
+            let Some(pick) = pick else { return Ok(None) };
+            let id: String = pick.get("id");
+            let takeover = pick.get::<String, _>("status") == "running";
+            let takeovers = pick.get::<i32, _>("takeovers") as i64 + takeover as i64;
+            if takeover && takeovers > policy.max_takeovers {
+                sqlx::query(
+                    "UPDATE jobs SET status = 'failed', message = $2, finished_at = $3, takeovers = $4, \
+                     lease_epoch = lease_epoch + 1, lease_expires = NULL WHERE id = $1",
+                )
+                .bind(&id)
+                .bind(crash_message(takeovers - 1))
+                .bind(now())
+                .bind(takeovers as i32)
+                .execute(&mut *tx)
+                .await?;
+                sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind(&id).execute(&mut *tx).await?;
+                tx.commit().await?;
+                continue;
+            }
+            let r = sqlx::query(concat!(
+                "UPDATE jobs SET status = 'running', started_at = COALESCE(started_at, $2), lease_owner = $3, \
+                 lease_epoch = lease_epoch + 1, lease_expires = ",
+                clock_ms!(),
+                " + $4, takeovers = $5 WHERE id = $1 RETURNING *"
+            ))
+            .bind(&id)
+            .bind(now())
+            .bind(owner)
+            .bind(lease_ms)
+            .bind(takeovers as i32)
+            .fetch_one(&mut *tx)
+            .await?;
+            tx.commit().await?;
+            let lease = Lease { owner: owner.to_string(), epoch: r.get("lease_epoch") };
+            return Ok(Some(Claimed { job: job_from_row(&r), lease, takeover }));
+        }
+    }
+
+    async fn renew(&self, id: &str, lease: &Lease, policy: &ClaimPolicy) -> StoreResult<bool> {
+        let done = sqlx::query(concat!(
+            "UPDATE jobs SET lease_expires = ",
+            clock_ms!(),
+            " + $3 WHERE id = $1 AND lease_epoch = $2 AND status = 'running'"
+        ))
+        .bind(id)
+        .bind(lease.epoch)
+        .bind(policy.lease.as_millis() as i64)
+        .execute(&self.pool)
+        .await?;
+        Ok(done.rows_affected() == 1)
+    }
+
+    async fn release(&self, id: &str, lease: &Lease) -> StoreResult<()> {
+        let mut tx = self.pool.begin().await?;
+        fence(&mut tx, id, lease).await?;
+        sqlx::query("UPDATE jobs SET status = 'accepted', lease_expires = NULL WHERE id = $1")
+            .bind(id)
+            .execute(&mut *tx)
+            .await?;
+        sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind("queue").execute(&mut *tx).await?;
+        Ok(tx.commit().await?)
+    }
+
+    async fn last_checkpoint(&self, id: &str) -> StoreResult<Option<Checkpoint>> {
+        let sql = "SELECT data FROM checkpoints WHERE job_id = $1 AND $2::bigint = $2 ORDER BY iteration DESC LIMIT 1";
+        Ok(self.checkpoint_rows(sql, id, 0).await?.pop())
+    }
+
+    async fn checkpoint_index(&self, id: &str) -> StoreResult<Vec<(i64, f64)>> {
+        let rows = sqlx::query("SELECT iteration, time FROM checkpoints WHERE job_id = $1 ORDER BY iteration")
+            .bind(id)
+            .fetch_all(&self.pool)
+            .await?;
+        Ok(rows.iter().map(|r| (r.get::<i64, _>("iteration"), r.get::<f64, _>("time"))).collect())
+    }
+
+    async fn checkpoint_at(&self, id: &str, iteration: i64) -> StoreResult<Option<Checkpoint>> {
+        let sql = "SELECT data FROM checkpoints WHERE job_id = $1 AND iteration = $2";
+        Ok(self.checkpoint_rows(sql, id, iteration).await?.pop())
+    }
+
+    async fn checkpoints(&self, id: &str) -> StoreResult<Vec<Checkpoint>> {
+        let sql = "SELECT data FROM checkpoints WHERE job_id = $1 AND $2::bigint = $2 ORDER BY iteration";
+        self.checkpoint_rows(sql, id, 0).await
+    }
+
+    async fn record(
+        &self,
+        id: &str,
+        lease: &Lease,
+        rows: &[Progress],
+        checkpoint: Option<&Checkpoint>,
+    ) -> StoreResult<()> {
+        let mut tx = self.pool.begin().await?;
+        fence(&mut tx, id, lease).await?;
+        if !rows.is_empty() {
+            // one statement for the batch
+            let col = |f: fn(&Progress) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+            let int = |f: fn(&Progress) -> usize| rows.iter().map(|p| f(p) as i64).collect::<Vec<i64>>();
+            sqlx::query(
+                "INSERT INTO history (job_id, iteration, time, tau, energy, vertices, components) \
+                 SELECT $1, * FROM UNNEST($2::bigint[], $3::float8[], $4::float8[], $5::float8[], $6::bigint[], $7::bigint[]) \
+                 ON CONFLICT (job_id, iteration) DO UPDATE SET time = EXCLUDED.time, tau = EXCLUDED.tau, \
+                 energy = EXCLUDED.energy, vertices = EXCLUDED.vertices, components = EXCLUDED.components",
+            )
+            .bind(id)
+            .bind(int(|p| p.iteration))
+            .bind(col(|p| p.time))
+            .bind(col(|p| p.tau))
+            .bind(col(|p| p.energy))
+            .bind(int(|p| p.vertices))
+            .bind(int(|p| p.components))
+            .execute(&mut *tx)
+            .await?;
+            let p = rows[rows.len() - 1];
+            sqlx::query(
+                "UPDATE jobs SET iteration = $2, time = $3, tau = $4, energy = $5, vertices = $6, components = $7 \
+                 WHERE id = $1",
+            )
+            .bind(id)
+            .bind(p.iteration as i64)
+            .bind(p.time)
+            .bind(p.tau)
+            .bind(p.energy)
+            .bind(p.vertices as i64)
+            .bind(p.components as i64)
+            .execute(&mut *tx)
+            .await?;
+        }
+        if let Some(c) = checkpoint {
+            sqlx::query(
+                "INSERT INTO checkpoints VALUES ($1, $2, $3, $4) \
+                 ON CONFLICT (job_id, iteration) DO UPDATE SET time = EXCLUDED.time, data = EXCLUDED.data",
+            )
+            .bind(id)
+            .bind(c.iteration as i64)
+            .bind(c.time)
+            .bind(serde_json::to_string(c).expect("checkpoint serializes"))
+            .execute(&mut *tx)
+            .await?;
+        }
+        sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind(id).execute(&mut *tx).await?;
+        Ok(tx.commit().await?)
+    }
+
+    async fn truncate_history(&self, id: &str, lease: &Lease, after: usize) -> StoreResult<()> {
+        let mut tx = self.pool.begin().await?;
+        fence(&mut tx, id, lease).await?;
+        sqlx::query("DELETE FROM history WHERE job_id = $1 AND iteration > $2")
+            .bind(id)
+            .bind(after as i64)
+            .execute(&mut *tx)
+            .await?;
+        Ok(tx.commit().await?)
+    }
+
+    async fn finish(
+        &self,
+        id: &str,
+        lease: Option<&Lease>,
+        status: &str,
+        stop_reason: Option<&str>,
+        message: Option<&str>,
+    ) -> StoreResult<()> {
+        let mut tx = self.pool.begin().await?;
+        if let Some(lease) = lease {
+            fence(&mut tx, id, lease).await?;
+        }
+        sqlx::query(
+            "UPDATE jobs SET status = $2, stop_reason = $3, message = $4, finished_at = $5, lease_expires = NULL \
+             WHERE id = $1",
+        )
+        .bind(id)
+        .bind(status)
+        .bind(stop_reason)
+        .bind(message)
+        .bind(now())
+        .execute(&mut *tx)
+        .await?;
+        sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind(id).execute(&mut *tx).await?;
+        Ok(tx.commit().await?)
+    }
+
+    async fn cancel_requested(&self, id: &str) -> StoreResult<bool> {
+        let r =
+            sqlx::query("SELECT cancel_requested FROM jobs WHERE id = $1").bind(id).fetch_optional(&self.pool).await?;
+        Ok(r.map(|r| r.get::<bool, _>("cancel_requested")).unwrap_or(true))
+    }
+
+    async fn request_cancel(&self, id: &str) -> StoreResult<Option<String>> {
+        let mut tx = self.pool.begin().await?;
+        let Some(r) =
+            sqlx::query("SELECT status FROM jobs WHERE id = $1 FOR UPDATE").bind(id).fetch_optional(&mut *tx).await?
+        else {
+            return Ok(None);
+        };
+        let status: String = r.get("status");
+        if status == "accepted" {
+            sqlx::query(
+                "UPDATE jobs SET status = 'dismissed', stop_reason = 'cancelled', \
+                 message = 'cancelled before it started', finished_at = $2 WHERE id = $1",
+            )
+            .bind(id)
+            .bind(now())
+            .execute(&mut *tx)
+            .await?;
+        }
+        sqlx::query("UPDATE jobs SET cancel_requested = TRUE WHERE id = $1").bind(id).execute(&mut *tx).await?;
+        sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind(id).execute(&mut *tx).await?;
+        tx.commit().await?;
+        Ok(Some(status))
+    }
+
+    async fn delete(&self, id: &str) -> StoreResult<()> {
+        sqlx::query("DELETE FROM jobs WHERE id = $1").bind(id).execute(&self.pool).await?;
+        Ok(())
+    }
+
+    async fn history_from(&self, id: &str, from: usize) -> StoreResult<Vec<Progress>> {
+        let rows = sqlx::query("SELECT * FROM history WHERE job_id = $1 AND iteration >= $2 ORDER BY iteration")
+            .bind(id)
+            .bind(from as i64)
+            .fetch_all(&self.pool)
+            .await?;
+        Ok(rows
+            .iter()
+            .map(|r| Progress {
+                iteration: r.get::<i64, _>("iteration") as usize,
+                time: r.get("time"),
+                tau: r.get("tau"),
+                energy: r.get("energy"),
+                vertices: r.get::<i64, _>("vertices") as usize,
+                components: r.get::<i64, _>("components") as usize,
+            })
+            .collect())
+    }
+}

@@ -1,0 +1,364 @@
+//! The SQLite store: the embedded default, for one node. One pool with a single
+//! connection serializes writers (WAL, synchronous=NORMAL); leases work as on
+//! PostgreSQL, and jobs left running at a restart go back to the queue.
+
+use super::{crash_message, now, ClaimPolicy, Claimed, JobRow, JobStore, Lease, StoreError, StoreResult};
+use crate::flow::{Checkpoint, Progress};
+use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous};
+use sqlx::{Row, Sqlite, Transaction};
+use std::collections::HashMap;
+use std::path::Path;
+use std::time::Duration;
+
+/// The database clock in ms since the Unix epoch, as SQL.
+macro_rules! clock_ms {
+    () => {
+        "CAST((julianday('now') - 2440587.5) * 86400000.0 AS INTEGER)"
+    };
+}
+
+#[derive(Clone)]
+pub struct SqliteStore {
+    pool: SqlitePool,
+}
+
+fn job_from_row(r: &sqlx::sqlite::SqliteRow) -> JobRow {
+    let iteration: Option<i64> = r.get("iteration");
+    JobRow {
+        id: r.get("id"),
+        seq: r.get("seq"),
+        status: r.get("status"),
+        spec: r.get("spec"),
+        created_at: r.get("created_at"),
+        started_at: r.get("started_at"),
+        finished_at: r.get("finished_at"),
+        message: r.get("message"),
+        stop_reason: r.get("stop_reason"),
+        progress: iteration.map(|it| Progress {
+            iteration: it as usize,
+            time: r.get("time"),
+            tau: r.get("tau"),
+            energy: r.get("energy"),
+            vertices: r.get::<i64, _>("vertices") as usize,
+            components: r.get::<i64, _>("components") as usize,
+        }),
+    }
+}
+
+fn progress_from_row(r: &sqlx::sqlite::SqliteRow) -> Progress {
+    Progress {
+        iteration: r.get::<i64, _>("iteration") as usize,
+        time: r.get("time"),
+        tau: r.get("tau"),
+        energy: r.get("energy"),
+        vertices: r.get::<i64, _>("vertices") as usize,
+        components: r.get::<i64, _>("components") as usize,
+    }
+}
+
+/// Within `tx`: refuse unless `lease` is still the job's.
+async fn fence(tx: &mut Transaction<'_, Sqlite>, id: &str, lease: &Lease) -> StoreResult<()> {
+    let held = sqlx::query("SELECT 1 FROM jobs WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running'")
+        .bind(id)
+        .bind(lease.epoch)
+        .fetch_optional(&mut **tx)
+        .await?;
+    held.map(|_| ()).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
+}
+
+impl SqliteStore {
+    /// Open (creating if missing) and migrate the database file.
+    pub async fn open(path: &Path) -> StoreResult<Self> {
+        let options = SqliteConnectOptions::new()
+            .filename(path)
+            .create_if_missing(true)
+            .journal_mode(SqliteJournalMode::Wal)
+            .synchronous(SqliteSynchronous::Normal)
+            .busy_timeout(Duration::from_secs(10))
+            .foreign_keys(true);
+        let pool = SqlitePoolOptions::new().max_connections(1).connect_with(options).await?;
+        sqlx::migrate!("./migrations/sqlite").run(&pool).await?;
+        Ok(SqliteStore { pool })
+    }
+
+    async fn checkpoint_rows(&self, sql: &'static str, id: &str, iteration: i64) -> StoreResult<Vec<Checkpoint>> {
+        let rows = sqlx::query(sql).bind(id).bind(iteration).fetch_all(&self.pool).await?;
+        Ok(rows.iter().filter_map(|r| serde_json::from_str(&r.get::<String, _>("data")).ok()).collect())
+    }
+}
+
+#[async_trait::async_trait]
+impl JobStore for SqliteStore {
+    fn backend(&self) -> &'static str {
+        "sqlite"
+    }
+
+    async fn insert_job(&self, id: &str, spec: &str, inputs: &HashMap<String, Vec<u8>>) -> StoreResult<JobRow> {
+        let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
+        sqlx::query(
+            "INSERT INTO jobs (id, seq, status, spec, created_at) \
+             VALUES (?1, (SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs), 'accepted', ?2, ?3)",
+        )
+        .bind(id)
+        .bind(spec)
+        .bind(now())
+        .execute(&mut *tx)
+        .await?;
+        for (name, data) in inputs {
+            sqlx::query("INSERT INTO inputs (job_id, name, data) VALUES (?1, ?2, ?3)")
+                .bind(id)
+                .bind(name)
+                .bind(data.as_slice())
+                .execute(&mut *tx)
+                .await?;
+        }
+        tx.commit().await?;
+        Ok(self.job(id).await?.expect("just inserted"))
+    }
+
+    async fn input_magics(&self, id: &str) -> StoreResult<Vec<Vec<u8>>> {
+        let rows = sqlx::query("SELECT substr(data, 1, 8) AS head FROM inputs WHERE job_id = ?1")
+            .bind(id)
+            .fetch_all(&self.pool)
+            .await?;
+        Ok(rows.iter().map(|r| r.get::<Vec<u8>, _>("head")).collect())
+    }
+
+    async fn inputs(&self, id: &str) -> StoreResult<HashMap<String, Vec<u8>>> {
+        let rows =
+            sqlx::query("SELECT name, data FROM inputs WHERE job_id = ?1").bind(id).fetch_all(&self.pool).await?;
+        Ok(rows.iter().map(|r| (r.get::<String, _>("name"), r.get::<Vec<u8>, _>("data"))).collect())
+    }
+
+    async fn job(&self, id: &str) -> StoreResult<Option<JobRow>> {
+        let r = sqlx::query("SELECT * FROM jobs WHERE id = ?1").bind(id).fetch_optional(&self.pool).await?;
+        Ok(r.as_ref().map(job_from_row))
+    }
+
+    async fn list(&self, status: Option<&str>, before: Option<i64>, limit: i64) -> StoreResult<Vec<JobRow>> {
+        let rows = sqlx::query(
+            "SELECT * FROM jobs WHERE (?1 IS NULL OR status = ?1) AND (?2 IS NULL OR seq < ?2) \
+             ORDER BY seq DESC LIMIT ?3",
+        )
+        .bind(status)
+        .bind(before)
+        .bind(limit)
+        .fetch_all(&self.pool)
+        .await?;
+        Ok(rows.iter().map(job_from_row).collect())
+    }
+
+    async fn requeue_running(&self) -> StoreResult<u64> {
+        // the epoch moves on: a worker of the previous process can no longer write
+        Ok(sqlx::query("UPDATE jobs SET status = 'accepted', lease_epoch = lease_epoch + 1 WHERE status = 'running'")
+            .execute(&self.pool)
+            .await?
+            .rows_affected())
+    }
+
+    async fn claim_next(&self, owner: &str, policy: &ClaimPolicy) -> StoreResult<Option<Claimed>> {
+        let lease_ms = policy.lease.as_millis() as i64;
+        loop {
+            let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
+            let pick = sqlx::query(concat!(
+                "SELECT id, status, takeovers FROM jobs WHERE status = 'accepted' \
+                 OR (status = 'running' AND lease_expires < ",
+                clock_ms!(),
+                ") ORDER BY seq LIMIT 1"
+            ))
+            .fetch_optional(&mut *tx)
+            .await?;
+            let Some(pick) = pick else { return Ok(None) };
+            let id: String = pick.get("id");
+            let takeover = pick.get::<String, _>("status") == "running";
+            let takeovers = pick.get::<i64, _>("takeovers") + takeover as i64;
+            if takeover && takeovers > policy.max_takeovers {
+                sqlx::query(
+                    "UPDATE jobs SET status = 'failed', message = ?2, finished_at = ?3, takeovers = ?4, \
+                     lease_epoch = lease_epoch + 1 WHERE id = ?1",
+                )
+                .bind(&id)
+                .bind(crash_message(takeovers - 1))
+                .bind(now())
+                .bind(takeovers)
+                .execute(&mut *tx)
+                .await?;
+                tx.commit().await?;
+                continue;
+            }
+            let r = sqlx::query(concat!(
+                "UPDATE jobs SET status = 'running', started_at = COALESCE(started_at, ?2), lease_owner = ?3, \
+                 lease_epoch = lease_epoch + 1, lease_expires = ",
+                clock_ms!(),
+                " + ?4, takeovers = ?5 WHERE id = ?1 RETURNING *"
+            ))
+            .bind(&id)
+            .bind(now())
+            .bind(owner)
+            .bind(lease_ms)
+            .bind(takeovers)
+            .fetch_one(&mut *tx)
+            .await?;
+            tx.commit().await?;
+            let lease = Lease { owner: owner.to_string(), epoch: r.get("lease_epoch") };
+            return Ok(Some(Claimed { job: job_from_row(&r), lease, takeover }));
+        }
+    }
+
+    async fn renew(&self, id: &str, lease: &Lease, policy: &ClaimPolicy) -> StoreResult<bool> {
+        let done = sqlx::query(concat!(
+            "UPDATE jobs SET lease_expires = ",
+            clock_ms!(),
+            " + ?3 WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running'"
+        ))
+        .bind(id)
+        .bind(lease.epoch)
+        .bind(policy.lease.as_millis() as i64)
+        .execute(&self.pool)
+        .await?;
+        Ok(done.rows_affected() == 1)
+    }
+
+    /// One node: a stopped node's jobs stay `running` and go back to the queue at
+    /// its next start ([`JobStore::requeue_running`]).
+    async fn release(&self, _id: &str, _lease: &Lease) -> StoreResult<()> {
+        Ok(())
+    }
+
+    async fn last_checkpoint(&self, id: &str) -> StoreResult<Option<Checkpoint>> {
+        let sql = "SELECT data FROM checkpoints WHERE job_id = ?1 AND ?2 = ?2 ORDER BY iteration DESC LIMIT 1";
+        Ok(self.checkpoint_rows(sql, id, 0).await?.pop())
+    }
+
+    async fn checkpoint_index(&self, id: &str) -> StoreResult<Vec<(i64, f64)>> {
+        let rows = sqlx::query("SELECT iteration, time FROM checkpoints WHERE job_id = ?1 ORDER BY iteration")
+            .bind(id)
+            .fetch_all(&self.pool)
+            .await?;
+        Ok(rows.iter().map(|r| (r.get::<i64, _>("iteration"), r.get::<f64, _>("time"))).collect())
+    }
+
+    async fn checkpoint_at(&self, id: &str, iteration: i64) -> StoreResult<Option<Checkpoint>> {
+        let sql = "SELECT data FROM checkpoints WHERE job_id = ?1 AND iteration = ?2";
+        Ok(self.checkpoint_rows(sql, id, iteration).await?.pop())
+    }
+
+    async fn checkpoints(&self, id: &str) -> StoreResult<Vec<Checkpoint>> {
+        let sql = "SELECT data FROM checkpoints WHERE job_id = ?1 AND ?2 = ?2 ORDER BY iteration";
+        self.checkpoint_rows(sql, id, 0).await
+    }
+
+    async fn record(
+        &self,
+        id: &str,
+        lease: &Lease,
+        rows: &[Progress],
+        checkpoint: Option<&Checkpoint>,
+    ) -> StoreResult<()> {
+        let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
+        fence(&mut tx, id, lease).await?;
+        for p in rows {
+            sqlx::query("INSERT OR REPLACE INTO history VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)")
+                .bind(id)
+                .bind(p.iteration as i64)
+                .bind(p.time)
+                .bind(p.tau)
+                .bind(p.energy)
+                .bind(p.vertices as i64)
+                .bind(p.components as i64)
+                .execute(&mut *tx)
+                .await?;
+        }
+        if let Some(p) = rows.last() {
+            sqlx::query(
+                "UPDATE jobs SET (iteration, time, tau, energy, vertices, components) = (?2, ?3, ?4, ?5, ?6, ?7) \
+                 WHERE id = ?1",
+            )
+            .bind(id)
+            .bind(p.iteration as i64)
+            .bind(p.time)
+            .bind(p.tau)
+            .bind(p.energy)
+            .bind(p.vertices as i64)
+            .bind(p.components as i64)
+            .execute(&mut *tx)
+            .await?;
+        }
+        if let Some(c) = checkpoint {
+            sqlx::query("INSERT OR REPLACE INTO checkpoints VALUES (?1, ?2, ?3, ?4)")
+                .bind(id)
+                .bind(c.iteration as i64)
+                .bind(c.time)
+                .bind(serde_json::to_string(c).expect("checkpoint serializes"))
+                .execute(&mut *tx)
+                .await?;
+        }
+        Ok(tx.commit().await?)
+    }
+
+    async fn truncate_history(&self, id: &str, lease: &Lease, after: usize) -> StoreResult<()> {
+        let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
+        fence(&mut tx, id, lease).await?;
+        sqlx::query("DELETE FROM history WHERE job_id = ?1 AND iteration > ?2")
+            .bind(id)
+            .bind(after as i64)
+            .execute(&mut *tx)
+            .await?;
+        Ok(tx.commit().await?)
+    }
+
+    async fn finish(
+        &self,
+        id: &str,
+        lease: Option<&Lease>,
+        status: &str,
+        stop_reason: Option<&str>,
+        message: Option<&str>,
+    ) -> StoreResult<()> {
+        let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
+        if let Some(lease) = lease {
+            fence(&mut tx, id, lease).await?;
+        }
+        sqlx::query(
+            "UPDATE jobs SET status = ?2, stop_reason = ?3, message = ?4, finished_at = ?5, lease_expires = NULL \
+             WHERE id = ?1",
+        )
+        .bind(id)
+        .bind(status)
+        .bind(stop_reason)
+        .bind(message)
+        .bind(now())
+        .execute(&mut *tx)
+        .await?;
+        Ok(tx.commit().await?)
+    }
+
+    async fn cancel_requested(&self, id: &str) -> StoreResult<bool> {
+        let r =
+            sqlx::query("SELECT cancel_requested FROM jobs WHERE id = ?1").bind(id).fetch_optional(&self.pool).await?;
+        Ok(r.map(|r| r.get::<i64, _>("cancel_requested") != 0).unwrap_or(true))
+    }
+
+    async fn request_cancel(&self, id: &str) -> StoreResult<Option<String>> {
+        let Some(job) = self.job(id).await? else { return Ok(None) };
+        if job.status == "accepted" {
+            self.finish(id, None, "dismissed", Some("cancelled"), Some("cancelled before it started")).await?;
+        }
+        sqlx::query("UPDATE jobs SET cancel_requested = 1 WHERE id = ?1").bind(id).execute(&self.pool).await?;
+        Ok(Some(job.status))
+    }
+
+    async fn delete(&self, id: &str) -> StoreResult<()> {
+        sqlx::query("DELETE FROM jobs WHERE id = ?1").bind(id).execute(&self.pool).await?;
+        Ok(())
+    }
+
+    async fn history_from(&self, id: &str, from: usize) -> StoreResult<Vec<Progress>> {
+        let rows = sqlx::query("SELECT * FROM history WHERE job_id = ?1 AND iteration >= ?2 ORDER BY iteration")
+            .bind(id)
+            .bind(from as i64)
+            .fetch_all(&self.pool)
+            .await?;
+        Ok(rows.iter().map(progress_from_row).collect())
+    }
+}
