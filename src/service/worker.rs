@@ -5,7 +5,7 @@
 //! outcome, every write fenced by the lease. A worker that loses its lease stops
 //! the run and writes nothing more.
 
-use super::store::{ClaimPolicy, Claimed, Lease, Store, StoreError};
+use super::store::{ClaimPolicy, Claimed, JobStatus, Lease, Store, StoreError};
 use crate::flow::{Checkpoint, Progress, StopReason};
 use crate::jobs::{parse_spec, prepare, run_prepared, RunEvents};
 use std::collections::HashMap;
@@ -22,7 +22,15 @@ pub type Registry = Arc<Mutex<HashMap<String, Arc<AtomicBool>>>>;
 #[derive(Debug, Clone, PartialEq)]
 pub enum Outcome {
     Idle,
-    Ran { id: String, status: String },
+    /// The job ended with `status`, or stopped still `running` (the node stops).
+    Ran {
+        id: String,
+        status: JobStatus,
+    },
+    /// Another worker took the job over; this run's results were dropped.
+    Lost {
+        id: String,
+    },
 }
 
 #[derive(Clone)]
@@ -126,11 +134,11 @@ impl Worker {
             return Ok(Outcome::Idle);
         };
         let id = claimed.job.id.clone();
-        let status = match self.run(&claimed) {
-            Err(StoreError::LeaseLost(_)) => "lost".to_string(),
-            other => other?,
-        };
-        Ok(Outcome::Ran { id, status })
+        match self.run(&claimed) {
+            Ok(status) => Ok(Outcome::Ran { id, status }),
+            Err(StoreError::LeaseLost(_)) => Ok(Outcome::Lost { id }),
+            Err(e) => Err(e),
+        }
     }
 
     /// Loop until shutdown, sleeping on the wake-up notification when idle (at
@@ -139,7 +147,7 @@ impl Worker {
     pub fn run_forever(&self) {
         while !self.shutdown.load(Ordering::Relaxed) {
             match self.try_execute_next() {
-                Ok(Outcome::Ran { .. }) => {}
+                Ok(Outcome::Ran { .. } | Outcome::Lost { .. }) => {}
                 Ok(Outcome::Idle) => {
                     let wake = self.wake.clone();
                     self.rt.block_on(async {
@@ -180,12 +188,12 @@ impl Worker {
         });
     }
 
-    fn run(&self, claimed: &Claimed) -> Result<String, StoreError> {
+    fn run(&self, claimed: &Claimed) -> Result<JobStatus, StoreError> {
         let (job, lease) = (&claimed.job, &claimed.lease);
-        let finish = |status: &str, stop: Option<&str>, msg: Option<&str>| -> Result<String, StoreError> {
+        let finish = |status: JobStatus, stop: Option<&str>, msg: Option<&str>| -> Result<JobStatus, StoreError> {
             retrying(&self.rt, || self.store.finish(&job.id, Some(lease), status, stop, msg))?;
             let _ = self.events.send(Arc::from(job.id.as_str()));
-            Ok(status.to_string())
+            Ok(status)
         };
         if claimed.takeover {
             tracing::info!(job = %job.id, "taking over a job whose lease expired");
@@ -193,7 +201,7 @@ impl Worker {
         let inputs = self.rt.block_on(self.store.inputs(&job.id))?;
         let prepared = match parse_spec(&job.spec).and_then(|s| prepare(s, &inputs)) {
             Ok(p) => p,
-            Err(e) => return finish("failed", None, Some(&e.to_string())),
+            Err(e) => return finish(JobStatus::Failed, None, Some(&e.to_string())),
         };
         let resume = self.rt.block_on(self.store.last_checkpoint(&job.id))?;
         if let Some(cp) = &resume {
@@ -223,7 +231,7 @@ impl Worker {
             return Err(StoreError::LeaseLost(job.id.clone()));
         }
         if let Some(e) = rec.state.error {
-            return finish("failed", None, Some(&format!("storage error: {e}")));
+            return finish(JobStatus::Failed, None, Some(&format!("storage error: {e}")));
         }
         match result {
             Ok(o) if o.stop == StopReason::Cancelled => {
@@ -231,12 +239,12 @@ impl Worker {
                     // stopped by a node shutdown: the job goes back to the queue
                     // (PostgreSQL) or stays running to resume at the next start (SQLite)
                     self.rt.block_on(self.store.release(&job.id, lease))?;
-                    return Ok("running".into());
+                    return Ok(JobStatus::Running);
                 }
-                finish("dismissed", Some("cancelled"), Some("cancelled by request"))
+                finish(JobStatus::Dismissed, Some("cancelled"), Some("cancelled by request"))
             }
-            Ok(o) => finish("successful", Some(o.stop.as_str()), o.note),
-            Err(f) => finish("failed", None, Some(&f.error.to_string())),
+            Ok(o) => finish(JobStatus::Successful, Some(o.stop.as_str()), o.note),
+            Err(f) => finish(JobStatus::Failed, None, Some(&f.error.to_string())),
         }
     }
 }

@@ -21,13 +21,53 @@ use std::time::Duration;
 pub use postgres::PgStore;
 pub use sqlite::SqliteStore;
 
+/// The status of a job (OGC API – Processes), as stored and as the API shows it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum JobStatus {
+    Accepted,
+    Running,
+    Successful,
+    Failed,
+    Dismissed,
+}
+
+impl JobStatus {
+    pub const ALL: [JobStatus; 5] =
+        [JobStatus::Accepted, JobStatus::Running, JobStatus::Successful, JobStatus::Failed, JobStatus::Dismissed];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            JobStatus::Accepted => "accepted",
+            JobStatus::Running => "running",
+            JobStatus::Successful => "successful",
+            JobStatus::Failed => "failed",
+            JobStatus::Dismissed => "dismissed",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<JobStatus> {
+        JobStatus::ALL.into_iter().find(|x| x.as_str() == s)
+    }
+
+    /// The job has ended (it will not run again).
+    pub fn is_final(self) -> bool {
+        matches!(self, JobStatus::Successful | JobStatus::Failed | JobStatus::Dismissed)
+    }
+}
+
+/// A stored status text (the tables' CHECK constraints allow only these).
+pub(crate) fn status_of(text: &str) -> JobStatus {
+    JobStatus::parse(text).unwrap_or(JobStatus::Failed)
+}
+
 /// A job as stored.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JobRow {
     pub id: String,
     /// Submission order (1, 2, ...).
     pub seq: i64,
-    pub status: String,
+    pub status: JobStatus,
     pub spec: String,
     pub created_at: String,
     pub started_at: Option<String>,
@@ -117,7 +157,7 @@ pub trait JobStore: Send + Sync + 'static {
     async fn job(&self, id: &str) -> StoreResult<Option<JobRow>>;
     /// Jobs newest first, optionally of one status and submitted before `before`
     /// (a `seq`), at most `limit`.
-    async fn list(&self, status: Option<&str>, before: Option<i64>, limit: i64) -> StoreResult<Vec<JobRow>>;
+    async fn list(&self, status: Option<JobStatus>, before: Option<i64>, limit: i64) -> StoreResult<Vec<JobRow>>;
     /// Single node only (SQLite): jobs left running by a crash or a stop go back to
     /// the queue at start. On a shared database this is the leases' work: 0.
     async fn requeue_running(&self) -> StoreResult<u64>;
@@ -155,7 +195,7 @@ pub trait JobStore: Send + Sync + 'static {
         &self,
         id: &str,
         lease: Option<&Lease>,
-        status: &str,
+        status: JobStatus,
         stop_reason: Option<&str>,
         message: Option<&str>,
     ) -> StoreResult<()>;
@@ -164,7 +204,7 @@ pub trait JobStore: Send + Sync + 'static {
     /// Request cancellation: an accepted job is dismissed at once, a running one
     /// flagged (its worker, on whichever node, sees the flag at its next write).
     /// Returns the status before the request, `None` if unknown.
-    async fn request_cancel(&self, id: &str) -> StoreResult<Option<String>>;
+    async fn request_cancel(&self, id: &str) -> StoreResult<Option<JobStatus>>;
     async fn delete(&self, id: &str) -> StoreResult<()>;
     /// History rows from iteration `from` on.
     async fn history_from(&self, id: &str, from: usize) -> StoreResult<Vec<Progress>>;

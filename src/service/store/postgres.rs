@@ -4,7 +4,9 @@
 //! the channel [`CHANNEL`] (the job's id: a wake-up hint for event streams on
 //! every node, [`PgStore::watch`]).
 
-use super::{crash_message, now, ClaimPolicy, Claimed, JobRow, JobStore, Lease, StoreError, StoreResult};
+use super::{
+    crash_message, now, status_of, ClaimPolicy, Claimed, JobRow, JobStatus, JobStore, Lease, StoreError, StoreResult,
+};
 use crate::flow::{Checkpoint, Progress};
 use sqlx::postgres::{PgConnectOptions, PgListener, PgPool, PgPoolOptions, PgRow};
 use sqlx::{Postgres, Row, Transaction};
@@ -34,7 +36,7 @@ fn job_from_row(r: &PgRow) -> JobRow {
     JobRow {
         id: r.get("id"),
         seq: r.get("seq"),
-        status: r.get("status"),
+        status: status_of(r.get::<&str, _>("status")),
         spec: r.get("spec"),
         created_at: r.get("created_at"),
         started_at: r.get("started_at"),
@@ -174,7 +176,8 @@ impl JobStore for PgStore {
         Ok(r.as_ref().map(job_from_row))
     }
 
-    async fn list(&self, status: Option<&str>, before: Option<i64>, limit: i64) -> StoreResult<Vec<JobRow>> {
+    async fn list(&self, status: Option<JobStatus>, before: Option<i64>, limit: i64) -> StoreResult<Vec<JobRow>> {
+        let status = status.map(JobStatus::as_str);
         let rows = sqlx::query(
             "SELECT * FROM jobs WHERE ($1::text IS NULL OR status = $1) AND ($2::bigint IS NULL OR seq < $2) \
              ORDER BY seq DESC LIMIT $3",
@@ -207,7 +210,7 @@ impl JobStore for PgStore {
             .await?;
             let Some(pick) = pick else { return Ok(None) };
             let id: String = pick.get("id");
-            let takeover = pick.get::<String, _>("status") == "running";
+            let takeover = pick.get::<&str, _>("status") == "running";
             let takeovers = pick.get::<i32, _>("takeovers") as i64 + takeover as i64;
             if takeover && takeovers > policy.max_takeovers {
                 sqlx::query(
@@ -365,7 +368,7 @@ impl JobStore for PgStore {
         &self,
         id: &str,
         lease: Option<&Lease>,
-        status: &str,
+        status: JobStatus,
         stop_reason: Option<&str>,
         message: Option<&str>,
     ) -> StoreResult<()> {
@@ -378,7 +381,7 @@ impl JobStore for PgStore {
              WHERE id = $1",
         )
         .bind(id)
-        .bind(status)
+        .bind(status.as_str())
         .bind(stop_reason)
         .bind(message)
         .bind(now())
@@ -394,15 +397,15 @@ impl JobStore for PgStore {
         Ok(r.map(|r| r.get::<bool, _>("cancel_requested")).unwrap_or(true))
     }
 
-    async fn request_cancel(&self, id: &str) -> StoreResult<Option<String>> {
+    async fn request_cancel(&self, id: &str) -> StoreResult<Option<JobStatus>> {
         let mut tx = self.pool.begin().await?;
         let Some(r) =
             sqlx::query("SELECT status FROM jobs WHERE id = $1 FOR UPDATE").bind(id).fetch_optional(&mut *tx).await?
         else {
             return Ok(None);
         };
-        let status: String = r.get("status");
-        if status == "accepted" {
+        let status = status_of(r.get::<&str, _>("status"));
+        if status == JobStatus::Accepted {
             sqlx::query(
                 "UPDATE jobs SET status = 'dismissed', stop_reason = 'cancelled', \
                  message = 'cancelled before it started', finished_at = $2 WHERE id = $1",

@@ -2,7 +2,9 @@
 //! connection serializes writers (WAL, synchronous=NORMAL); leases work as on
 //! PostgreSQL, and jobs left running at a restart go back to the queue.
 
-use super::{crash_message, now, ClaimPolicy, Claimed, JobRow, JobStore, Lease, StoreError, StoreResult};
+use super::{
+    crash_message, now, status_of, ClaimPolicy, Claimed, JobRow, JobStatus, JobStore, Lease, StoreError, StoreResult,
+};
 use crate::flow::{Checkpoint, Progress};
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous};
 use sqlx::{Row, Sqlite, Transaction};
@@ -27,7 +29,7 @@ fn job_from_row(r: &sqlx::sqlite::SqliteRow) -> JobRow {
     JobRow {
         id: r.get("id"),
         seq: r.get("seq"),
-        status: r.get("status"),
+        status: status_of(r.get::<&str, _>("status")),
         spec: r.get("spec"),
         created_at: r.get("created_at"),
         started_at: r.get("started_at"),
@@ -135,7 +137,8 @@ impl JobStore for SqliteStore {
         Ok(r.as_ref().map(job_from_row))
     }
 
-    async fn list(&self, status: Option<&str>, before: Option<i64>, limit: i64) -> StoreResult<Vec<JobRow>> {
+    async fn list(&self, status: Option<JobStatus>, before: Option<i64>, limit: i64) -> StoreResult<Vec<JobRow>> {
+        let status = status.map(JobStatus::as_str);
         let rows = sqlx::query(
             "SELECT * FROM jobs WHERE (?1 IS NULL OR status = ?1) AND (?2 IS NULL OR seq < ?2) \
              ORDER BY seq DESC LIMIT ?3",
@@ -170,7 +173,7 @@ impl JobStore for SqliteStore {
             .await?;
             let Some(pick) = pick else { return Ok(None) };
             let id: String = pick.get("id");
-            let takeover = pick.get::<String, _>("status") == "running";
+            let takeover = pick.get::<&str, _>("status") == "running";
             let takeovers = pick.get::<i64, _>("takeovers") + takeover as i64;
             if takeover && takeovers > policy.max_takeovers {
                 sqlx::query(
@@ -311,7 +314,7 @@ impl JobStore for SqliteStore {
         &self,
         id: &str,
         lease: Option<&Lease>,
-        status: &str,
+        status: JobStatus,
         stop_reason: Option<&str>,
         message: Option<&str>,
     ) -> StoreResult<()> {
@@ -324,7 +327,7 @@ impl JobStore for SqliteStore {
              WHERE id = ?1",
         )
         .bind(id)
-        .bind(status)
+        .bind(status.as_str())
         .bind(stop_reason)
         .bind(message)
         .bind(now())
@@ -339,10 +342,10 @@ impl JobStore for SqliteStore {
         Ok(r.map(|r| r.get::<i64, _>("cancel_requested") != 0).unwrap_or(true))
     }
 
-    async fn request_cancel(&self, id: &str) -> StoreResult<Option<String>> {
+    async fn request_cancel(&self, id: &str) -> StoreResult<Option<JobStatus>> {
         let Some(job) = self.job(id).await? else { return Ok(None) };
-        if job.status == "accepted" {
-            self.finish(id, None, "dismissed", Some("cancelled"), Some("cancelled before it started")).await?;
+        if job.status == JobStatus::Accepted {
+            self.finish(id, None, JobStatus::Dismissed, Some("cancelled"), Some("cancelled before it started")).await?;
         }
         sqlx::query("UPDATE jobs SET cancel_requested = 1 WHERE id = ?1").bind(id).execute(&self.pool).await?;
         Ok(Some(job.status))

@@ -12,44 +12,48 @@ use axum::response::{IntoResponse, Response};
 
 /// The page's files: (path under /ui/, media type, contents).
 const FILES: &[(&str, &str, &[u8])] = &[
-    ("app.js", JS, include_bytes!("../../web/app.js")),
-    ("dom.js", JS, include_bytes!("../../web/dom.js")),
-    ("api.js", JS, include_bytes!("../../web/api.js")),
-    ("jobs.js", JS, include_bytes!("../../web/jobs.js")),
-    ("job.js", JS, include_bytes!("../../web/job.js")),
-    ("form.js", JS, include_bytes!("../../web/form.js")),
-    ("plot.js", JS, include_bytes!("../../web/plot.js")),
-    ("scene.js", JS, include_bytes!("../../web/scene.js")),
-    ("style.css", "text/css; charset=utf-8", include_bytes!("../../web/style.css")),
+    ("app.js", JS, include_bytes!("../../../web/app.js")),
+    ("dom.js", JS, include_bytes!("../../../web/dom.js")),
+    ("api.js", JS, include_bytes!("../../../web/api.js")),
+    ("jobs.js", JS, include_bytes!("../../../web/jobs.js")),
+    ("job.js", JS, include_bytes!("../../../web/job.js")),
+    ("form.js", JS, include_bytes!("../../../web/form.js")),
+    ("plot.js", JS, include_bytes!("../../../web/plot.js")),
+    ("scene.js", JS, include_bytes!("../../../web/scene.js")),
+    ("style.css", "text/css; charset=utf-8", include_bytes!("../../../web/style.css")),
     ("examples.json", "application/json", include_bytes!(concat!(env!("OUT_DIR"), "/examples.json"))),
-    ("vendor/three/LICENSE", "text/plain; charset=utf-8", include_bytes!("../../web/vendor/three/LICENSE")),
-    ("vendor/three/build/three.module.min.js", JS, include_bytes!("../../web/vendor/three/build/three.module.min.js")),
-    ("vendor/three/build/three.core.min.js", JS, include_bytes!("../../web/vendor/three/build/three.core.min.js")),
+    ("vendor/three/LICENSE", "text/plain; charset=utf-8", include_bytes!("../../../web/vendor/three/LICENSE")),
+    (
+        "vendor/three/build/three.module.min.js",
+        JS,
+        include_bytes!("../../../web/vendor/three/build/three.module.min.js"),
+    ),
+    ("vendor/three/build/three.core.min.js", JS, include_bytes!("../../../web/vendor/three/build/three.core.min.js")),
     (
         "vendor/three/addons/loaders/GLTFLoader.js",
         JS,
-        include_bytes!("../../web/vendor/three/addons/loaders/GLTFLoader.js"),
+        include_bytes!("../../../web/vendor/three/addons/loaders/GLTFLoader.js"),
     ),
     (
         "vendor/three/addons/utils/BufferGeometryUtils.js",
         JS,
-        include_bytes!("../../web/vendor/three/addons/utils/BufferGeometryUtils.js"),
+        include_bytes!("../../../web/vendor/three/addons/utils/BufferGeometryUtils.js"),
     ),
     (
         "vendor/three/addons/utils/SkeletonUtils.js",
         JS,
-        include_bytes!("../../web/vendor/three/addons/utils/SkeletonUtils.js"),
+        include_bytes!("../../../web/vendor/three/addons/utils/SkeletonUtils.js"),
     ),
     (
         "vendor/three/addons/controls/OrbitControls.js",
         JS,
-        include_bytes!("../../web/vendor/three/addons/controls/OrbitControls.js"),
+        include_bytes!("../../../web/vendor/three/addons/controls/OrbitControls.js"),
     ),
 ];
 
 const JS: &str = "text/javascript; charset=utf-8";
 
-const INDEX: &str = include_str!("../../web/index.html");
+const INDEX: &str = include_str!("../../../web/index.html");
 
 /// Whether `path` is one of the page's routes, which need no token.
 pub(super) fn is_page(path: &str) -> bool {

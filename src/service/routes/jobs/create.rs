@@ -4,8 +4,9 @@
 //! meshes read) before anything is stored; job and inputs are stored in one
 //! transaction before 201 is answered.
 
-use super::{job_json, ApiError, AppState, MAX_BODY_BYTES, MAX_UPLOAD_BYTES};
 use crate::jobs::{parse_spec, prepare};
+use crate::service::wire::JobView;
+use crate::service::{ApiError, AppState, MAX_BODY_BYTES, MAX_UPLOAD_BYTES};
 use axum::extract::{FromRequest, Multipart, Request, State};
 use axum::http::{header, StatusCode};
 use axum::response::{IntoResponse, Response};
@@ -87,7 +88,10 @@ fn unreferenced_input(spec: &serde_json::Value, inputs: &HashMap<String, Vec<u8>
     }
 }
 
-pub(super) async fn create_job(State(state): State<AppState>, req: Request) -> Result<Response, ApiError> {
+pub(in crate::service::routes) async fn create(
+    State(state): State<AppState>,
+    req: Request,
+) -> Result<Response, ApiError> {
     let ctype = req.headers().get(header::CONTENT_TYPE).and_then(|v| v.to_str().ok()).unwrap_or("").to_string();
     let (text, inputs) = if ctype.starts_with("application/json") {
         let body = axum::body::to_bytes(req.into_body(), MAX_BODY_BYTES)
@@ -118,5 +122,5 @@ pub(super) async fn create_job(State(state): State<AppState>, req: Request) -> R
     let job = state.store.insert_job(&id, &normalized, &inputs).await?;
     state.wake.notify_one();
     let location = format!("/v1/jobs/{id}");
-    Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(job_json(&job))).into_response())
+    Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(JobView::from(&job))).into_response())
 }

@@ -1,19 +1,23 @@
-//! Result files of a job: the manifest, shape.glb, evolution.glb and the
-//! checkpoints (list and one .glb each). glTF is built on request from the stored
-//! checkpoints (on the blocking pool: it recomputes curvature and normal velocity).
+//! `GET /v1/jobs/{id}/results` (the manifest) and the result files: shape.json,
+//! shape.glb, evolution.glb and the image results. They are built on request from
+//! the stored checkpoints (on the blocking pool: glTF recomputes curvature and
+//! normal velocity).
 
-use super::{find, ApiError, AppState};
+use super::{blocking, find};
+use crate::export::shape_json;
 use crate::flow::Checkpoint;
 use crate::jobs::{
     image_result_names, parse_spec, prepare, result_state, state_glb, states_glb, PreparedJob, StateResults,
 };
+use crate::service::wire::{Manifest, ResultFile};
+use crate::service::{ApiError, AppState};
 use axum::extract::{Path, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
 use axum::Json;
-use serde_json::{json, Value};
+use serde_json::Value;
 
-const GLB: &str = "model/gltf-binary";
+pub(super) const GLB: &str = "model/gltf-binary";
 
 /// The job rebuilt from its stored spec (for the problem behind the fields).
 pub(super) async fn rebuild(state: &AppState, id: &str) -> Result<PreparedJob, ApiError> {
@@ -25,7 +29,7 @@ pub(super) async fn rebuild(state: &AppState, id: &str) -> Result<PreparedJob, A
         .map_err(|e| ApiError::Internal(format!("stored spec of {}: {e}", row.id)))
 }
 
-fn glb_response(bytes: Vec<u8>, name: &str) -> Response {
+pub(super) fn glb_response(bytes: Vec<u8>, name: &str) -> Response {
     (
         [
             (header::CONTENT_TYPE, GLB.to_string()),
@@ -36,42 +40,50 @@ fn glb_response(bytes: Vec<u8>, name: &str) -> Response {
         .into_response()
 }
 
-async fn blocking<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> Result<T, ApiError> {
-    tokio::task::spawn_blocking(f).await.map_err(|e| ApiError::Internal(e.to_string()))
-}
-
 /// `GET /v1/jobs/{id}/results`: the result files available now.
-pub(super) async fn manifest(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Value>, ApiError> {
+pub(super) async fn manifest(State(state): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
     let job = find(&state, &id).await?;
     let index = state.store.checkpoint_index(&id).await?;
     let base = format!("/v1/jobs/{id}");
+    let file = |name: &str, href: String, media_type| ResultFile { name: name.to_string(), href, media_type };
     let mut files = vec![
-        json!({"name": "energy", "href": format!("{base}/energy"), "type": "application/json"}),
-        json!({"name": "energy.csv", "href": format!("{base}/energy?format=csv"), "type": "text/csv"}),
-        json!({"name": "energy.svg", "href": format!("{base}/energy.svg"), "type": "image/svg+xml"}),
+        file("energy", format!("{base}/energy"), "application/json"),
+        file("energy.csv", format!("{base}/energy?format=csv"), "text/csv"),
+        file("energy.svg", format!("{base}/energy.svg"), "image/svg+xml"),
     ];
     if !index.is_empty() {
-        files.push(
-            json!({"name": "shape.json", "href": format!("{base}/results/shape.json"), "type": "application/json"}),
-        );
-        files.push(json!({"name": "shape.glb", "href": format!("{base}/results/shape.glb"), "type": GLB}));
-        files.push(json!({"name": "evolution.glb", "href": format!("{base}/results/evolution.glb"), "type": GLB}));
+        files.push(file("shape.json", format!("{base}/results/shape.json"), "application/json"));
+        files.push(file("shape.glb", format!("{base}/results/shape.glb"), GLB));
+        files.push(file("evolution.glb", format!("{base}/results/evolution.glb"), GLB));
         let spec: Value = serde_json::from_str(&job.spec).unwrap_or(Value::Null);
         if spec["problem"]["type"] == "segmentation" {
             let volume = spec["problem"]["image"].is_array() || is_volume(&state, &id).await?;
-            let names = image_result_names(if volume { 3 } else { 2 });
-            for (name, media) in names {
-                files.push(json!({"name": name, "href": format!("{base}/results/{name}"), "type": media}));
+            for (name, media) in image_result_names(if volume { 3 } else { 2 }) {
+                files.push(file(name, format!("{base}/results/{name}"), media));
             }
         }
     }
-    Ok(Json(json!({
-        "id": id,
-        "status": job.status,
-        "final": matches!(job.status.as_str(), "successful" | "failed" | "dismissed"),
-        "files": files,
-        "checkpoints": format!("{base}/checkpoints"),
-    })))
+    let checkpoints = format!("{base}/checkpoints");
+    Ok(Json(Manifest { id: &id, status: job.status, is_final: job.status.is_final(), files, checkpoints })
+        .into_response())
+}
+
+/// `GET /v1/jobs/{id}/results/shape.json`: the latest state as its results show it
+/// (a segmentation's contour refined onto the edges, with pixel coordinates).
+pub(super) async fn shape(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Value>, ApiError> {
+    let row = find(&state, &id).await?;
+    let cp = state
+        .store
+        .last_checkpoint(&id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("job {id} has no result yet")))?;
+    let spec: Value = serde_json::from_str(&row.spec).unwrap_or(Value::Null);
+    if spec["problem"]["type"] != "segmentation" {
+        return Ok(Json(shape_json(&cp.mesh, cp.energy, cp.iteration, None)));
+    }
+    let job = rebuild(&state, &id).await?;
+    let doc = blocking(move || StateResults::new(&job, &result_state(&job, &cp)).shape_document()).await?;
+    Ok(Json(doc))
 }
 
 /// Whether the (single) input image of a segmentation job is an NRRD volume.
@@ -143,37 +155,4 @@ pub(super) async fn evolution_glb(State(state): State<AppState>, Path(id): Path<
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("job {id} has no checkpoint yet")))?;
     Ok(glb_response(bytes, "evolution.glb"))
-}
-
-/// `GET /v1/jobs/{id}/checkpoints`: iteration, time and link of every checkpoint.
-pub(super) async fn checkpoint_list(
-    State(state): State<AppState>,
-    Path(id): Path<String>,
-) -> Result<Json<Value>, ApiError> {
-    find(&state, &id).await?;
-    let index = state.store.checkpoint_index(&id).await?;
-    let list: Vec<Value> = index
-        .iter()
-        .map(|(it, t)| json!({"iteration": it, "time": t, "href": format!("/v1/jobs/{id}/checkpoints/{it}.glb")}))
-        .collect();
-    Ok(Json(json!({ "checkpoints": list })))
-}
-
-/// `GET /v1/jobs/{id}/checkpoints/{n}.glb`.
-pub(super) async fn checkpoint_glb(
-    State(state): State<AppState>,
-    Path((id, file)): Path<(String, String)>,
-) -> Result<Response, ApiError> {
-    let job = rebuild(&state, &id).await?;
-    let n: i64 = file
-        .strip_suffix(".glb")
-        .and_then(|n| n.parse().ok())
-        .ok_or_else(|| ApiError::NotFound(format!("no checkpoint file {file:?}: expected {{iteration}}.glb")))?;
-    let cp = state
-        .store
-        .checkpoint_at(&id, n)
-        .await?
-        .ok_or_else(|| ApiError::NotFound(format!("job {id} has no checkpoint at iteration {n}")))?;
-    let bytes = blocking(move || state_glb(&job, &cp)).await?;
-    Ok(glb_response(bytes, &file))
 }

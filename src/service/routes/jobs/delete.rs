@@ -1,0 +1,19 @@
+//! `DELETE /v1/jobs/{id}`: a job that has ended, with its history, checkpoints and
+//! inputs; 409 while it is accepted or running.
+
+use super::super::find;
+use crate::service::{ApiError, AppState};
+use axum::extract::{Path, State};
+use axum::http::StatusCode;
+
+pub(in crate::service::routes) async fn delete(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<StatusCode, ApiError> {
+    let job = find(&state, &id).await?;
+    if !job.status.is_final() {
+        return Err(ApiError::Conflict(format!("job {id} is {}; cancel it first", job.status.as_str())));
+    }
+    state.store.delete(&id).await?;
+    Ok(StatusCode::NO_CONTENT)
+}
