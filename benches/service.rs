@@ -1,11 +1,16 @@
 //! Service latency: `POST /v1/jobs` and `GET /v1/jobs/{id}` (p50/p99) with 50
-//! concurrent pollers while 2 workers compute, over real HTTP on 127.0.0.1 with a
-//! temporary SQLite file; and the service's overhead on a short job (wall time from
-//! POST to `successful` minus the engine time of the same job run in-process).
+//! concurrent pollers while 2 workers compute, over real HTTP on 127.0.0.1; event
+//! streams (100 SSE clients and 20 pollers); the service's overhead on a short job
+//! (wall time from POST to `successful` minus the engine time of the same job run
+//! in-process); and the latency of a claim with 100,000 finished jobs in the table.
+//! On a temporary SQLite file, or on PostgreSQL when `SHAPEFLOW_BENCH_DATABASE` is
+//! a `postgres://` URL (an empty database: the bench fills it).
 //! `cargo bench --bench service`.
 
 use shapeflow::jobs::{parse_spec, prepare, run_prepared};
-use shapeflow::service::Service;
+use shapeflow::service::store::{self, ClaimPolicy, JobStatus};
+use shapeflow::service::{Service, ServiceConfig};
+use std::io::BufRead;
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -45,8 +50,12 @@ fn percentile(v: &mut [f64], p: f64) -> f64 {
 fn main() {
     shapeflow::tune_allocator();
     let dir = tempfile::tempdir().unwrap();
+    let database = std::env::var("SHAPEFLOW_BENCH_DATABASE")
+        .unwrap_or_else(|_| dir.path().join("bench.db").to_string_lossy().into_owned());
     let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
-    let service = rt.block_on(Service::start(&dir.path().join("bench.db"), 2, None)).unwrap();
+    let config = ServiceConfig { database: database.clone(), workers: 2, token: None, policy: ClaimPolicy::default() };
+    let service = rt.block_on(Service::start_with(config)).unwrap();
+    println!("backend: {}", service.state.store.backend());
     let listener = rt.block_on(tokio::net::TcpListener::bind("127.0.0.1:0")).unwrap();
     let addr = listener.local_addr().unwrap();
     let app = service.router();
@@ -100,6 +109,56 @@ fn main() {
         percentile(&mut polls, 0.5),
         percentile(&mut polls, 0.99)
     );
+
+    // 100 event streams and 20 pollers on the two busy jobs for 5 s
+    let stop = Arc::new(AtomicBool::new(false));
+    let streams: Vec<_> = (0..100)
+        .map(|k| {
+            let (stop, id) = (stop.clone(), busy[k % 2].clone());
+            std::thread::spawn(move || follow(addr, &id, &stop))
+        })
+        .collect();
+    let pollers: Vec<_> = (0..20)
+        .map(|k| {
+            let (stop, id) = (stop.clone(), busy[k % 2].clone());
+            std::thread::spawn(move || {
+                let mut lat = Vec::new();
+                while !stop.load(Ordering::Relaxed) {
+                    let t = Instant::now();
+                    assert_eq!(http(addr, "GET", &format!("/v1/jobs/{id}"), None).0, 200);
+                    lat.push(t.elapsed().as_secs_f64() * 1e3);
+                }
+                lat
+            })
+        })
+        .collect();
+    std::thread::sleep(Duration::from_secs(5));
+    stop.store(true, Ordering::Relaxed);
+    let mut polls: Vec<f64> = pollers.into_iter().flat_map(|h| h.join().unwrap()).collect();
+    let followed: Vec<(f64, usize, f64)> = streams.into_iter().map(|h| h.join().unwrap()).collect();
+    let mut first: Vec<f64> = followed.iter().map(|f| f.0).collect();
+    let mut gaps: Vec<f64> = followed.iter().map(|f| f.2).collect();
+    let events: usize = followed.iter().map(|f| f.1).sum();
+    println!();
+    println!("| 100 SSE clients, 20 pollers, 2 busy workers, 5 s | count | p50 | p99 |");
+    println!("|---|---|---|---|");
+    let n = polls.len();
+    println!(
+        "| GET /v1/jobs/{{id}} | {n} | {:.2} ms | {:.2} ms |",
+        percentile(&mut polls, 0.5),
+        percentile(&mut polls, 0.99)
+    );
+    println!(
+        "| SSE: connect → first event (the history so far) | 100 | {:.2} ms | {:.2} ms |",
+        percentile(&mut first, 0.5),
+        percentile(&mut first, 0.99)
+    );
+    println!(
+        "| SSE: longest wait between events, per client | 100 | {:.1} ms | {:.1} ms |",
+        percentile(&mut gaps, 0.5),
+        percentile(&mut gaps, 0.99)
+    );
+    println!("| SSE events delivered | {events} | | |");
     for id in &busy {
         http(addr, "POST", &format!("/v1/jobs/{id}/cancel"), None);
     }
@@ -132,4 +191,76 @@ fn main() {
     println!("| service: POST → successful (polled every ms) | {w:.1} ms |");
     println!("| overhead | {:.1} ms ({:.0} %) |", w - e, 100.0 * (w - e) / e);
     rt.block_on(service.stop());
+    rt.block_on(claims(&database));
+}
+
+/// Claim latency with 100,000 finished jobs in the table (bulk-inserted with SQL),
+/// through the store with no workers running: 50 accepted jobs claimed one by one.
+async fn claims(database: &str) {
+    let st = store::open(database).await.unwrap();
+    let bulk = if st.backend() == "postgres" {
+        "INSERT INTO jobs (id, status, spec, created_at) \
+         SELECT 'done-' || x, 'successful', '{}', '2026-01-01T00:00:00Z' FROM generate_series(1, 100000) x"
+    } else {
+        "INSERT INTO jobs (id, seq, status, spec, created_at) \
+         WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c WHERE x < 100000) \
+         SELECT 'done-' || x, 1000000 + x, 'successful', '{}', '2026-01-01T00:00:00Z' FROM c"
+    };
+    if database.starts_with("postgres") {
+        let pool = sqlx::PgPool::connect(database).await.unwrap();
+        sqlx::query(bulk).execute(&pool).await.unwrap();
+    } else {
+        let pool = sqlx::SqlitePool::connect(&format!("sqlite:{database}")).await.unwrap();
+        sqlx::query(bulk).execute(&pool).await.unwrap();
+    }
+    let mut ids = Vec::new();
+    for k in 0..50 {
+        let id = format!("claim-{k}");
+        st.insert_job(&id, SHORT, &Default::default()).await.unwrap();
+        ids.push(id);
+    }
+    let policy = ClaimPolicy::default();
+    let mut lat = Vec::new();
+    for _ in 0..50 {
+        let t = Instant::now();
+        let c = st.claim_next("bench", &policy).await.unwrap().expect("an accepted job");
+        lat.push(t.elapsed().as_secs_f64() * 1e3);
+        st.finish(&c.job.id, Some(&c.lease), JobStatus::Successful, None, None).await.unwrap();
+    }
+    println!();
+    println!("| claim with 100,000 finished jobs in the table | count | p50 | p99 |");
+    println!("|---|---|---|---|");
+    println!(
+        "| claim_next | 50 | {:.2} ms | {:.2} ms |",
+        percentile(&mut lat.clone(), 0.5),
+        percentile(&mut lat, 0.99)
+    );
+}
+
+/// Follow a job's event stream until `stop`: ms to the first event, the number of
+/// events, and the longest wait between two events (ms).
+fn follow(addr: SocketAddr, id: &str, stop: &AtomicBool) -> (f64, usize, f64) {
+    let t = Instant::now();
+    let mut s = TcpStream::connect(addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_millis(200))).unwrap();
+    write!(s, "GET /v1/jobs/{id}/events HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
+    let mut reader = std::io::BufReader::new(s);
+    let (mut first, mut count, mut longest, mut last) = (None, 0, 0.0f64, Instant::now());
+    let mut line = String::new();
+    while !stop.load(Ordering::Relaxed) {
+        line.clear();
+        match reader.read_line(&mut line) {
+            Ok(0) => break,
+            Ok(_) if line.starts_with("event: progress") => {
+                first.get_or_insert(t.elapsed().as_secs_f64() * 1e3);
+                if count > 0 {
+                    longest = longest.max(last.elapsed().as_secs_f64() * 1e3);
+                }
+                last = Instant::now();
+                count += 1;
+            }
+            _ => {}
+        }
+    }
+    (first.unwrap_or(f64::NAN), count, longest)
 }

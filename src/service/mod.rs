@@ -9,6 +9,7 @@
 //! /v1/openapi.json`, and the viewer page (`/`, `/jobs/{id}`, `/ui/...`).
 
 mod error;
+mod recorder;
 mod routes;
 pub mod store;
 mod wire;

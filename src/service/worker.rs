@@ -5,13 +5,14 @@
 //! outcome, every write fenced by the lease. A worker that loses its lease stops
 //! the run and writes nothing more.
 
+use super::recorder::{retrying, Recorder};
 use super::store::{ClaimPolicy, Claimed, JobStatus, Lease, Store, StoreError};
-use crate::flow::{Checkpoint, Progress, StopReason};
-use crate::jobs::{parse_spec, prepare, run_prepared, RunEvents};
+use crate::flow::StopReason;
+use crate::jobs::{parse_spec, prepare, run_prepared};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 use tokio::runtime::Handle;
 use tokio::sync::{broadcast, Notify};
 
@@ -45,86 +46,6 @@ pub struct Worker {
     /// This node's name in the leases it holds.
     pub owner: String,
     pub policy: ClaimPolicy,
-}
-
-/// Why a run's writes stopped.
-#[derive(Default)]
-struct WriteState {
-    /// The lease moved on: another worker has the job.
-    lost: bool,
-    /// Another storage error.
-    error: Option<String>,
-}
-
-/// Buffers progress rows and writes them (with checkpoints) in fenced transactions.
-struct Recorder<'a> {
-    w: &'a Worker,
-    id: &'a str,
-    lease: &'a Lease,
-    rows: Vec<Progress>,
-    last_flush: Instant,
-    cancel: &'a AtomicBool,
-    state: WriteState,
-}
-
-/// How long a write is retried while the database cannot be reached.
-const RETRY_FOR: Duration = Duration::from_secs(60);
-
-/// `op` until it succeeds, fails for a reason other than an unreachable database,
-/// or [`RETRY_FOR`] has passed.
-fn retrying<T, F: std::future::Future<Output = Result<T, StoreError>>>(
-    rt: &Handle,
-    mut op: impl FnMut() -> F,
-) -> Result<T, StoreError> {
-    let start = Instant::now();
-    loop {
-        match rt.block_on(op()) {
-            Err(e) if e.is_transient() && start.elapsed() < RETRY_FOR => {
-                tracing::warn!("database unreachable ({e}); retrying");
-                std::thread::sleep(Duration::from_millis(250));
-            }
-            other => return other,
-        }
-    }
-}
-
-impl Recorder<'_> {
-    fn flush(&mut self, checkpoint: Option<&Checkpoint>) {
-        if self.state.lost || self.state.error.is_some() {
-            return;
-        }
-        let rows = std::mem::take(&mut self.rows);
-        let (store, id, lease) = (&self.w.store, self.id, self.lease);
-        match retrying(&self.w.rt, || store.record(id, lease, &rows, checkpoint)) {
-            Ok(()) => {
-                let _ = self.w.events.send(Arc::from(self.id));
-            }
-            Err(StoreError::LeaseLost(_)) => {
-                self.state.lost = true;
-                self.cancel.store(true, Ordering::Relaxed);
-            }
-            Err(e) => {
-                self.state.error = Some(e.to_string());
-                self.cancel.store(true, Ordering::Relaxed);
-            }
-        }
-        if let Ok(true) = self.w.rt.block_on(self.w.store.cancel_requested(self.id)) {
-            self.cancel.store(true, Ordering::Relaxed);
-        }
-        self.last_flush = Instant::now();
-    }
-}
-
-impl RunEvents for Recorder<'_> {
-    fn progress(&mut self, p: &Progress) {
-        self.rows.push(*p);
-        if self.rows.len() >= 256 || self.last_flush.elapsed() > Duration::from_millis(250) {
-            self.flush(None);
-        }
-    }
-    fn checkpoint(&mut self, c: &Checkpoint) {
-        self.flush(Some(c));
-    }
 }
 
 impl Worker {
@@ -191,7 +112,7 @@ impl Worker {
     fn run(&self, claimed: &Claimed) -> Result<JobStatus, StoreError> {
         let (job, lease) = (&claimed.job, &claimed.lease);
         let finish = |status: JobStatus, stop: Option<&str>, msg: Option<&str>| -> Result<JobStatus, StoreError> {
-            retrying(&self.rt, || self.store.finish(&job.id, Some(lease), status, stop, msg))?;
+            self.rt.block_on(retrying(|| self.store.finish(&job.id, Some(lease), status, stop, msg)))?;
             let _ = self.events.send(Arc::from(job.id.as_str()));
             Ok(status)
         };
@@ -213,24 +134,17 @@ impl Worker {
         let done = Arc::new(Notify::new());
         self.heartbeat(&job.id, lease, done.clone(), lost.clone(), cancel.clone());
         self.registry.lock().unwrap().insert(job.id.clone(), cancel.clone());
-        let mut rec = Recorder {
-            w: self,
-            id: &job.id,
-            lease,
-            rows: Vec::new(),
-            last_flush: Instant::now(),
-            cancel: &cancel,
-            state: WriteState::default(),
-        };
+        let mut rec =
+            Recorder::start(&self.rt, self.store.clone(), &job.id, lease, cancel.clone(), self.events.clone());
         let result = run_prepared(&prepared, resume.as_ref(), &cancel, &mut rec);
-        rec.flush(None);
+        let written = rec.close();
         done.notify_one();
         self.registry.lock().unwrap().remove(&job.id);
-        if rec.state.lost || lost.load(Ordering::Relaxed) {
+        if written.lost || lost.load(Ordering::Relaxed) {
             tracing::warn!(job = %job.id, "the job was taken over by another worker; this run's results are dropped");
             return Err(StoreError::LeaseLost(job.id.clone()));
         }
-        if let Some(e) = rec.state.error {
+        if let Some(e) = written.error {
             return finish(JobStatus::Failed, None, Some(&format!("storage error: {e}")));
         }
         match result {

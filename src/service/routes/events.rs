@@ -13,6 +13,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use tokio::sync::broadcast;
 
+/// History rows read at a time by a stream.
+const PAGE: usize = 1000;
+
 /// Server-Sent Events: one `progress` event per iteration (`id` = iteration, so a
 /// reconnect with `Last-Event-ID` continues after it), then one `status` event with
 /// the finished job, and the stream ends. Keep-alive comments every 15 s; streams end
@@ -48,7 +51,8 @@ pub(super) async fn events(
                 return None;
             }
             let job = c.state.store.job(&c.id).await.ok().flatten();
-            let rows = c.state.store.history_from(&c.id, c.next).await.unwrap_or_default();
+            // a page at a time: streams catching up on a long history take turns
+            let rows = c.state.store.history_from(&c.id, c.next, PAGE).await.unwrap_or_default();
             for p in rows {
                 c.next = p.iteration + 1;
                 let data = serde_json::to_string(&p).expect("progress serializes");

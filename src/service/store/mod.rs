@@ -179,14 +179,15 @@ pub trait JobStore: Send + Sync + 'static {
     async fn checkpoints(&self, id: &str) -> StoreResult<Vec<Checkpoint>>;
     /// Append history rows (replacing rows already present after a resume), update
     /// the job's progress and store a checkpoint, in one transaction fenced by
-    /// `lease`; on PostgreSQL also one notification for the batch.
+    /// `lease`; on PostgreSQL also one notification for the batch. Returns whether
+    /// cancellation was requested (read by the fence).
     async fn record(
         &self,
         id: &str,
         lease: &Lease,
         rows: &[Progress],
         checkpoint: Option<&Checkpoint>,
-    ) -> StoreResult<()>;
+    ) -> StoreResult<bool>;
     /// Drop history rows after a checkpoint (before resuming from it); fenced.
     async fn truncate_history(&self, id: &str, lease: &Lease, after: usize) -> StoreResult<()>;
     /// End a job: fenced by `lease` if given (a worker), unconditional otherwise
@@ -206,10 +207,10 @@ pub trait JobStore: Send + Sync + 'static {
     /// Returns the status before the request, `None` if unknown.
     async fn request_cancel(&self, id: &str) -> StoreResult<Option<JobStatus>>;
     async fn delete(&self, id: &str) -> StoreResult<()>;
-    /// History rows from iteration `from` on.
-    async fn history_from(&self, id: &str, from: usize) -> StoreResult<Vec<Progress>>;
+    /// History rows from iteration `from` on, at most `limit`.
+    async fn history_from(&self, id: &str, from: usize, limit: usize) -> StoreResult<Vec<Progress>>;
     async fn history(&self, id: &str) -> StoreResult<Vec<Progress>> {
-        self.history_from(id, 0).await
+        self.history_from(id, 0, usize::MAX).await
     }
 }
 

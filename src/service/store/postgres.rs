@@ -54,14 +54,17 @@ fn job_from_row(r: &PgRow) -> JobRow {
     }
 }
 
-/// Within `tx`: lock the job's row and refuse unless `lease` is still its lease.
-async fn fence(tx: &mut Transaction<'_, Postgres>, id: &str, lease: &Lease) -> StoreResult<()> {
-    let held = sqlx::query("SELECT 1 FROM jobs WHERE id = $1 AND lease_epoch = $2 AND status = 'running' FOR UPDATE")
-        .bind(id)
-        .bind(lease.epoch)
-        .fetch_optional(&mut **tx)
-        .await?;
-    held.map(|_| ()).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
+/// Within `tx`: lock the job's row and refuse unless `lease` is still its lease;
+/// whether cancellation was requested.
+async fn fence(tx: &mut Transaction<'_, Postgres>, id: &str, lease: &Lease) -> StoreResult<bool> {
+    let held = sqlx::query(
+        "SELECT cancel_requested FROM jobs WHERE id = $1 AND lease_epoch = $2 AND status = 'running' FOR UPDATE",
+    )
+    .bind(id)
+    .bind(lease.epoch)
+    .fetch_optional(&mut **tx)
+    .await?;
+    held.map(|r| r.get::<bool, _>(0)).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
 }
 
 impl PgStore {
@@ -201,8 +204,8 @@ impl JobStore for PgStore {
         loop {
             let mut tx = self.pool.begin().await?;
             let pick = sqlx::query(concat!(
-                "SELECT id, status, takeovers FROM jobs WHERE status = 'accepted' \
-                 OR (status = 'running' AND lease_expires < ",
+                "SELECT id, status, takeovers FROM jobs WHERE status IN ('accepted', 'running') \
+                 AND (status = 'accepted' OR lease_expires < ",
                 clock_ms!(),
                 ") ORDER BY seq LIMIT 1 FOR UPDATE SKIP LOCKED"
             ))
@@ -300,9 +303,9 @@ impl JobStore for PgStore {
         lease: &Lease,
         rows: &[Progress],
         checkpoint: Option<&Checkpoint>,
-    ) -> StoreResult<()> {
+    ) -> StoreResult<bool> {
         let mut tx = self.pool.begin().await?;
-        fence(&mut tx, id, lease).await?;
+        let cancel = fence(&mut tx, id, lease).await?;
         if !rows.is_empty() {
             // one statement for the batch
             let col = |f: fn(&Progress) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
@@ -350,7 +353,8 @@ impl JobStore for PgStore {
             .await?;
         }
         sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind(id).execute(&mut *tx).await?;
-        Ok(tx.commit().await?)
+        tx.commit().await?;
+        Ok(cancel)
     }
 
     async fn truncate_history(&self, id: &str, lease: &Lease, after: usize) -> StoreResult<()> {
@@ -426,12 +430,14 @@ impl JobStore for PgStore {
         Ok(())
     }
 
-    async fn history_from(&self, id: &str, from: usize) -> StoreResult<Vec<Progress>> {
-        let rows = sqlx::query("SELECT * FROM history WHERE job_id = $1 AND iteration >= $2 ORDER BY iteration")
-            .bind(id)
-            .bind(from as i64)
-            .fetch_all(&self.pool)
-            .await?;
+    async fn history_from(&self, id: &str, from: usize, limit: usize) -> StoreResult<Vec<Progress>> {
+        let rows =
+            sqlx::query("SELECT * FROM history WHERE job_id = $1 AND iteration >= $2 ORDER BY iteration LIMIT $3")
+                .bind(id)
+                .bind(from as i64)
+                .bind(limit.min(i64::MAX as usize) as i64)
+                .fetch_all(&self.pool)
+                .await?;
         Ok(rows
             .iter()
             .map(|r| Progress {

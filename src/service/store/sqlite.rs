@@ -58,14 +58,16 @@ fn progress_from_row(r: &sqlx::sqlite::SqliteRow) -> Progress {
     }
 }
 
-/// Within `tx`: refuse unless `lease` is still the job's.
-async fn fence(tx: &mut Transaction<'_, Sqlite>, id: &str, lease: &Lease) -> StoreResult<()> {
-    let held = sqlx::query("SELECT 1 FROM jobs WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running'")
-        .bind(id)
-        .bind(lease.epoch)
-        .fetch_optional(&mut **tx)
-        .await?;
-    held.map(|_| ()).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
+/// Within `tx`: refuse unless `lease` is still the job's; whether cancellation
+/// was requested.
+async fn fence(tx: &mut Transaction<'_, Sqlite>, id: &str, lease: &Lease) -> StoreResult<bool> {
+    let held =
+        sqlx::query("SELECT cancel_requested FROM jobs WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running'")
+            .bind(id)
+            .bind(lease.epoch)
+            .fetch_optional(&mut **tx)
+            .await?;
+    held.map(|r| r.get::<i64, _>(0) != 0).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
 }
 
 impl SqliteStore {
@@ -164,8 +166,8 @@ impl JobStore for SqliteStore {
         loop {
             let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
             let pick = sqlx::query(concat!(
-                "SELECT id, status, takeovers FROM jobs WHERE status = 'accepted' \
-                 OR (status = 'running' AND lease_expires < ",
+                "SELECT id, status, takeovers FROM jobs WHERE status IN ('accepted', 'running') \
+                 AND (status = 'accepted' OR lease_expires < ",
                 clock_ms!(),
                 ") ORDER BY seq LIMIT 1"
             ))
@@ -257,9 +259,9 @@ impl JobStore for SqliteStore {
         lease: &Lease,
         rows: &[Progress],
         checkpoint: Option<&Checkpoint>,
-    ) -> StoreResult<()> {
+    ) -> StoreResult<bool> {
         let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
-        fence(&mut tx, id, lease).await?;
+        let cancel = fence(&mut tx, id, lease).await?;
         for p in rows {
             sqlx::query("INSERT OR REPLACE INTO history VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)")
                 .bind(id)
@@ -296,7 +298,8 @@ impl JobStore for SqliteStore {
                 .execute(&mut *tx)
                 .await?;
         }
-        Ok(tx.commit().await?)
+        tx.commit().await?;
+        Ok(cancel)
     }
 
     async fn truncate_history(&self, id: &str, lease: &Lease, after: usize) -> StoreResult<()> {
@@ -356,12 +359,14 @@ impl JobStore for SqliteStore {
         Ok(())
     }
 
-    async fn history_from(&self, id: &str, from: usize) -> StoreResult<Vec<Progress>> {
-        let rows = sqlx::query("SELECT * FROM history WHERE job_id = ?1 AND iteration >= ?2 ORDER BY iteration")
-            .bind(id)
-            .bind(from as i64)
-            .fetch_all(&self.pool)
-            .await?;
+    async fn history_from(&self, id: &str, from: usize, limit: usize) -> StoreResult<Vec<Progress>> {
+        let rows =
+            sqlx::query("SELECT * FROM history WHERE job_id = ?1 AND iteration >= ?2 ORDER BY iteration LIMIT ?3")
+                .bind(id)
+                .bind(from as i64)
+                .bind(limit.min(i64::MAX as usize) as i64)
+                .fetch_all(&self.pool)
+                .await?;
         Ok(rows.iter().map(progress_from_row).collect())
     }
 }

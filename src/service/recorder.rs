@@ -1,0 +1,135 @@
+//! What a running job writes: its history rows (batched: 256 rows or 250 ms) and
+//! checkpoints, in fenced transactions ([`super::store::JobStore::record`]) made
+//! by a writer task in submission order, so that the engine computes on while the
+//! database commits (at most [`QUEUE`] batches wait; beyond that the engine waits).
+//! A lost lease or a storage error stops the run (through its cancel flag) and is
+//! reported when the recorder is closed.
+
+use super::store::{Lease, Store, StoreError};
+use crate::flow::{Checkpoint, Progress};
+use crate::jobs::RunEvents;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use tokio::runtime::Handle;
+use tokio::sync::{broadcast, mpsc};
+
+/// Batches that may wait for the writer.
+const QUEUE: usize = 4;
+
+/// How long a write is retried while the database cannot be reached.
+const RETRY_FOR: Duration = Duration::from_secs(60);
+
+/// Why a run's writes stopped.
+#[derive(Debug, Default)]
+pub(super) struct WriteState {
+    /// The lease moved on: another worker has the job.
+    pub lost: bool,
+    /// Another storage error.
+    pub error: Option<String>,
+}
+
+/// `op` until it succeeds, fails for a reason other than an unreachable database,
+/// or [`RETRY_FOR`] has passed.
+pub(super) async fn retrying<T, F: std::future::Future<Output = Result<T, StoreError>>>(
+    mut op: impl FnMut() -> F,
+) -> Result<T, StoreError> {
+    let start = Instant::now();
+    loop {
+        match op().await {
+            Err(e) if e.is_transient() && start.elapsed() < RETRY_FOR => {
+                tracing::warn!("database unreachable ({e}); retrying");
+                tokio::time::sleep(Duration::from_millis(250)).await;
+            }
+            other => return other,
+        }
+    }
+}
+
+struct Batch {
+    rows: Vec<Progress>,
+    checkpoint: Option<Checkpoint>,
+}
+
+/// The [`RunEvents`] of a job run by a worker.
+pub(super) struct Recorder {
+    rt: Handle,
+    rows: Vec<Progress>,
+    last_flush: Instant,
+    queue: Option<mpsc::Sender<Batch>>,
+    writer: Option<tokio::task::JoinHandle<WriteState>>,
+}
+
+impl Recorder {
+    /// Start the writer of job `id` under `lease`; `cancel` is raised when the run
+    /// must stop (cancellation requested, lease lost, storage error); every written
+    /// batch is announced on `events`.
+    pub(super) fn start(
+        rt: &Handle,
+        store: Store,
+        id: &str,
+        lease: &Lease,
+        cancel: Arc<AtomicBool>,
+        events: broadcast::Sender<Arc<str>>,
+    ) -> Recorder {
+        let (tx, mut rx) = mpsc::channel::<Batch>(QUEUE);
+        let (id, lease) = (id.to_string(), lease.clone());
+        let writer = rt.spawn(async move {
+            let mut state = WriteState::default();
+            while let Some(b) = rx.recv().await {
+                if state.lost || state.error.is_some() {
+                    continue; // drain: nothing more is written
+                }
+                match retrying(|| store.record(&id, &lease, &b.rows, b.checkpoint.as_ref())).await {
+                    Ok(cancelled) => {
+                        let _ = events.send(Arc::from(id.as_str()));
+                        if cancelled {
+                            cancel.store(true, Ordering::Relaxed);
+                        }
+                    }
+                    Err(StoreError::LeaseLost(_)) => {
+                        state.lost = true;
+                        cancel.store(true, Ordering::Relaxed);
+                    }
+                    Err(e) => {
+                        state.error = Some(e.to_string());
+                        cancel.store(true, Ordering::Relaxed);
+                    }
+                }
+            }
+            state
+        });
+        Recorder { rt: rt.clone(), rows: Vec::new(), last_flush: Instant::now(), queue: Some(tx), writer: Some(writer) }
+    }
+
+    fn flush(&mut self, checkpoint: Option<Checkpoint>) {
+        let rows = std::mem::take(&mut self.rows);
+        if let Some(q) = &self.queue {
+            // fails only if the writer ended, which it does not before `close`
+            let _ = q.blocking_send(Batch { rows, checkpoint });
+        }
+        self.last_flush = Instant::now();
+    }
+
+    /// Write what is left, wait for the writer, and say how the writes went.
+    pub(super) fn close(mut self) -> WriteState {
+        self.flush(None);
+        self.queue = None;
+        let writer = self.writer.take().expect("closed once");
+        self.rt
+            .block_on(writer)
+            .unwrap_or_else(|e| WriteState { lost: false, error: Some(format!("the writer stopped: {e}")) })
+    }
+}
+
+impl RunEvents for Recorder {
+    fn progress(&mut self, p: &Progress) {
+        self.rows.push(*p);
+        if self.rows.len() >= 256 || self.last_flush.elapsed() > Duration::from_millis(250) {
+            self.flush(None);
+        }
+    }
+    fn checkpoint(&mut self, c: &Checkpoint) {
+        self.flush(Some(c.clone()));
+    }
+}
