@@ -121,7 +121,7 @@ impl Node {
         let log = dir.join(format!("node{k}.log"));
         let child = Command::new(env!("CARGO_BIN_EXE_shapeflow"))
             .args(["serve", "--bind", &addr.to_string(), "--database", database, "--workers", "2"])
-            .args(["--lease-seconds", "2"])
+            .args(["--lease-seconds", "3"])
             .env("RUST_LOG", "info")
             .stdout(Stdio::null())
             .stderr(std::fs::File::create(&log).unwrap())
@@ -212,7 +212,11 @@ fn submit(node: &Node, spec: &str) -> String {
 }
 
 fn status(node: &Node, id: &str) -> String {
-    json(node.addr, "GET", &format!("/v1/jobs/{id}"), None).1["status"].as_str().unwrap_or("").to_string()
+    job(node, id)["status"].as_str().unwrap_or("").to_string()
+}
+
+fn job(node: &Node, id: &str) -> Value {
+    json(node.addr, "GET", &format!("/v1/jobs/{id}"), None).1
 }
 
 fn wait_all(node: &Node, ids: &[String], limit: Duration) {
@@ -223,7 +227,7 @@ fn wait_all(node: &Node, ids: &[String], limit: Duration) {
             if s == "successful" {
                 break;
             }
-            assert!(!matches!(s.as_str(), "failed" | "dismissed"), "job {id} ended {s}: {}", node.log_text());
+            assert!(!matches!(s.as_str(), "failed" | "dismissed"), "job {}\n{}", job(node, id), node.log_text());
             assert!(t0.elapsed() < limit, "job {id} still {s} after {limit:?}");
             std::thread::sleep(Duration::from_millis(100));
         }

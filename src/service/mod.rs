@@ -94,6 +94,18 @@ impl Service {
             closing: Arc::new(AtomicBool::new(false)),
             events,
         };
+        // a job queued by another node (PostgreSQL's "queue" notification) wakes the
+        // idle workers at once rather than at their next look at the store
+        let (mut queued, wake) = (state.events.subscribe(), state.wake.clone());
+        tokio::spawn(async move {
+            loop {
+                match queued.recv().await {
+                    Ok(e) if &*e == "queue" => wake.notify_waiters(),
+                    Err(broadcast::error::RecvError::Closed) => return,
+                    _ => {}
+                }
+            }
+        });
         let shutdown = Arc::new(AtomicBool::new(false));
         let rt = tokio::runtime::Handle::current();
         let node = format!("{}-{}", std::process::id(), &uuid::Uuid::new_v4().simple().to_string()[..8]);

@@ -62,9 +62,9 @@ impl Worker {
         }
     }
 
-    /// Loop until shutdown, sleeping on the wake-up notification when idle (at
-    /// most half a second: jobs of other nodes' queues and expired leases are
-    /// seen by polling the store).
+    /// Loop until shutdown, sleeping on the wake-up notification when idle (a
+    /// submission on this node, or another node's "queue" notification), at most
+    /// half a second: expired leases are seen by looking at the store.
     pub fn run_forever(&self) {
         while !self.shutdown.load(Ordering::Relaxed) {
             match self.try_execute_next() {

@@ -114,12 +114,13 @@ pub enum StoreError {
 pub type StoreResult<T> = Result<T, StoreError>;
 
 impl StoreError {
-    /// The database could not be reached (restarting, connection lost): the same
-    /// request may succeed a moment later.
+    /// The database could not be reached (restarting, connection lost), or ended
+    /// the session (a transaction left idle too long while this node was paused:
+    /// 25P03): the same request may succeed a moment later on a new connection.
     pub fn is_transient(&self) -> bool {
         match self {
             StoreError::Db(sqlx::Error::Database(e)) => {
-                e.code().is_some_and(|c| c.starts_with("08") || c.starts_with("57P"))
+                e.code().is_some_and(|c| c.starts_with("08") || c.starts_with("57P") || c == "25P03")
             }
             StoreError::Db(e) => matches!(
                 e,
