@@ -176,22 +176,7 @@ fn curves_surfaces_and_segmentations_validate_with_the_right_fields() {
     // the film itself filled over the period, down to the substrate: its area
     let child = doc["nodes"][0]["children"][0].as_u64().unwrap() as usize;
     let filled = &doc["meshes"][doc["nodes"][child]["mesh"].as_u64().unwrap() as usize]["primitives"][0];
-    let p = floats(&doc, bin, filled["attributes"]["POSITION"].as_u64().unwrap() as usize);
-    let idx = &doc["accessors"][filled["indices"].as_u64().unwrap() as usize];
-    let view = &doc["bufferViews"][idx["bufferView"].as_u64().unwrap() as usize];
-    let off = view["byteOffset"].as_u64().unwrap() as usize;
-    let tris: Vec<u32> = bin[off..off + view["byteLength"].as_u64().unwrap() as usize]
-        .chunks_exact(4)
-        .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
-        .collect();
-    let area: f64 = tris
-        .chunks_exact(3)
-        .map(|t| {
-            let q = |k: usize| (p[3 * t[k] as usize] as f64, p[3 * t[k] as usize + 1] as f64);
-            let (a, b, c) = (q(0), q(1), q(2));
-            0.5 * ((b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1)).abs()
-        })
-        .sum();
+    let area = triangle_area(&doc, bin, filled);
     assert!((area - 0.5).abs() < 2e-3, "film area {area}");
     write("film.glb", &glb);
     write("film_evolution.glb", &states_glb(&job, &cps).unwrap());

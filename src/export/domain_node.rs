@@ -64,8 +64,8 @@ pub(super) fn domain_primitives(domain: &DomainOutline, ribbon_width: f64) -> Ve
     out
 }
 
-/// The diagonal of the bounding box of `points` (the ribbons' width is a share of
-/// that of `Σ`).
+/// The diagonal of the bounding box of `points` (ribbons are a share of it wide:
+/// the curves' for a frame, `Σ`'s for the domain).
 pub(super) fn bounding_diagonal(points: &[[f64; 2]]) -> f64 {
     let (lo, hi) = points.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
         ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])

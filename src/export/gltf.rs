@@ -216,10 +216,7 @@ impl Builder {
         }
         let drawing = super::fill::Drawing::of(m);
         let region = super::fill::region_triangles(&drawing.points, &drawing.region)?;
-        let (lo, hi) = drawing.points.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
-            ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])
-        });
-        let width = RIBBON_WIDTH * (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
+        let width = RIBBON_WIDTH * bounding_diagonal(&drawing.points);
         let mut primitives = Vec::new();
         if !region.is_empty() {
             let pos: Vec<f32> = drawing.points.iter().flat_map(|p| [p[0] as f32, p[1] as f32, 0.0]).collect();
