@@ -53,7 +53,16 @@ fn main() {
     let database = std::env::var("SHAPEFLOW_BENCH_DATABASE")
         .unwrap_or_else(|_| dir.path().join("bench.db").to_string_lossy().into_owned());
     let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
-    let config = ServiceConfig { database: database.clone(), workers: 2, token: None, policy: ClaimPolicy::default() };
+    // SHAPEFLOW_BENCH_OBJECT_STORE: an s3:// bucket instead of a temporary directory
+    let object_store = std::env::var("SHAPEFLOW_BENCH_OBJECT_STORE").ok();
+    let config = ServiceConfig {
+        database: database.clone(),
+        object_store,
+        data_dir: dir.path().to_path_buf(),
+        workers: 2,
+        token: None,
+        policy: ClaimPolicy::default(),
+    };
     let service = rt.block_on(Service::start_with(config)).unwrap();
     println!("backend: {}", service.state.store.backend());
     let listener = rt.block_on(tokio::net::TcpListener::bind("127.0.0.1:0")).unwrap();
@@ -191,13 +200,14 @@ fn main() {
     println!("| service: POST → successful (polled every ms) | {w:.1} ms |");
     println!("| overhead | {:.1} ms ({:.0} %) |", w - e, 100.0 * (w - e) / e);
     rt.block_on(service.stop());
-    rt.block_on(claims(&database));
+    rt.block_on(claims(&database, dir.path()));
 }
 
 /// Claim latency with 100,000 finished jobs in the table (bulk-inserted with SQL),
 /// through the store with no workers running: 50 accepted jobs claimed one by one.
-async fn claims(database: &str) {
-    let st = store::open(database).await.unwrap();
+async fn claims(database: &str, dir: &std::path::Path) {
+    let blobs = shapeflow::service::blobs::Blobs::local(&dir.join("blobs")).unwrap();
+    let st = store::open(database, blobs).await.unwrap();
     let bulk = if st.backend() == "postgres" {
         "INSERT INTO jobs (id, status, spec, created_at) \
          SELECT 'done-' || x, 'successful', '{}', '2026-01-01T00:00:00Z' FROM generate_series(1, 100000) x"

@@ -5,9 +5,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use shapeflow::export::{energy_csv, energy_svg};
 use shapeflow::flow::{Checkpoint, Progress};
-use shapeflow::jobs::{
-    image_result_names, parse_spec, prepare, result_state, run_prepared, state_glb, states_glb, RunEvents, StateResults,
-};
+use shapeflow::jobs::{parse_spec, prepare, result_files, run_prepared, Frame, RunEvents};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -70,10 +68,17 @@ struct NodeArgs {
     /// shared by the nodes of a cluster.
     #[arg(long, default_value = "shapeflow.db")]
     database: String,
-    /// Directory for the service's data (a SQLite database, with its WAL files);
-    /// created if missing.
+    /// Directory for the service's data (a SQLite database, with its WAL files,
+    /// and the folder `blobs` of inputs, checkpoints and results unless
+    /// --object-store is given); created if missing.
     #[arg(long, default_value = ".")]
     data_dir: PathBuf,
+    /// Keep inputs, checkpoints and result files in an S3-compatible bucket,
+    /// `s3://bucket` or `s3://bucket/prefix`, shared by the nodes of a cluster
+    /// (credentials and endpoint from AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY,
+    /// AWS_REGION, AWS_ENDPOINT, AWS_ALLOW_HTTP).
+    #[arg(long)]
+    object_store: Option<String>,
     /// Worker threads running jobs (default: number of cores).
     #[arg(long)]
     workers: Option<usize>,
@@ -93,11 +98,14 @@ impl NodeArgs {
             self.lease_seconds
         );
         let shared = self.database.contains("://") && !self.database.starts_with("sqlite:");
+        if let Some(url) = &self.object_store {
+            anyhow::ensure!(url.starts_with("s3://"), "--object-store must be an s3://bucket/prefix URL, got {url:?}");
+        }
+        std::fs::create_dir_all(&self.data_dir)
+            .with_context(|| format!("cannot create data directory {}", self.data_dir.display()))?;
         let database = if shared || self.database.starts_with("sqlite:") {
             self.database
         } else {
-            std::fs::create_dir_all(&self.data_dir)
-                .with_context(|| format!("cannot create data directory {}", self.data_dir.display()))?;
             self.data_dir.join(&self.database).to_string_lossy().into_owned()
         };
         let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
@@ -105,7 +113,14 @@ impl NodeArgs {
         anyhow::ensure!(api || workers > 0, "a worker node needs --workers of at least 1");
         let policy =
             ClaimPolicy { lease: std::time::Duration::from_secs_f64(self.lease_seconds), ..ClaimPolicy::default() };
-        Ok(shapeflow::service::ServiceConfig { database, workers: workers.max(!api as usize), token, policy })
+        Ok(shapeflow::service::ServiceConfig {
+            database,
+            object_store: self.object_store,
+            data_dir: self.data_dir,
+            workers: workers.max(!api as usize),
+            token,
+            policy,
+        })
     }
 }
 
@@ -292,36 +307,26 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
             (f.last, ExitCode::from(1))
         }
     };
-    let write = |name: &str, data: String| -> Result<()> {
+    let write = |name: &str, data: &[u8]| -> Result<()> {
         let p = out.join(name);
         std::fs::write(&p, data).with_context(|| format!("cannot write {}", p.display()))
     };
-    // what the results show (a segmentation's contour refined onto the edges);
-    // checkpoint.json keeps the flow's state for --resume
-    let shown = result_state(&job, &last);
-    let results = StateResults::new(&job, &shown);
-    write("shape.json", serde_json::to_string_pretty(&results.shape_document())?)?;
-    write("energy.csv", energy_csv(&rep.history))?;
-    write("energy.svg", energy_svg(&rep.history, &spec_path.display().to_string()))?;
-    write("checkpoint.json", serde_json::to_string(&last)?)?;
-    let mut written = vec!["shape.json", "energy.csv", "energy.svg", "checkpoint.json", "shape.glb"];
-    let write_bytes = |name: &str, data: Vec<u8>| -> Result<()> {
-        let p = out.join(name);
-        std::fs::write(&p, data).with_context(|| format!("cannot write {}", p.display()))
-    };
-    write_bytes("shape.glb", state_glb(&job, &shown))?;
-    if let Some(glb) = states_glb(&job, &rep.checkpoints) {
-        write_bytes("evolution.glb", glb)?;
-        written.push("evolution.glb");
+    // the frames of the run (the last one its final state); checkpoint.json keeps
+    // the flow's state for --resume
+    let mut states = std::mem::take(&mut rep.checkpoints);
+    if states.last() != Some(&last) {
+        states.push(last.clone());
     }
-    if let Some(img) = job.image.as_deref() {
-        for &(name, _) in image_result_names(img.dimension) {
-            if let Some((_, bytes)) = results.image_file(name) {
-                write_bytes(name, bytes)?;
-                written.push(name);
-            }
-        }
+    let frames: Vec<Frame> = states.iter().map(|s| Frame::of(&job, s)).collect();
+    let mut written = Vec::new();
+    for file in result_files(&job, &frames) {
+        write(file.name, &file.bytes)?;
+        written.push(file.name);
     }
+    write("energy.csv", energy_csv(&rep.history).as_bytes())?;
+    write("energy.svg", energy_svg(&rep.history, &spec_path.display().to_string()).as_bytes())?;
+    write("checkpoint.json", serde_json::to_string(&last)?.as_bytes())?;
+    written.extend(["energy.csv", "energy.svg", "checkpoint.json"]);
     say(format_args!("wrote {} in {}", written.join(", "), out.display()));
     Ok(code)
 }

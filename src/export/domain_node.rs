@@ -9,7 +9,7 @@ use super::fill::{region_triangles, ribbon};
 
 /// The outline of a shape-design domain: `Σ`, and the inner and outer curves of
 /// the control region `D` (closed polygons, either orientation).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DomainOutline {
     pub outer: Vec<[f64; 2]>,
     pub control: [Vec<[f64; 2]>; 2],

@@ -51,14 +51,14 @@ pub struct GltfFrame<'a> {
     pub energy: f64,
     /// The problem's own field, if it has one: its attribute name and its values
     /// per vertex of `mesh`.
-    pub own: Option<(&'static str, &'a [f64])>,
+    pub own: Option<(&'a str, &'a [f64])>,
     /// The field `COLOR_0` shows.
     pub color_by: ColorField,
 }
 
-impl GltfFrame<'_> {
+impl<'a> GltfFrame<'a> {
     /// The values of the coloured field and its attribute's name.
-    fn colored(&self) -> (&[f64], &'static str) {
+    fn colored(&self) -> (&'a [f64], &'a str) {
         match (self.color_by, self.own) {
             (ColorField::NormalVelocity, _) => (self.normal_velocity, "_NORMAL_VELOCITY"),
             (ColorField::ProblemField, Some((name, values))) => (values, name),

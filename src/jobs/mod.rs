@@ -1,9 +1,11 @@
 //! Jobs: the job spec (`spec`: serde types, parsing with errors naming the field,
 //! the JSON Schema and its Markdown reference), its translation into a mesh, a
 //! problem and flow settings (`prepare`), the run of a prepared job with progress
-//! and checkpoint callbacks (`run`) and the result files of a state (`results`).
+//! and checkpoint callbacks (`run`), the stored states with their fields
+//! (`frames`) and the result files of a run (`results`).
 //! No I/O: input files arrive as bytes.
 
+mod frames;
 mod prepare;
 mod results;
 mod run;
@@ -13,8 +15,9 @@ mod spec;
 
 pub use crate::formats::{read_mesh_file, MeshFileError};
 pub use crate::geometry::AnyMesh;
+pub use frames::{job_extras, state_glb, states_glb, Frame, FrameFields, GlbContext, MAX_FRAMES};
 pub use prepare::{default_min_size, default_mu, prepare, PreparedJob, ProblemKind, SegmentationSetup};
-pub use results::{image_result_names, job_extras, result_state, state_glb, states_glb, StateResults, MAX_FRAMES};
+pub use results::{image_result_names, result_files, result_state, ResultFile, StateResults, GLB};
 pub use run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
 pub use schema::{job_spec_schema, openapi_schemas};
 pub use schema_doc::job_spec_reference;

@@ -1,22 +1,15 @@
-//! glTF results of a job from its checkpoints: each state with its per-vertex
-//! curvature and normal velocity (recomputed from the job's problem on that state).
+//! The result files of a job ([`result_files`]: one list for the CLI and the
+//! service) and what its latest state shows ([`result_state`]).
 
-use super::run::vertex_fields;
-use super::spec::ColorBy;
-use super::{PreparedJob, ProblemKind};
-use crate::bulk::Polygon;
-use crate::export::{
-    evolution_glb, labels_png, mask_nrrd, mask_png, objects, objects_csv, overlay_png, shape_glb, shape_json,
-    ColorField, DomainOutline, GltfFrame, ObjectRow,
-};
-use crate::flow::{Checkpoint, MeshData, VertexFields};
+use super::frames::{Frame, GlbContext};
+use super::PreparedJob;
+use crate::export::{labels_png, mask_nrrd, mask_png, objects, objects_csv, overlay_png, shape_json, ObjectRow};
+use crate::flow::{Checkpoint, MeshData};
 use crate::geometry::{loop_area, Point};
 use crate::imaging::{encode_nrrd_labels, Grid};
 use crate::problems::refine_to_edges;
-use serde_json::{json, Value};
+use serde_json::Value;
 use std::cell::OnceCell;
-
-pub use crate::limits::MAX_FRAMES;
 
 /// The state a job's results show (shape.json, shape.glb, the mask and the overlay):
 /// for a segmentation with `problem.edge_refinement` (default on), `state` with its
@@ -143,78 +136,44 @@ pub fn image_result_names(dimension: usize) -> &'static [(&'static str, &'static
     }
 }
 
-/// The job's metadata for the glTF `extras`.
-pub fn job_extras(job: &PreparedJob) -> Value {
-    let spec = serde_json::to_value(&job.spec).unwrap_or(Value::Null);
-    json!({"generator": "shapeflow", "problem": spec["problem"]["type"], "spec": spec})
+/// One result file: its name, media type and bytes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ResultFile {
+    pub name: &'static str,
+    pub media_type: &'static str,
+    pub bytes: Vec<u8>,
 }
 
-/// Curvature, normal velocity and the problem's own field of `state`; zeros (and
-/// no own field) where they cannot be computed (e.g. the last state of a failed
-/// run), so that the geometry is still shown.
-fn fields(job: &PreparedJob, state: &Checkpoint) -> VertexFields {
-    let n = state.mesh.positions.len();
-    match vertex_fields(job, state) {
-        Ok(f) if f.curvature.len() == n && f.normal_velocity.len() == n => f,
-        _ => VertexFields { curvature: vec![0.0; n], normal_velocity: vec![0.0; n], own: None },
+/// The result files of a run whose frames (checkpoints with their fields, the
+/// last one its final state) are `frames`: shape.json and shape.glb of what the
+/// final state shows ([`result_state`]), evolution.glb of every frame, and for an
+/// image job its mask, overlay, label image and table of objects
+/// ([`image_result_names`]). Empty if there is no frame. The CLI writes these to
+/// its output directory; the service stores them when a job ends.
+pub fn result_files(job: &PreparedJob, frames: &[Frame]) -> Vec<ResultFile> {
+    let Some(last) = frames.last() else { return Vec::new() };
+    let context = GlbContext::of(job);
+    let shown = result_state(job, &last.state);
+    // the fields of the shown state: the last frame's, unless the contour moved
+    let shown_frame = if shown == last.state { last.clone() } else { Frame::of(job, &shown) };
+    let results = StateResults::new(job, &shown);
+    let json = serde_json::to_vec_pretty(&results.shape_document()).expect("shape.json serializes");
+    let mut files = vec![
+        ResultFile { name: "shape.json", media_type: "application/json", bytes: json },
+        ResultFile { name: "shape.glb", media_type: GLB, bytes: context.frame_glb(&shown_frame) },
+    ];
+    if let Some(glb) = context.evolution_glb(frames) {
+        files.push(ResultFile { name: "evolution.glb", media_type: GLB, bytes: glb });
     }
-}
-
-/// One state to draw, with its fields.
-fn frame<'a>(job: &PreparedJob, state: &'a Checkpoint, fields: &'a VertexFields) -> GltfFrame<'a> {
-    GltfFrame {
-        mesh: &state.mesh,
-        curvature: &fields.curvature,
-        normal_velocity: &fields.normal_velocity,
-        own: fields.own.as_ref().map(|f| (f.name, f.values.as_slice())),
-        iteration: state.iteration,
-        time: state.time,
-        energy: state.energy,
-        color_by: color_field(job),
+    if let Some(img) = job.image.as_deref() {
+        for &(name, media_type) in image_result_names(img.dimension) {
+            if let Some((_, bytes)) = results.image_file(name) {
+                files.push(ResultFile { name, media_type, bytes });
+            }
+        }
     }
+    files
 }
 
-/// The field the job's glTF results colour (`output.color_by`).
-fn color_field(job: &PreparedJob) -> ColorField {
-    match job.spec.output.color_by {
-        ColorBy::Curvature => ColorField::Curvature,
-        ColorBy::NormalVelocity => ColorField::NormalVelocity,
-        ColorBy::ProblemField => ColorField::ProblemField,
-    }
-}
-
-/// The fixed domain (`Σ` and `D`) of a shape-design job.
-fn domain_outline(job: &PreparedJob) -> Option<DomainOutline> {
-    let ProblemKind::ShapeDesign(p) = &job.problem else { return None };
-    let points = |q: &Polygon| q.points().iter().map(|x| [x[0], x[1]]).collect::<Vec<_>>();
-    let [inner, outer] = p.domain.control();
-    Some(DomainOutline { outer: points(p.domain.outer()), control: [points(inner), points(outer)] })
-}
-
-/// shape.glb / checkpoints/{n}.glb of one state.
-pub fn state_glb(job: &PreparedJob, state: &Checkpoint) -> Vec<u8> {
-    let fields = fields(job, state);
-    shape_glb(&frame(job, state, &fields), domain_outline(job).as_ref(), job_extras(job))
-}
-
-/// evolution.glb of the checkpoints (in iteration order). `None` if there are none.
-pub fn states_glb(job: &PreparedJob, states: &[Checkpoint]) -> Option<Vec<u8>> {
-    if states.is_empty() {
-        return None;
-    }
-    let picked: Vec<&Checkpoint> = if states.len() <= MAX_FRAMES {
-        states.iter().collect()
-    } else {
-        let last = states.len() - 1;
-        (0..MAX_FRAMES).map(|k| &states[k * last / (MAX_FRAMES - 1)]).collect()
-    };
-    let fields: Vec<VertexFields> = picked.iter().map(|s| fields(job, s)).collect();
-    let frames: Vec<GltfFrame<'_>> = picked.iter().zip(&fields).map(|(s, f)| frame(job, s, f)).collect();
-    let mut extras = job_extras(job);
-    extras["frames"] = json!(frames.len());
-    extras["seconds_per_frame"] = json!(crate::export::FRAME_SECONDS);
-    // the animation's length, for importers that set a scene's frame range (the
-    // last frame is held for one more frame time)
-    extras["animation_seconds"] = json!(frames.len() as f64 * crate::export::FRAME_SECONDS as f64);
-    Some(evolution_glb(&frames, domain_outline(job).as_ref(), extras))
-}
+/// The media type of glTF binary files.
+pub const GLB: &str = "model/gltf-binary";

@@ -8,6 +8,7 @@
 //! /v1/jobs/{id}/checkpoints` and `.../checkpoints/{n}.glb`, `GET /healthz`, `GET
 //! /v1/openapi.json`, and the viewer page (`/`, `/jobs/{id}`, `/ui/...`).
 
+pub mod blobs;
 mod error;
 mod recorder;
 mod routes;
@@ -48,6 +49,10 @@ pub struct AppState {
 pub struct ServiceConfig {
     /// A SQLite file path or `sqlite:` URL, or a `postgres://` URL ([`store::open`]).
     pub database: String,
+    /// Where the blobs go: `s3://bucket/prefix`, or `None` for the directory
+    /// `blobs` under `data_dir` ([`blobs::Blobs::open`]).
+    pub object_store: Option<String>,
+    pub data_dir: std::path::PathBuf,
     /// Worker threads (0: none, an API-only node).
     pub workers: usize,
     /// With a token, every route but `/healthz` and the viewer page's needs it.
@@ -64,22 +69,32 @@ pub struct Service {
 
 impl Service {
     /// [`Service::start_with`] on a SQLite file with `workers` (at least one) worker
-    /// threads and the default leases.
+    /// threads and the default leases; blobs in the directory `blobs` beside it.
     pub async fn start(
         database: &std::path::Path,
         workers: usize,
         token: Option<String>,
     ) -> Result<Self, store::StoreError> {
+        let data_dir = database.parent().unwrap_or(std::path::Path::new(".")).to_path_buf();
         let database = database.to_string_lossy().into_owned();
-        Self::start_with(ServiceConfig { database, workers: workers.max(1), token, policy: ClaimPolicy::default() })
-            .await
+        let policy = ClaimPolicy::default();
+        Self::start_with(ServiceConfig {
+            database,
+            object_store: None,
+            data_dir,
+            workers: workers.max(1),
+            token,
+            policy,
+        })
+        .await
     }
 
     /// Open the store (on SQLite, jobs left running by a stop or crash go back to
     /// the queue; on PostgreSQL their leases expire) and start the worker threads.
     /// Call from within a tokio runtime.
     pub async fn start_with(config: ServiceConfig) -> Result<Self, store::StoreError> {
-        let store = store::open(&config.database).await?;
+        let blobs = blobs::Blobs::open(config.object_store.as_deref(), &config.data_dir)?;
+        let store = store::open(&config.database, blobs).await?;
         let requeued = store.requeue_running().await?;
         if requeued > 0 {
             tracing::info!(requeued, "jobs interrupted by a previous stop go back to the queue");

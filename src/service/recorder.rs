@@ -2,12 +2,14 @@
 //! checkpoints, in fenced transactions ([`super::store::JobStore::record`]) made
 //! by a writer task in submission order, so that the engine computes on while the
 //! database commits (at most [`QUEUE`] batches wait; beyond that the engine waits).
+//! A checkpoint is stored as a [`Frame`]: its per-vertex fields are computed once,
+//! by the writer, on the blocking pool.
 //! A lost lease or a storage error stops the run (through its cancel flag) and is
 //! reported when the recorder is closed.
 
 use super::store::{Lease, Store, StoreError};
 use crate::flow::{Checkpoint, Progress};
-use crate::jobs::RunEvents;
+use crate::jobs::{Frame, PreparedJob, RunEvents};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -27,6 +29,8 @@ pub(super) struct WriteState {
     pub lost: bool,
     /// Another storage error.
     pub error: Option<String>,
+    /// The frames written, in order.
+    pub frames: Vec<Frame>,
 }
 
 /// `op` until it succeeds, fails for a reason other than an unreachable database,
@@ -66,6 +70,7 @@ impl Recorder {
     /// batch is announced on `events`.
     pub(super) fn start(
         rt: &Handle,
+        job: Arc<PreparedJob>,
         store: Store,
         id: &str,
         lease: &Lease,
@@ -80,8 +85,23 @@ impl Recorder {
                 if state.lost || state.error.is_some() {
                     continue; // drain: nothing more is written
                 }
-                match retrying(|| store.record(&id, &lease, &b.rows, b.checkpoint.as_ref())).await {
+                let frame = match b.checkpoint {
+                    Some(cp) => {
+                        let job = job.clone();
+                        match tokio::task::spawn_blocking(move || Frame::of(&job, &cp)).await {
+                            Ok(frame) => Some(frame),
+                            Err(e) => {
+                                state.error = Some(format!("the fields of a checkpoint: {e}"));
+                                cancel.store(true, Ordering::Relaxed);
+                                continue;
+                            }
+                        }
+                    }
+                    None => None,
+                };
+                match retrying(|| store.record(&id, &lease, &b.rows, frame.as_ref())).await {
                     Ok(cancelled) => {
+                        state.frames.extend(frame);
                         let _ = events.send(Arc::from(id.as_str()));
                         if cancelled {
                             cancel.store(true, Ordering::Relaxed);
@@ -118,7 +138,7 @@ impl Recorder {
         let writer = self.writer.take().expect("closed once");
         self.rt
             .block_on(writer)
-            .unwrap_or_else(|e| WriteState { lost: false, error: Some(format!("the writer stopped: {e}")) })
+            .unwrap_or_else(|e| WriteState { error: Some(format!("the writer stopped: {e}")), ..WriteState::default() })
     }
 }
 

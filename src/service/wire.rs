@@ -53,7 +53,7 @@ pub struct ResultFile {
     pub name: String,
     pub href: String,
     #[serde(rename = "type")]
-    pub media_type: &'static str,
+    pub media_type: String,
 }
 
 /// `GET /v1/jobs/{id}/results`: the result files available now.

@@ -1,14 +1,15 @@
 //! Worker threads that run jobs from the store's queue. Each worker step
 //! ([`Worker::try_execute_next`]) claims the oldest accepted job (or one whose
 //! lease expired), keeps its lease alive with heartbeats, runs it (resuming from
-//! its last checkpoint, if any), and records history rows, checkpoints and the
-//! outcome, every write fenced by the lease. A worker that loses its lease stops
-//! the run and writes nothing more.
+//! its last checkpoint, if any), and records history rows, checkpoints, the
+//! result files and the outcome, every write fenced by the lease. A worker that
+//! loses its lease stops the run and writes nothing more. The result files are
+//! computed once, when the run ends ([`result_files`]), from the frames stored.
 
 use super::recorder::{retrying, Recorder};
-use super::store::{ClaimPolicy, Claimed, JobStatus, Lease, Store, StoreError};
+use super::store::{ClaimPolicy, Claimed, JobStatus, Lease, Store, StoreError, Which};
 use crate::flow::StopReason;
-use crate::jobs::{parse_spec, prepare, run_prepared};
+use crate::jobs::{parse_spec, prepare, result_files, run_prepared, GlbContext};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -121,10 +122,14 @@ impl Worker {
         }
         let inputs = self.rt.block_on(self.store.inputs(&job.id))?;
         let prepared = match parse_spec(&job.spec).and_then(|s| prepare(s, &inputs)) {
-            Ok(p) => p,
+            Ok(p) => Arc::new(p),
             Err(e) => return finish(JobStatus::Failed, None, Some(&e.to_string())),
         };
-        let resume = self.rt.block_on(self.store.last_checkpoint(&job.id))?;
+        let context = GlbContext::of(&prepared);
+        self.rt.block_on(retrying(|| self.store.put_context(&job.id, &context)))?;
+        // the frames stored so far (a takeover), for evolution.glb
+        let mut frames = self.rt.block_on(self.store.frames(&job.id, Which::All))?;
+        let resume = frames.last().map(|f| f.state.clone());
         if let Some(cp) = &resume {
             self.rt.block_on(self.store.truncate_history(&job.id, lease, cp.iteration))?;
             tracing::info!(job = %job.id, iteration = cp.iteration, "resuming from checkpoint");
@@ -134,10 +139,11 @@ impl Worker {
         let done = Arc::new(Notify::new());
         self.heartbeat(&job.id, lease, done.clone(), lost.clone(), cancel.clone());
         self.registry.lock().unwrap().insert(job.id.clone(), cancel.clone());
+        let store = self.store.clone();
         let mut rec =
-            Recorder::start(&self.rt, self.store.clone(), &job.id, lease, cancel.clone(), self.events.clone());
+            Recorder::start(&self.rt, prepared.clone(), store, &job.id, lease, cancel.clone(), self.events.clone());
         let result = run_prepared(&prepared, resume.as_ref(), &cancel, &mut rec);
-        let written = rec.close();
+        let mut written = rec.close();
         done.notify_one();
         self.registry.lock().unwrap().remove(&job.id);
         if written.lost || lost.load(Ordering::Relaxed) {
@@ -147,9 +153,24 @@ impl Worker {
         if let Some(e) = written.error {
             return finish(JobStatus::Failed, None, Some(&format!("storage error: {e}")));
         }
+        let stopping = matches!(&result, Ok(o) if o.stop == StopReason::Cancelled)
+            && self.shutdown.load(Ordering::Relaxed)
+            && !self.rt.block_on(self.store.cancel_requested(&job.id))?;
+        if !stopping {
+            // a resumed run's first frame repeats the last one stored before
+            let resumed_at = frames.last().map(|f| f.state.iteration);
+            frames.extend(written.frames.drain(..).filter(|f| Some(f.state.iteration) != resumed_at));
+            let files = result_files(&prepared, &frames);
+            match self.rt.block_on(retrying(|| self.store.put_results(&job.id, Some(lease), &files))) {
+                Ok(_) => {}
+                Err(StoreError::LeaseLost(id)) => return Err(StoreError::LeaseLost(id)),
+                // written on the first request instead
+                Err(e) => tracing::warn!(job = %job.id, "cannot store the result files: {e}"),
+            }
+        }
         match result {
             Ok(o) if o.stop == StopReason::Cancelled => {
-                if self.shutdown.load(Ordering::Relaxed) && !self.rt.block_on(self.store.cancel_requested(&job.id))? {
+                if stopping {
                     // stopped by a node shutdown: the job goes back to the queue
                     // (PostgreSQL) or stays running to resume at the next start (SQLite)
                     self.rt.block_on(self.store.release(&job.id, lease))?;

@@ -1,5 +1,7 @@
 //! Helpers shared by the test binaries.
 
+pub mod server;
+
 use std::path::Path;
 use std::process::Command;
 

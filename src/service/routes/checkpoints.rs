@@ -1,9 +1,9 @@
 //! `GET /v1/jobs/{id}/checkpoints` (iteration, time and link of each) and
 //! `GET /v1/jobs/{id}/checkpoints/{n}.glb` (one checkpoint as glTF).
 
-use super::results::{glb_response, rebuild};
+use super::results::{frames_to_draw, glb_response};
 use super::{blocking, find};
-use crate::jobs::state_glb;
+use crate::service::store::Which;
 use crate::service::wire::{CheckpointEntry, CheckpointList};
 use crate::service::{ApiError, AppState};
 use axum::extract::{Path, State};
@@ -25,21 +25,19 @@ pub(super) async fn list(State(state): State<AppState>, Path(id): Path<String>) 
     Ok(Json(CheckpointList { checkpoints }).into_response())
 }
 
-/// `GET /v1/jobs/{id}/checkpoints/{n}.glb`.
+/// `GET /v1/jobs/{id}/checkpoints/{n}.glb`: encoded from the stored frame.
 pub(super) async fn glb(
     State(state): State<AppState>,
     Path((id, file)): Path<(String, String)>,
 ) -> Result<Response, ApiError> {
-    let job = rebuild(&state, &id).await?;
+    find(&state, &id).await?;
     let n: i64 = file
         .strip_suffix(".glb")
         .and_then(|n| n.parse().ok())
         .ok_or_else(|| ApiError::NotFound(format!("no checkpoint file {file:?}: expected {{iteration}}.glb")))?;
-    let cp = state
-        .store
-        .checkpoint_at(&id, n)
-        .await?
-        .ok_or_else(|| ApiError::NotFound(format!("job {id} has no checkpoint at iteration {n}")))?;
-    let bytes = blocking(move || state_glb(&job, &cp)).await?;
+    let (context, mut frames) = frames_to_draw(&state, &id, Which::At(n)).await?;
+    let frame =
+        frames.pop().ok_or_else(|| ApiError::NotFound(format!("job {id} has no checkpoint at iteration {n}")))?;
+    let bytes = blocking(move || context.frame_glb(&frame)).await?;
     Ok(glb_response(bytes, &file))
 }

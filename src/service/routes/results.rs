@@ -1,32 +1,76 @@
-//! `GET /v1/jobs/{id}/results` (the manifest) and the result files: shape.json,
-//! shape.glb, evolution.glb and the image results. They are built on request from
-//! the stored checkpoints (on the blocking pool: glTF recomputes curvature and
-//! normal velocity).
+//! `GET /v1/jobs/{id}/results` (the manifest) and the result files. An ended
+//! job's files were computed once, by its worker, and are served as stored. A
+//! running job shows its latest checkpoint: shape.json, shape.glb and
+//! evolution.glb are encoded from the stored frames (checkpoints with their
+//! fields: nothing is solved); its image results come when it ends. An ended job
+//! whose files were never stored (its nodes kept dying, or an older version ran
+//! it) has them computed on the first request, and stored.
 
 use super::{blocking, find};
 use crate::export::shape_json;
-use crate::flow::Checkpoint;
-use crate::jobs::{
-    image_result_names, parse_spec, prepare, result_state, state_glb, states_glb, PreparedJob, StateResults,
-};
+use crate::jobs::{image_result_names, parse_spec, prepare, result_files, Frame, GlbContext, PreparedJob, GLB};
+use crate::service::store::{JobRow, ResultIndex, Which};
 use crate::service::wire::{Manifest, ResultFile};
 use crate::service::{ApiError, AppState};
 use axum::extract::{Path, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
 use axum::Json;
-use serde_json::Value;
 
-pub(super) const GLB: &str = "model/gltf-binary";
+/// The files a running job's latest checkpoint shows.
+const RUNNING_FILES: [(&str, &str); 3] =
+    [("shape.json", "application/json"), ("shape.glb", GLB), ("evolution.glb", GLB)];
 
-/// The job rebuilt from its stored spec (for the problem behind the fields).
-pub(super) async fn rebuild(state: &AppState, id: &str) -> Result<PreparedJob, ApiError> {
+/// The job prepared again from its stored spec and inputs: only for what an older
+/// version did not store (frames without fields, result files, the glb context).
+async fn rebuild(state: &AppState, id: &str) -> Result<PreparedJob, ApiError> {
     let row = find(state, id).await?;
     let spec = parse_spec(&row.spec).map_err(|e| ApiError::Internal(format!("stored spec of {id}: {e}")))?;
     let inputs = state.store.inputs(id).await?;
     blocking(move || prepare(spec, &inputs))
         .await?
         .map_err(|e| ApiError::Internal(format!("stored spec of {}: {e}", row.id)))
+}
+
+/// The frames `which` of job `id` and what their glb files share; frames stored
+/// without fields get them (the job prepared again).
+pub(super) async fn frames_to_draw(
+    state: &AppState,
+    id: &str,
+    which: Which,
+) -> Result<(GlbContext, Vec<Frame>), ApiError> {
+    let frames = state.store.frames(id, which).await?;
+    let context = state.store.context(id).await?;
+    if let (Some(context), true) = (&context, frames.iter().all(|f| f.fields.is_some())) {
+        return Ok((context.clone(), frames));
+    }
+    let job = rebuild(state, id).await?;
+    let (context, frames) = blocking(move || {
+        let frames = frames.into_iter().map(|f| if f.fields.is_some() { f } else { Frame::of(&job, &f.state) });
+        (GlbContext::of(&job), frames.collect::<Vec<_>>())
+    })
+    .await?;
+    state.store.put_context(id, &context).await?;
+    Ok((context, frames))
+}
+
+/// The stored result files of an ended job (computed and stored now if they are
+/// missing); `None` for a job still queued or running, or one with no state.
+async fn ended_results(state: &AppState, row: &JobRow) -> Result<Option<ResultIndex>, ApiError> {
+    if !row.status.is_final() {
+        return Ok(None);
+    }
+    if let Some(index) = &row.results {
+        return Ok(Some(index.clone()));
+    }
+    let (_, frames) = frames_to_draw(state, &row.id, Which::All).await?;
+    if frames.is_empty() {
+        return Ok(None);
+    }
+    let job = rebuild(state, &row.id).await?;
+    let files = blocking(move || result_files(&job, &frames)).await?;
+    state.store.put_results(&row.id, None, &files).await?;
+    Ok(state.store.job(&row.id).await?.and_then(|j| j.results))
 }
 
 pub(super) fn glb_response(bytes: Vec<u8>, name: &str) -> Response {
@@ -43,115 +87,103 @@ pub(super) fn glb_response(bytes: Vec<u8>, name: &str) -> Response {
 /// `GET /v1/jobs/{id}/results`: the result files available now.
 pub(super) async fn manifest(State(state): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
     let job = find(&state, &id).await?;
-    let index = state.store.checkpoint_index(&id).await?;
     let base = format!("/v1/jobs/{id}");
-    let file = |name: &str, href: String, media_type| ResultFile { name: name.to_string(), href, media_type };
+    let file = |name: &str, href: String, media_type: &str| ResultFile {
+        name: name.to_string(),
+        href,
+        media_type: media_type.to_string(),
+    };
     let mut files = vec![
         file("energy", format!("{base}/energy"), "application/json"),
         file("energy.csv", format!("{base}/energy?format=csv"), "text/csv"),
         file("energy.svg", format!("{base}/energy.svg"), "image/svg+xml"),
     ];
-    if !index.is_empty() {
-        files.push(file("shape.json", format!("{base}/results/shape.json"), "application/json"));
-        files.push(file("shape.glb", format!("{base}/results/shape.glb"), GLB));
-        files.push(file("evolution.glb", format!("{base}/results/evolution.glb"), GLB));
-        let spec: Value = serde_json::from_str(&job.spec).unwrap_or(Value::Null);
-        if spec["problem"]["type"] == "segmentation" {
-            let volume = spec["problem"]["image"].is_array() || is_volume(&state, &id).await?;
-            for (name, media) in image_result_names(if volume { 3 } else { 2 }) {
-                files.push(file(name, format!("{base}/results/{name}"), media));
-            }
-        }
+    if let Some(index) = ended_results(&state, &job).await? {
+        files.extend(index.files.iter().map(|f| file(&f.name, format!("{base}/results/{}", f.name), &f.media_type)));
+    } else if !job.status.is_final() && !state.store.checkpoint_index(&id).await?.is_empty() {
+        files.extend(RUNNING_FILES.iter().map(|(name, media)| file(name, format!("{base}/results/{name}"), media)));
     }
     let checkpoints = format!("{base}/checkpoints");
     Ok(Json(Manifest { id: &id, status: job.status, is_final: job.status.is_final(), files, checkpoints })
         .into_response())
 }
 
-/// `GET /v1/jobs/{id}/results/shape.json`: the latest state as its results show it
-/// (a segmentation's contour refined onto the edges, with pixel coordinates).
-pub(super) async fn shape(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Value>, ApiError> {
-    let row = find(&state, &id).await?;
-    let cp = state
-        .store
-        .last_checkpoint(&id)
-        .await?
-        .ok_or_else(|| ApiError::NotFound(format!("job {id} has no result yet")))?;
-    let spec: Value = serde_json::from_str(&row.spec).unwrap_or(Value::Null);
-    if spec["problem"]["type"] != "segmentation" {
-        return Ok(Json(shape_json(&cp.mesh, cp.energy, cp.iteration, None)));
+/// The stored file `name` of an ended job; `None` for a running job.
+async fn stored(state: &AppState, id: &str, name: &str) -> Result<Option<Response>, ApiError> {
+    let row = find(state, id).await?;
+    if ended_results(state, &row).await?.is_none() {
+        return Ok(None);
     }
-    let job = rebuild(&state, &id).await?;
-    let doc = blocking(move || StateResults::new(&job, &result_state(&job, &cp)).shape_document()).await?;
-    Ok(Json(doc))
+    match state.store.result_file(id, name).await? {
+        Some((media, bytes)) => Ok(Some(([(header::CONTENT_TYPE, media)], bytes).into_response())),
+        None => Err(ApiError::NotFound(format!("job {id} has no result {name}"))),
+    }
 }
 
-/// Whether the (single) input image of a segmentation job is an NRRD volume.
-async fn is_volume(state: &AppState, id: &str) -> Result<bool, ApiError> {
-    Ok(state.store.input_magics(id).await?.iter().any(|b| b.starts_with(b"NRRD")))
+/// The latest frame of a running job, or 404.
+async fn latest(state: &AppState, id: &str) -> Result<(GlbContext, Frame), ApiError> {
+    let (context, mut frames) = frames_to_draw(state, id, Which::Last).await?;
+    let frame = frames.pop().ok_or_else(|| ApiError::NotFound(format!("job {id} has no result yet")))?;
+    Ok((context, frame))
 }
 
-/// The job, its image and what its latest state shows ([`result_state`]), for
-/// image results.
-async fn image_job(state: &AppState, id: &str) -> Result<(PreparedJob, Checkpoint), ApiError> {
-    let job = rebuild(state, id).await?;
-    if job.image.is_none() {
-        return Err(ApiError::NotFound(format!("job {id} is not an image job: it has no mask")));
+/// `GET /v1/jobs/{id}/results/shape.json`: what the job's final state shows (a
+/// segmentation's contour refined onto the edges, with pixel coordinates and the
+/// objects), or the latest checkpoint of a running job.
+pub(super) async fn shape(State(state): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
+    if let Some(r) = stored(&state, &id, "shape.json").await? {
+        return Ok(r);
     }
-    let cp = state
-        .store
-        .last_checkpoint(id)
-        .await?
-        .ok_or_else(|| ApiError::NotFound(format!("job {id} has no result yet")))?;
-    blocking(move || {
-        let shown = result_state(&job, &cp);
-        (job, shown)
-    })
-    .await
+    let frames = state.store.frames(&id, Which::Last).await?;
+    let s = &frames.last().ok_or_else(|| ApiError::NotFound(format!("job {id} has no result yet")))?.state;
+    Ok(Json(shape_json(&s.mesh, s.energy, s.iteration, None)).into_response())
 }
 
 /// `GET /v1/jobs/{id}/results/mask.png`, `overlay.png`, `labels.png` (2D),
-/// `mask.nrrd`, `labels.nrrd` (3D), `objects.csv`: the segmentation of the latest
-/// state ([`StateResults::image_file`]).
+/// `mask.nrrd`, `labels.nrrd` (3D), `objects.csv`: the segmentation of an ended
+/// image job.
 pub(super) async fn image_result(
     State(state): State<AppState>,
     Path((id, file)): Path<(String, String)>,
 ) -> Result<Response, ApiError> {
     let known = [2, 3].iter().any(|&d| image_result_names(d).iter().any(|(n, _)| *n == file));
+    let row = find(&state, &id).await?;
     if !known {
-        state.store.job(&id).await?.ok_or_else(|| ApiError::NotFound(format!("no job {id}")))?;
         return Err(ApiError::NotFound(format!(
             "no result {file:?}; GET /v1/jobs/{id}/results lists this job's files"
         )));
     }
-    let (job, cp) = image_job(&state, &id).await?;
-    let dimension = job.image.as_ref().map_or(0, |g| g.dimension);
-    let wanted = file.clone();
-    let found = blocking(move || StateResults::new(&job, &cp).image_file(&wanted)).await?;
-    let Some((media, bytes)) = found else {
-        return Err(ApiError::NotFound(format!("job {id} has no result {file} ({dimension}D image)")));
-    };
-    Ok(([(header::CONTENT_TYPE, media)], bytes).into_response())
+    let spec: serde_json::Value = serde_json::from_str(&row.spec).unwrap_or_default();
+    if spec["problem"]["type"] != "segmentation" {
+        return Err(ApiError::NotFound(format!("job {id} is not an image job: it has no {file}")));
+    }
+    match stored(&state, &id, &file).await? {
+        Some(r) => Ok(r),
+        None => Err(ApiError::NotFound(format!(
+            "job {id} is {}: its image results are written when it ends",
+            row.status.as_str()
+        ))),
+    }
 }
 
-/// `GET /v1/jobs/{id}/results/shape.glb`: the final (or latest) state, as its
-/// results show it ([`result_state`]).
+/// `GET /v1/jobs/{id}/results/shape.glb`: the final state as its results show it,
+/// or the latest checkpoint of a running job.
 pub(super) async fn shape_glb(State(state): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
-    let job = rebuild(&state, &id).await?;
-    let cp = state
-        .store
-        .last_checkpoint(&id)
-        .await?
-        .ok_or_else(|| ApiError::NotFound(format!("job {id} has no result yet")))?;
-    let bytes = blocking(move || state_glb(&job, &result_state(&job, &cp))).await?;
+    if let Some(r) = stored(&state, &id, "shape.glb").await? {
+        return Ok(r);
+    }
+    let (context, frame) = latest(&state, &id).await?;
+    let bytes = blocking(move || context.frame_glb(&frame)).await?;
     Ok(glb_response(bytes, "shape.glb"))
 }
 
 /// `GET /v1/jobs/{id}/results/evolution.glb`: every checkpoint, animated.
 pub(super) async fn evolution_glb(State(state): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
-    let job = rebuild(&state, &id).await?;
-    let cps: Vec<Checkpoint> = state.store.checkpoints(&id).await?;
-    let bytes = blocking(move || states_glb(&job, &cps))
+    if let Some(r) = stored(&state, &id, "evolution.glb").await? {
+        return Ok(r);
+    }
+    let (context, frames) = frames_to_draw(&state, &id, Which::All).await?;
+    let bytes = blocking(move || context.evolution_glb(&frames))
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("job {id} has no checkpoint yet")))?;
     Ok(glb_response(bytes, "evolution.glb"))

@@ -13,7 +13,9 @@
 mod postgres;
 mod sqlite;
 
+use super::blobs::{input_key, Blobs};
 use crate::flow::{Checkpoint, Progress};
+use crate::jobs::{Frame, GlbContext, ResultFile};
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Duration;
@@ -75,6 +77,8 @@ pub struct JobRow {
     pub message: Option<String>,
     pub stop_reason: Option<String>,
     pub progress: Option<Progress>,
+    /// The stored result files, once written.
+    pub results: Option<ResultIndex>,
 }
 
 /// The lease a worker holds on a running job.
@@ -109,6 +113,9 @@ pub enum StoreError {
     /// The job's lease moved on (another node took the job over): nothing was written.
     #[error("job {0}: the lease was lost to another worker")]
     LeaseLost(String),
+    /// The blob store refused or failed.
+    #[error("blob store: {0}")]
+    Blob(String),
 }
 
 pub type StoreResult<T> = Result<T, StoreError>;
@@ -140,21 +147,64 @@ pub struct Claimed {
     pub takeover: bool,
 }
 
-/// What every backend stores and how (see the module documentation).
+/// Which checkpoint rows to read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Which {
+    Last,
+    At(i64),
+    All,
+}
+
+/// A checkpoint row: the key of its frame in the blob store, or (rows stored
+/// before blobs) the checkpoint's JSON itself.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CheckpointRow {
+    pub iteration: i64,
+    pub blob: Option<String>,
+    pub data: String,
+}
+
+/// An input row: its name, and its bytes unless they are in the blob store.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputRow {
+    pub name: String,
+    pub in_blob: bool,
+    pub data: Vec<u8>,
+}
+
+/// The result files a job's row points to: the blob folder `results/{set}` of the
+/// job and the files in it.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ResultIndex {
+    pub set: String,
+    pub files: Vec<ResultEntry>,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ResultEntry {
+    pub name: String,
+    pub media_type: String,
+}
+
+/// What every backend stores and how (see the module documentation). The
+/// required methods are SQL on the backend's rows; the provided ones put the
+/// large bytes in the blob store first and the rows that point to them after.
 #[async_trait::async_trait]
 pub trait JobStore: Send + Sync + 'static {
     /// Which backend ("sqlite", "postgres").
     fn backend(&self) -> &'static str;
+    /// Where inputs, frames and result files are kept.
+    fn blobs(&self) -> &Blobs;
     /// Forward other nodes' activity to `events` (a job's id per history batch or
     /// outcome; `"*"`: re-read everything). Nothing to do on a single node, whose
     /// workers send to `events` themselves.
     fn watch(&self, _events: tokio::sync::broadcast::Sender<Arc<str>>) {}
-    /// Store a new accepted job and its uploaded inputs, in one transaction.
-    async fn insert_job(&self, id: &str, spec: &str, inputs: &HashMap<String, Vec<u8>>) -> StoreResult<JobRow>;
+    /// Insert a new accepted job and the rows of its inputs (already in the blob
+    /// store; `heads`: name and first bytes of each), in one transaction.
+    async fn insert_rows(&self, id: &str, spec: &str, heads: &[(String, Vec<u8>)]) -> StoreResult<JobRow>;
     /// The first bytes (at most 8) of each uploaded input of a job.
     async fn input_magics(&self, id: &str) -> StoreResult<Vec<Vec<u8>>>;
-    /// The uploaded inputs of a job, by name.
-    async fn inputs(&self, id: &str) -> StoreResult<HashMap<String, Vec<u8>>>;
+    async fn input_rows(&self, id: &str) -> StoreResult<Vec<InputRow>>;
     async fn job(&self, id: &str) -> StoreResult<Option<JobRow>>;
     /// Jobs newest first, optionally of one status and submitted before `before`
     /// (a `seq`), at most `limit`.
@@ -170,27 +220,28 @@ pub trait JobStore: Send + Sync + 'static {
     async fn renew(&self, id: &str, lease: &Lease, policy: &ClaimPolicy) -> StoreResult<bool>;
     /// Give a running job back to the queue (a node stopping); fenced.
     async fn release(&self, id: &str, lease: &Lease) -> StoreResult<()>;
-    /// The newest checkpoint of a job.
-    async fn last_checkpoint(&self, id: &str) -> StoreResult<Option<Checkpoint>>;
     /// `(iteration, time)` of every checkpoint of a job, oldest first.
     async fn checkpoint_index(&self, id: &str) -> StoreResult<Vec<(i64, f64)>>;
-    /// The checkpoint of a job at `iteration`.
-    async fn checkpoint_at(&self, id: &str, iteration: i64) -> StoreResult<Option<Checkpoint>>;
-    /// Every checkpoint of a job, oldest first.
-    async fn checkpoints(&self, id: &str) -> StoreResult<Vec<Checkpoint>>;
+    /// Checkpoint rows of a job, oldest first.
+    async fn checkpoint_rows(&self, id: &str, which: Which) -> StoreResult<Vec<CheckpointRow>>;
     /// Append history rows (replacing rows already present after a resume), update
-    /// the job's progress and store a checkpoint, in one transaction fenced by
-    /// `lease`; on PostgreSQL also one notification for the batch. Returns whether
-    /// cancellation was requested (read by the fence).
-    async fn record(
+    /// the job's progress and add the row of a checkpoint (`(iteration, time, key
+    /// of its frame)`), in one transaction fenced by `lease`; on PostgreSQL also
+    /// one notification for the batch. Returns whether cancellation was requested
+    /// (read by the fence).
+    async fn record_rows(
         &self,
         id: &str,
         lease: &Lease,
         rows: &[Progress],
-        checkpoint: Option<&Checkpoint>,
+        checkpoint: Option<(i64, f64, &str)>,
     ) -> StoreResult<bool>;
     /// Drop history rows after a checkpoint (before resuming from it); fenced.
     async fn truncate_history(&self, id: &str, lease: &Lease, after: usize) -> StoreResult<()>;
+    /// Point the job's row to its result files: fenced by `lease` if given (a
+    /// worker), else only if the row points to none yet (results of an ended job
+    /// written on first request). Returns whether the row was changed.
+    async fn set_results(&self, id: &str, lease: Option<&Lease>, index: &str) -> StoreResult<bool>;
     /// End a job: fenced by `lease` if given (a worker), unconditional otherwise
     /// (cancelling an accepted job).
     async fn finish(
@@ -207,11 +258,114 @@ pub trait JobStore: Send + Sync + 'static {
     /// flagged (its worker, on whichever node, sees the flag at its next write).
     /// Returns the status before the request, `None` if unknown.
     async fn request_cancel(&self, id: &str) -> StoreResult<Option<JobStatus>>;
-    async fn delete(&self, id: &str) -> StoreResult<()>;
+    /// Delete the job's rows (history, checkpoints and inputs with them).
+    async fn delete_rows(&self, id: &str) -> StoreResult<()>;
     /// History rows from iteration `from` on, at most `limit`.
     async fn history_from(&self, id: &str, from: usize, limit: usize) -> StoreResult<Vec<Progress>>;
+
     async fn history(&self, id: &str) -> StoreResult<Vec<Progress>> {
         self.history_from(id, 0, usize::MAX).await
+    }
+
+    /// Store a new accepted job: its inputs in the blob store, then its rows.
+    async fn insert_job(&self, id: &str, spec: &str, inputs: &HashMap<String, Vec<u8>>) -> StoreResult<JobRow> {
+        let mut heads = Vec::with_capacity(inputs.len());
+        for (name, data) in inputs {
+            self.blobs().put(&input_key(id, name), data.clone()).await?;
+            heads.push((name.clone(), data[..data.len().min(8)].to_vec()));
+        }
+        self.insert_rows(id, spec, &heads).await
+    }
+
+    /// The uploaded inputs of a job, by name.
+    async fn inputs(&self, id: &str) -> StoreResult<HashMap<String, Vec<u8>>> {
+        let mut inputs = HashMap::new();
+        for row in self.input_rows(id).await? {
+            let data = if row.in_blob { self.blobs().get_existing(&input_key(id, &row.name)).await? } else { row.data };
+            inputs.insert(row.name, data);
+        }
+        Ok(inputs)
+    }
+
+    /// Checkpoints of a job with their fields, oldest first.
+    async fn frames(&self, id: &str, which: Which) -> StoreResult<Vec<Frame>> {
+        let mut frames = Vec::new();
+        for row in self.checkpoint_rows(id, which).await? {
+            let bytes = match &row.blob {
+                Some(key) => self.blobs().get_existing(&["jobs", id, "checkpoints", key]).await?,
+                None => row.data.into_bytes(),
+            };
+            let frame = serde_json::from_slice(&bytes).map_err(|e| {
+                StoreError::Blob(format!("checkpoint {} of job {id} cannot be read: {e}", row.iteration))
+            })?;
+            frames.push(frame);
+        }
+        Ok(frames)
+    }
+
+    /// The newest checkpoint of a job.
+    async fn last_checkpoint(&self, id: &str) -> StoreResult<Option<Checkpoint>> {
+        Ok(self.frames(id, Which::Last).await?.pop().map(|f| f.state))
+    }
+
+    /// History rows and, optionally, a checkpoint with its fields (its frame in the
+    /// blob store under a key with the lease's epoch, then its row): see
+    /// [`JobStore::record_rows`].
+    async fn record(&self, id: &str, lease: &Lease, rows: &[Progress], frame: Option<&Frame>) -> StoreResult<bool> {
+        let Some(frame) = frame else { return self.record_rows(id, lease, rows, None).await };
+        let key = format!("{}.e{}.json", frame.state.iteration, lease.epoch);
+        let json = serde_json::to_vec(frame).expect("frames serialize");
+        self.blobs().put(&["jobs", id, "checkpoints", &key], json).await?;
+        let (iteration, time) = (frame.state.iteration as i64, frame.state.time);
+        self.record_rows(id, lease, rows, Some((iteration, time, &key))).await
+    }
+
+    /// Store the result files of a job (see [`JobStore::set_results`] for `lease`)
+    /// in a new blob folder, point the row to it and drop the folder it pointed to
+    /// before. Returns whether the files were stored.
+    async fn put_results(&self, id: &str, lease: Option<&Lease>, files: &[ResultFile]) -> StoreResult<bool> {
+        let set = match lease {
+            Some(l) => format!("e{}", l.epoch),
+            None => format!("r{}", uuid::Uuid::new_v4().simple()),
+        };
+        for f in files {
+            self.blobs().put(&["jobs", id, "results", &set, f.name], f.bytes.clone()).await?;
+        }
+        let before = self.job(id).await?.and_then(|j| j.results);
+        let entries =
+            files.iter().map(|f| ResultEntry { name: f.name.into(), media_type: f.media_type.into() }).collect();
+        let index = serde_json::to_string(&ResultIndex { set: set.clone(), files: entries }).expect("serializes");
+        let changed = self.set_results(id, lease, &index).await?;
+        let old = if changed { before.filter(|b| b.set != set).map(|b| b.set) } else { Some(set) };
+        if let Some(old) = old {
+            self.blobs().delete_all(&["jobs", id, "results", &old]).await?;
+        }
+        Ok(changed)
+    }
+
+    /// A stored result file of a job: its media type and bytes.
+    async fn result_file(&self, id: &str, name: &str) -> StoreResult<Option<(String, Vec<u8>)>> {
+        let Some(index) = self.job(id).await?.and_then(|j| j.results) else { return Ok(None) };
+        let Some(entry) = index.files.iter().find(|f| f.name == name) else { return Ok(None) };
+        let bytes = self.blobs().get_existing(&["jobs", id, "results", &index.set, name]).await?;
+        Ok(Some((entry.media_type.clone(), bytes)))
+    }
+
+    /// Store what every glb of the job shares ([`GlbContext`]).
+    async fn put_context(&self, id: &str, context: &GlbContext) -> StoreResult<()> {
+        let json = serde_json::to_vec(context).expect("contexts serialize");
+        self.blobs().put(&["jobs", id, "context.json"], json).await
+    }
+
+    async fn context(&self, id: &str) -> StoreResult<Option<GlbContext>> {
+        let Some(bytes) = self.blobs().get(&["jobs", id, "context.json"]).await? else { return Ok(None) };
+        Ok(serde_json::from_slice(&bytes).ok())
+    }
+
+    /// Delete a job: its rows, then its blobs.
+    async fn delete(&self, id: &str) -> StoreResult<()> {
+        self.delete_rows(id).await?;
+        self.blobs().delete_all(&["jobs", id]).await
     }
 }
 
@@ -219,14 +373,20 @@ pub trait JobStore: Send + Sync + 'static {
 pub type Store = Arc<dyn JobStore>;
 
 /// Open the store `database` names: `postgres://…` / `postgresql://…`, a
-/// `sqlite:` URL, or a SQLite file path (created if missing); migrated.
-pub async fn open(database: &str) -> StoreResult<Store> {
+/// `sqlite:` URL, or a SQLite file path (created if missing); migrated. Its
+/// large bytes go to `blobs`.
+pub async fn open(database: &str, blobs: Blobs) -> StoreResult<Store> {
     if database.starts_with("postgres://") || database.starts_with("postgresql://") {
-        Ok(Arc::new(PgStore::open(database).await?))
+        Ok(Arc::new(PgStore::open(database, blobs).await?))
     } else {
         let path = database.strip_prefix("sqlite://").or_else(|| database.strip_prefix("sqlite:")).unwrap_or(database);
-        Ok(Arc::new(SqliteStore::open(std::path::Path::new(path)).await?))
+        Ok(Arc::new(SqliteStore::open(std::path::Path::new(path), blobs).await?))
     }
+}
+
+/// The stored result index of a row's `results` column.
+pub(crate) fn results_of(text: Option<String>) -> Option<ResultIndex> {
+    text.and_then(|t| serde_json::from_str(&t).ok())
 }
 
 /// RFC 3339 UTC from the system clock (timestamps shown to users; leases use the

@@ -5,12 +5,12 @@
 //! every node, [`PgStore::watch`]).
 
 use super::{
-    crash_message, now, status_of, ClaimPolicy, Claimed, JobRow, JobStatus, JobStore, Lease, StoreError, StoreResult,
+    crash_message, now, results_of, status_of, Blobs, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
+    JobStore, Lease, StoreError, StoreResult, Which,
 };
-use crate::flow::{Checkpoint, Progress};
+use crate::flow::Progress;
 use sqlx::postgres::{PgConnectOptions, PgListener, PgPool, PgPoolOptions, PgRow};
 use sqlx::{Postgres, Row, Transaction};
-use std::collections::HashMap;
 use std::str::FromStr;
 use std::sync::Arc;
 use std::time::Duration;
@@ -29,6 +29,7 @@ macro_rules! clock_ms {
 #[derive(Clone)]
 pub struct PgStore {
     pool: PgPool,
+    blobs: Blobs,
 }
 
 fn job_from_row(r: &PgRow) -> JobRow {
@@ -51,6 +52,7 @@ fn job_from_row(r: &PgRow) -> JobRow {
             vertices: r.get::<i64, _>("vertices") as usize,
             components: r.get::<i64, _>("components") as usize,
         }),
+        results: results_of(r.get("results")),
     }
 }
 
@@ -72,7 +74,7 @@ impl PgStore {
     /// restart) and migrate. A transaction left idle for 5 s (its node paused or cut
     /// off in the middle of one) is aborted by the server, so that the job rows it
     /// locked can be claimed again.
-    pub async fn open(url: &str) -> StoreResult<Self> {
+    pub async fn open(url: &str, blobs: Blobs) -> StoreResult<Self> {
         let options = PgConnectOptions::from_str(url)?.options([("idle_in_transaction_session_timeout", "5s")]);
         let pool = PgPoolOptions::new()
             .max_connections(8)
@@ -81,12 +83,7 @@ impl PgStore {
             .connect_with(options)
             .await?;
         sqlx::migrate!("./migrations/postgres").run(&pool).await?;
-        Ok(PgStore { pool })
-    }
-
-    async fn checkpoint_rows(&self, sql: &'static str, id: &str, iteration: i64) -> StoreResult<Vec<Checkpoint>> {
-        let rows = sqlx::query(sql).bind(id).bind(iteration).fetch_all(&self.pool).await?;
-        Ok(rows.iter().filter_map(|r| serde_json::from_str(&r.get::<String, _>("data")).ok()).collect())
+        Ok(PgStore { pool, blobs })
     }
 }
 
@@ -94,6 +91,10 @@ impl PgStore {
 impl JobStore for PgStore {
     fn backend(&self) -> &'static str {
         "postgres"
+    }
+
+    fn blobs(&self) -> &Blobs {
+        &self.blobs
     }
 
     /// Forward the notifications of [`CHANNEL`] to `events` (the job's id), from a
@@ -138,7 +139,7 @@ impl JobStore for PgStore {
         });
     }
 
-    async fn insert_job(&self, id: &str, spec: &str, inputs: &HashMap<String, Vec<u8>>) -> StoreResult<JobRow> {
+    async fn insert_rows(&self, id: &str, spec: &str, heads: &[(String, Vec<u8>)]) -> StoreResult<JobRow> {
         let mut tx = self.pool.begin().await?;
         let r =
             sqlx::query("INSERT INTO jobs (id, status, spec, created_at) VALUES ($1, 'accepted', $2, $3) RETURNING *")
@@ -147,11 +148,11 @@ impl JobStore for PgStore {
                 .bind(now())
                 .fetch_one(&mut *tx)
                 .await?;
-        for (name, data) in inputs {
-            sqlx::query("INSERT INTO inputs (job_id, name, data) VALUES ($1, $2, $3)")
+        for (name, head) in heads {
+            sqlx::query("INSERT INTO inputs (job_id, name, data, in_blob, head) VALUES ($1, $2, '', TRUE, $3)")
                 .bind(id)
                 .bind(name)
-                .bind(data.as_slice())
+                .bind(head.as_slice())
                 .execute(&mut *tx)
                 .await?;
         }
@@ -161,17 +162,23 @@ impl JobStore for PgStore {
     }
 
     async fn input_magics(&self, id: &str) -> StoreResult<Vec<Vec<u8>>> {
-        let rows = sqlx::query("SELECT substring(data from 1 for 8) AS head FROM inputs WHERE job_id = $1")
-            .bind(id)
-            .fetch_all(&self.pool)
-            .await?;
+        let rows =
+            sqlx::query("SELECT COALESCE(head, substring(data from 1 for 8)) AS head FROM inputs WHERE job_id = $1")
+                .bind(id)
+                .fetch_all(&self.pool)
+                .await?;
         Ok(rows.iter().map(|r| r.get::<Vec<u8>, _>("head")).collect())
     }
 
-    async fn inputs(&self, id: &str) -> StoreResult<HashMap<String, Vec<u8>>> {
-        let rows =
-            sqlx::query("SELECT name, data FROM inputs WHERE job_id = $1").bind(id).fetch_all(&self.pool).await?;
-        Ok(rows.iter().map(|r| (r.get::<String, _>("name"), r.get::<Vec<u8>, _>("data"))).collect())
+    async fn input_rows(&self, id: &str) -> StoreResult<Vec<InputRow>> {
+        let rows = sqlx::query("SELECT name, in_blob, data FROM inputs WHERE job_id = $1")
+            .bind(id)
+            .fetch_all(&self.pool)
+            .await?;
+        Ok(rows
+            .iter()
+            .map(|r| InputRow { name: r.get("name"), in_blob: r.get("in_blob"), data: r.get("data") })
+            .collect())
     }
 
     async fn job(&self, id: &str) -> StoreResult<Option<JobRow>> {
@@ -274,11 +281,6 @@ impl JobStore for PgStore {
         Ok(tx.commit().await?)
     }
 
-    async fn last_checkpoint(&self, id: &str) -> StoreResult<Option<Checkpoint>> {
-        let sql = "SELECT data FROM checkpoints WHERE job_id = $1 AND $2::bigint = $2 ORDER BY iteration DESC LIMIT 1";
-        Ok(self.checkpoint_rows(sql, id, 0).await?.pop())
-    }
-
     async fn checkpoint_index(&self, id: &str) -> StoreResult<Vec<(i64, f64)>> {
         let rows = sqlx::query("SELECT iteration, time FROM checkpoints WHERE job_id = $1 ORDER BY iteration")
             .bind(id)
@@ -287,22 +289,32 @@ impl JobStore for PgStore {
         Ok(rows.iter().map(|r| (r.get::<i64, _>("iteration"), r.get::<f64, _>("time"))).collect())
     }
 
-    async fn checkpoint_at(&self, id: &str, iteration: i64) -> StoreResult<Option<Checkpoint>> {
-        let sql = "SELECT data FROM checkpoints WHERE job_id = $1 AND iteration = $2";
-        Ok(self.checkpoint_rows(sql, id, iteration).await?.pop())
+    async fn checkpoint_rows(&self, id: &str, which: Which) -> StoreResult<Vec<CheckpointRow>> {
+        let (sql, iteration) = match which {
+            Which::Last => (
+                "SELECT iteration, blob, data FROM checkpoints WHERE job_id = $1 AND $2::bigint = $2 \
+                 ORDER BY iteration DESC LIMIT 1",
+                0,
+            ),
+            Which::At(n) => ("SELECT iteration, blob, data FROM checkpoints WHERE job_id = $1 AND iteration = $2", n),
+            Which::All => (
+                "SELECT iteration, blob, data FROM checkpoints WHERE job_id = $1 AND $2::bigint = $2 ORDER BY iteration",
+                0,
+            ),
+        };
+        let rows = sqlx::query(sql).bind(id).bind(iteration).fetch_all(&self.pool).await?;
+        Ok(rows
+            .iter()
+            .map(|r| CheckpointRow { iteration: r.get("iteration"), blob: r.get("blob"), data: r.get("data") })
+            .collect())
     }
 
-    async fn checkpoints(&self, id: &str) -> StoreResult<Vec<Checkpoint>> {
-        let sql = "SELECT data FROM checkpoints WHERE job_id = $1 AND $2::bigint = $2 ORDER BY iteration";
-        self.checkpoint_rows(sql, id, 0).await
-    }
-
-    async fn record(
+    async fn record_rows(
         &self,
         id: &str,
         lease: &Lease,
         rows: &[Progress],
-        checkpoint: Option<&Checkpoint>,
+        checkpoint: Option<(i64, f64, &str)>,
     ) -> StoreResult<bool> {
         let mut tx = self.pool.begin().await?;
         let cancel = fence(&mut tx, id, lease).await?;
@@ -340,15 +352,15 @@ impl JobStore for PgStore {
             .execute(&mut *tx)
             .await?;
         }
-        if let Some(c) = checkpoint {
+        if let Some((iteration, time, key)) = checkpoint {
             sqlx::query(
-                "INSERT INTO checkpoints VALUES ($1, $2, $3, $4) \
-                 ON CONFLICT (job_id, iteration) DO UPDATE SET time = EXCLUDED.time, data = EXCLUDED.data",
+                "INSERT INTO checkpoints (job_id, iteration, time, data, blob) VALUES ($1, $2, $3, '', $4) \
+                 ON CONFLICT (job_id, iteration) DO UPDATE SET time = EXCLUDED.time, data = '', blob = EXCLUDED.blob",
             )
             .bind(id)
-            .bind(c.iteration as i64)
-            .bind(c.time)
-            .bind(serde_json::to_string(c).expect("checkpoint serializes"))
+            .bind(iteration)
+            .bind(time)
+            .bind(key)
             .execute(&mut *tx)
             .await?;
         }
@@ -366,6 +378,20 @@ impl JobStore for PgStore {
             .execute(&mut *tx)
             .await?;
         Ok(tx.commit().await?)
+    }
+
+    async fn set_results(&self, id: &str, lease: Option<&Lease>, index: &str) -> StoreResult<bool> {
+        let mut tx = self.pool.begin().await?;
+        let sql = match lease {
+            Some(lease) => {
+                fence(&mut tx, id, lease).await?;
+                "UPDATE jobs SET results = $2 WHERE id = $1"
+            }
+            None => "UPDATE jobs SET results = $2 WHERE id = $1 AND results IS NULL",
+        };
+        let done = sqlx::query(sql).bind(id).bind(index).execute(&mut *tx).await?;
+        tx.commit().await?;
+        Ok(done.rows_affected() == 1)
     }
 
     async fn finish(
@@ -425,7 +451,7 @@ impl JobStore for PgStore {
         Ok(Some(status))
     }
 
-    async fn delete(&self, id: &str) -> StoreResult<()> {
+    async fn delete_rows(&self, id: &str) -> StoreResult<()> {
         sqlx::query("DELETE FROM jobs WHERE id = $1").bind(id).execute(&self.pool).await?;
         Ok(())
     }

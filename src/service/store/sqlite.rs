@@ -3,12 +3,12 @@
 //! PostgreSQL, and jobs left running at a restart go back to the queue.
 
 use super::{
-    crash_message, now, status_of, ClaimPolicy, Claimed, JobRow, JobStatus, JobStore, Lease, StoreError, StoreResult,
+    crash_message, now, results_of, status_of, Blobs, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
+    JobStore, Lease, StoreError, StoreResult, Which,
 };
-use crate::flow::{Checkpoint, Progress};
+use crate::flow::Progress;
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous};
 use sqlx::{Row, Sqlite, Transaction};
-use std::collections::HashMap;
 use std::path::Path;
 use std::time::Duration;
 
@@ -22,6 +22,7 @@ macro_rules! clock_ms {
 #[derive(Clone)]
 pub struct SqliteStore {
     pool: SqlitePool,
+    blobs: Blobs,
 }
 
 fn job_from_row(r: &sqlx::sqlite::SqliteRow) -> JobRow {
@@ -44,6 +45,7 @@ fn job_from_row(r: &sqlx::sqlite::SqliteRow) -> JobRow {
             vertices: r.get::<i64, _>("vertices") as usize,
             components: r.get::<i64, _>("components") as usize,
         }),
+        results: results_of(r.get("results")),
     }
 }
 
@@ -72,7 +74,7 @@ async fn fence(tx: &mut Transaction<'_, Sqlite>, id: &str, lease: &Lease) -> Sto
 
 impl SqliteStore {
     /// Open (creating if missing) and migrate the database file.
-    pub async fn open(path: &Path) -> StoreResult<Self> {
+    pub async fn open(path: &Path, blobs: Blobs) -> StoreResult<Self> {
         let options = SqliteConnectOptions::new()
             .filename(path)
             .create_if_missing(true)
@@ -82,12 +84,7 @@ impl SqliteStore {
             .foreign_keys(true);
         let pool = SqlitePoolOptions::new().max_connections(1).connect_with(options).await?;
         sqlx::migrate!("./migrations/sqlite").run(&pool).await?;
-        Ok(SqliteStore { pool })
-    }
-
-    async fn checkpoint_rows(&self, sql: &'static str, id: &str, iteration: i64) -> StoreResult<Vec<Checkpoint>> {
-        let rows = sqlx::query(sql).bind(id).bind(iteration).fetch_all(&self.pool).await?;
-        Ok(rows.iter().filter_map(|r| serde_json::from_str(&r.get::<String, _>("data")).ok()).collect())
+        Ok(SqliteStore { pool, blobs })
     }
 }
 
@@ -97,7 +94,11 @@ impl JobStore for SqliteStore {
         "sqlite"
     }
 
-    async fn insert_job(&self, id: &str, spec: &str, inputs: &HashMap<String, Vec<u8>>) -> StoreResult<JobRow> {
+    fn blobs(&self) -> &Blobs {
+        &self.blobs
+    }
+
+    async fn insert_rows(&self, id: &str, spec: &str, heads: &[(String, Vec<u8>)]) -> StoreResult<JobRow> {
         let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
         sqlx::query(
             "INSERT INTO jobs (id, seq, status, spec, created_at) \
@@ -108,11 +109,11 @@ impl JobStore for SqliteStore {
         .bind(now())
         .execute(&mut *tx)
         .await?;
-        for (name, data) in inputs {
-            sqlx::query("INSERT INTO inputs (job_id, name, data) VALUES (?1, ?2, ?3)")
+        for (name, head) in heads {
+            sqlx::query("INSERT INTO inputs (job_id, name, data, in_blob, head) VALUES (?1, ?2, x'', 1, ?3)")
                 .bind(id)
                 .bind(name)
-                .bind(data.as_slice())
+                .bind(head.as_slice())
                 .execute(&mut *tx)
                 .await?;
         }
@@ -121,17 +122,22 @@ impl JobStore for SqliteStore {
     }
 
     async fn input_magics(&self, id: &str) -> StoreResult<Vec<Vec<u8>>> {
-        let rows = sqlx::query("SELECT substr(data, 1, 8) AS head FROM inputs WHERE job_id = ?1")
+        let rows = sqlx::query("SELECT COALESCE(head, substr(data, 1, 8)) AS head FROM inputs WHERE job_id = ?1")
             .bind(id)
             .fetch_all(&self.pool)
             .await?;
         Ok(rows.iter().map(|r| r.get::<Vec<u8>, _>("head")).collect())
     }
 
-    async fn inputs(&self, id: &str) -> StoreResult<HashMap<String, Vec<u8>>> {
-        let rows =
-            sqlx::query("SELECT name, data FROM inputs WHERE job_id = ?1").bind(id).fetch_all(&self.pool).await?;
-        Ok(rows.iter().map(|r| (r.get::<String, _>("name"), r.get::<Vec<u8>, _>("data"))).collect())
+    async fn input_rows(&self, id: &str) -> StoreResult<Vec<InputRow>> {
+        let rows = sqlx::query("SELECT name, in_blob, data FROM inputs WHERE job_id = ?1")
+            .bind(id)
+            .fetch_all(&self.pool)
+            .await?;
+        Ok(rows
+            .iter()
+            .map(|r| InputRow { name: r.get("name"), in_blob: r.get::<i64, _>("in_blob") != 0, data: r.get("data") })
+            .collect())
     }
 
     async fn job(&self, id: &str) -> StoreResult<Option<JobRow>> {
@@ -230,11 +236,6 @@ impl JobStore for SqliteStore {
         Ok(())
     }
 
-    async fn last_checkpoint(&self, id: &str) -> StoreResult<Option<Checkpoint>> {
-        let sql = "SELECT data FROM checkpoints WHERE job_id = ?1 AND ?2 = ?2 ORDER BY iteration DESC LIMIT 1";
-        Ok(self.checkpoint_rows(sql, id, 0).await?.pop())
-    }
-
     async fn checkpoint_index(&self, id: &str) -> StoreResult<Vec<(i64, f64)>> {
         let rows = sqlx::query("SELECT iteration, time FROM checkpoints WHERE job_id = ?1 ORDER BY iteration")
             .bind(id)
@@ -243,22 +244,31 @@ impl JobStore for SqliteStore {
         Ok(rows.iter().map(|r| (r.get::<i64, _>("iteration"), r.get::<f64, _>("time"))).collect())
     }
 
-    async fn checkpoint_at(&self, id: &str, iteration: i64) -> StoreResult<Option<Checkpoint>> {
-        let sql = "SELECT data FROM checkpoints WHERE job_id = ?1 AND iteration = ?2";
-        Ok(self.checkpoint_rows(sql, id, iteration).await?.pop())
+    async fn checkpoint_rows(&self, id: &str, which: Which) -> StoreResult<Vec<CheckpointRow>> {
+        let (sql, iteration) = match which {
+            Which::Last => (
+                "SELECT iteration, blob, data FROM checkpoints WHERE job_id = ?1 AND ?2 = ?2 \
+                 ORDER BY iteration DESC LIMIT 1",
+                0,
+            ),
+            Which::At(n) => ("SELECT iteration, blob, data FROM checkpoints WHERE job_id = ?1 AND iteration = ?2", n),
+            Which::All => {
+                ("SELECT iteration, blob, data FROM checkpoints WHERE job_id = ?1 AND ?2 = ?2 ORDER BY iteration", 0)
+            }
+        };
+        let rows = sqlx::query(sql).bind(id).bind(iteration).fetch_all(&self.pool).await?;
+        Ok(rows
+            .iter()
+            .map(|r| CheckpointRow { iteration: r.get("iteration"), blob: r.get("blob"), data: r.get("data") })
+            .collect())
     }
 
-    async fn checkpoints(&self, id: &str) -> StoreResult<Vec<Checkpoint>> {
-        let sql = "SELECT data FROM checkpoints WHERE job_id = ?1 AND ?2 = ?2 ORDER BY iteration";
-        self.checkpoint_rows(sql, id, 0).await
-    }
-
-    async fn record(
+    async fn record_rows(
         &self,
         id: &str,
         lease: &Lease,
         rows: &[Progress],
-        checkpoint: Option<&Checkpoint>,
+        checkpoint: Option<(i64, f64, &str)>,
     ) -> StoreResult<bool> {
         let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
         let cancel = fence(&mut tx, id, lease).await?;
@@ -289,14 +299,16 @@ impl JobStore for SqliteStore {
             .execute(&mut *tx)
             .await?;
         }
-        if let Some(c) = checkpoint {
-            sqlx::query("INSERT OR REPLACE INTO checkpoints VALUES (?1, ?2, ?3, ?4)")
-                .bind(id)
-                .bind(c.iteration as i64)
-                .bind(c.time)
-                .bind(serde_json::to_string(c).expect("checkpoint serializes"))
-                .execute(&mut *tx)
-                .await?;
+        if let Some((iteration, time, key)) = checkpoint {
+            sqlx::query(
+                "INSERT OR REPLACE INTO checkpoints (job_id, iteration, time, data, blob) VALUES (?1, ?2, ?3, '', ?4)",
+            )
+            .bind(id)
+            .bind(iteration)
+            .bind(time)
+            .bind(key)
+            .execute(&mut *tx)
+            .await?;
         }
         tx.commit().await?;
         Ok(cancel)
@@ -311,6 +323,20 @@ impl JobStore for SqliteStore {
             .execute(&mut *tx)
             .await?;
         Ok(tx.commit().await?)
+    }
+
+    async fn set_results(&self, id: &str, lease: Option<&Lease>, index: &str) -> StoreResult<bool> {
+        let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
+        let sql = match lease {
+            Some(lease) => {
+                fence(&mut tx, id, lease).await?;
+                "UPDATE jobs SET results = ?2 WHERE id = ?1"
+            }
+            None => "UPDATE jobs SET results = ?2 WHERE id = ?1 AND results IS NULL",
+        };
+        let done = sqlx::query(sql).bind(id).bind(index).execute(&mut *tx).await?;
+        tx.commit().await?;
+        Ok(done.rows_affected() == 1)
     }
 
     async fn finish(
@@ -354,7 +380,7 @@ impl JobStore for SqliteStore {
         Ok(Some(job.status))
     }
 
-    async fn delete(&self, id: &str) -> StoreResult<()> {
+    async fn delete_rows(&self, id: &str) -> StoreResult<()> {
         sqlx::query("DELETE FROM jobs WHERE id = ?1").bind(id).execute(&self.pool).await?;
         Ok(())
     }

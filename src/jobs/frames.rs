@@ -1,0 +1,155 @@
+//! Frames: a stored state with the per-vertex fields its glTF shows, computed once
+//! when the state is stored ([`Frame::of`]), and what else a glTF file of the job
+//! needs ([`GlbContext`]). With both, any glb of the job (a checkpoint, the
+//! evolution) is encoded without preparing the job again or solving anything.
+
+use super::run::vertex_fields;
+use super::spec::ColorBy;
+use super::{PreparedJob, ProblemKind};
+use crate::bulk::Polygon;
+use crate::export::{evolution_glb, shape_glb, ColorField, DomainOutline, GltfFrame};
+use crate::flow::{Checkpoint, VertexFields};
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
+
+pub use crate::limits::MAX_FRAMES;
+
+/// The per-vertex fields of a frame, as stored.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrameFields {
+    pub curvature: Vec<f64>,
+    pub normal_velocity: Vec<f64>,
+    /// The problem's own field: its glTF attribute name and values.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub own: Option<(String, Vec<f64>)>,
+}
+
+impl From<VertexFields> for FrameFields {
+    fn from(f: VertexFields) -> Self {
+        FrameFields {
+            curvature: f.curvature,
+            normal_velocity: f.normal_velocity,
+            own: f.own.map(|o| (o.name.to_string(), o.values)),
+        }
+    }
+}
+
+/// A state of a run and its fields. Serialized as the checkpoint's JSON with a
+/// `fields` member, so that a stored checkpoint without fields reads as a frame
+/// whose fields are unknown.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Frame {
+    #[serde(flatten)]
+    pub state: Checkpoint,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fields: Option<FrameFields>,
+}
+
+impl Frame {
+    /// `state` with its curvature, normal velocity and own field (one linear
+    /// solve of the job's problem); zeros where they cannot be computed (e.g. the
+    /// last state of a failed run), so that the geometry is still shown.
+    pub fn of(job: &PreparedJob, state: &Checkpoint) -> Frame {
+        let n = state.mesh.positions.len();
+        let fields = match vertex_fields(job, state) {
+            Ok(f) if f.curvature.len() == n && f.normal_velocity.len() == n => f,
+            _ => VertexFields { curvature: vec![0.0; n], normal_velocity: vec![0.0; n], own: None },
+        };
+        Frame { state: state.clone(), fields: Some(fields.into()) }
+    }
+
+    /// What the glTF encoder draws: the state with its fields (zeros if unknown).
+    fn gltf<'a>(&'a self, zeros: &'a [f64], color_by: ColorBy) -> GltfFrame<'a> {
+        let (curvature, normal_velocity, own) = match &self.fields {
+            Some(f) if f.curvature.len() == zeros.len() && f.normal_velocity.len() == zeros.len() => {
+                (f.curvature.as_slice(), f.normal_velocity.as_slice(), f.own.as_ref())
+            }
+            _ => (zeros, zeros, None),
+        };
+        GltfFrame {
+            mesh: &self.state.mesh,
+            curvature,
+            normal_velocity,
+            own: own.filter(|o| o.1.len() == zeros.len()).map(|(name, v)| (name.as_str(), v.as_slice())),
+            iteration: self.state.iteration,
+            time: self.state.time,
+            energy: self.state.energy,
+            color_by: match color_by {
+                ColorBy::Curvature => ColorField::Curvature,
+                ColorBy::NormalVelocity => ColorField::NormalVelocity,
+                ColorBy::ProblemField => ColorField::ProblemField,
+            },
+        }
+    }
+}
+
+/// What the glTF files of a job share: the metadata in `extras`, the field
+/// `COLOR_0` shows and the fixed domain of a shape-design job.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GlbContext {
+    pub extras: Value,
+    pub color_by: ColorBy,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub domain: Option<DomainOutline>,
+}
+
+impl GlbContext {
+    pub fn of(job: &PreparedJob) -> GlbContext {
+        GlbContext { extras: job_extras(job), color_by: job.spec.output.color_by, domain: domain_outline(job) }
+    }
+
+    /// shape.glb / checkpoints/{n}.glb of one frame.
+    pub fn frame_glb(&self, frame: &Frame) -> Vec<u8> {
+        let zeros = vec![0.0; frame.state.mesh.positions.len()];
+        shape_glb(&frame.gltf(&zeros, self.color_by), self.domain.as_ref(), self.extras.clone())
+    }
+
+    /// evolution.glb of the frames (in iteration order; at most [`MAX_FRAMES`],
+    /// evenly picked). `None` if there are none.
+    pub fn evolution_glb(&self, frames: &[Frame]) -> Option<Vec<u8>> {
+        if frames.is_empty() {
+            return None;
+        }
+        let picked: Vec<&Frame> = if frames.len() <= MAX_FRAMES {
+            frames.iter().collect()
+        } else {
+            let last = frames.len() - 1;
+            (0..MAX_FRAMES).map(|k| &frames[k * last / (MAX_FRAMES - 1)]).collect()
+        };
+        let zeros: Vec<Vec<f64>> = picked.iter().map(|f| vec![0.0; f.state.mesh.positions.len()]).collect();
+        let drawn: Vec<GltfFrame<'_>> = picked.iter().zip(&zeros).map(|(f, z)| f.gltf(z, self.color_by)).collect();
+        let mut extras = self.extras.clone();
+        extras["frames"] = json!(drawn.len());
+        extras["seconds_per_frame"] = json!(crate::export::FRAME_SECONDS);
+        // the animation's length, for importers that set a scene's frame range (the
+        // last frame is held for one more frame time)
+        extras["animation_seconds"] = json!(drawn.len() as f64 * crate::export::FRAME_SECONDS as f64);
+        Some(evolution_glb(&drawn, self.domain.as_ref(), extras))
+    }
+}
+
+/// The job's metadata for the glTF `extras`.
+pub fn job_extras(job: &PreparedJob) -> Value {
+    let spec = serde_json::to_value(&job.spec).unwrap_or(Value::Null);
+    json!({"generator": "shapeflow", "problem": spec["problem"]["type"], "spec": spec})
+}
+
+/// The fixed domain (`Σ` and `D`) of a shape-design job.
+fn domain_outline(job: &PreparedJob) -> Option<DomainOutline> {
+    let ProblemKind::ShapeDesign(p) = &job.problem else { return None };
+    let points = |q: &Polygon| q.points().iter().map(|x| [x[0], x[1]]).collect::<Vec<_>>();
+    let [inner, outer] = p.domain.control();
+    Some(DomainOutline { outer: points(p.domain.outer()), control: [points(inner), points(outer)] })
+}
+
+/// shape.glb / checkpoints/{n}.glb of one state of `job` (its fields computed).
+pub fn state_glb(job: &PreparedJob, state: &Checkpoint) -> Vec<u8> {
+    GlbContext::of(job).frame_glb(&Frame::of(job, state))
+}
+
+/// evolution.glb of the states of `job` (their fields computed). `None` if there
+/// are none.
+pub fn states_glb(job: &PreparedJob, states: &[Checkpoint]) -> Option<Vec<u8>> {
+    let frames: Vec<Frame> = states.iter().map(|s| Frame::of(job, s)).collect();
+    GlbContext::of(job).evolution_glb(&frames)
+}
