@@ -9,7 +9,6 @@
 //! epoch, so a worker that lost its lease never overwrites what the job's row
 //! points to.
 
-use super::store::{StoreError, StoreResult};
 use futures_util::StreamExt;
 use object_store::aws::AmazonS3Builder;
 use object_store::local::LocalFileSystem;
@@ -33,17 +32,24 @@ impl std::fmt::Debug for Blobs {
     }
 }
 
-fn blob_error(what: &str, key: &Path, e: object_store::Error) -> StoreError {
-    StoreError::Blob(format!("{what} {key}: {e}"))
+/// Why a blob could not be stored or read: the message names the key or setting.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct BlobError(pub String);
+
+pub type BlobResult<T> = Result<T, BlobError>;
+
+fn blob_error(what: &str, key: &Path, e: object_store::Error) -> BlobError {
+    BlobError(format!("{what} {key}: {e}"))
 }
 
 impl Blobs {
     /// Blobs in the local directory `dir` (created if missing).
-    pub fn local(dir: &std::path::Path) -> StoreResult<Blobs> {
+    pub fn local(dir: &std::path::Path) -> BlobResult<Blobs> {
         std::fs::create_dir_all(dir)
-            .map_err(|e| StoreError::Blob(format!("cannot create the blob directory {}: {e}", dir.display())))?;
+            .map_err(|e| BlobError(format!("cannot create the blob directory {}: {e}", dir.display())))?;
         let store = LocalFileSystem::new_with_prefix(dir)
-            .map_err(|e| StoreError::Blob(format!("blob directory {}: {e}", dir.display())))?;
+            .map_err(|e| BlobError(format!("blob directory {}: {e}", dir.display())))?;
         Ok(Blobs {
             store: Arc::new(store),
             prefix: Vec::new(),
@@ -56,24 +62,23 @@ impl Blobs {
     /// `s3://bucket/prefix`. Credentials, region and endpoint come from the usual
     /// AWS variables (`AWS_ACCESS_KEY_ID`, `AWS_SECRET_ACCESS_KEY`, `AWS_REGION`,
     /// `AWS_ENDPOINT`, `AWS_ALLOW_HTTP=true` for a plain-HTTP endpoint).
-    pub fn s3(url: &str) -> StoreResult<Blobs> {
-        let rest = url.strip_prefix("s3://").ok_or_else(|| {
-            StoreError::Blob(format!("--object-store {url:?}: expected s3://bucket or s3://bucket/prefix"))
-        })?;
+    pub fn s3(url: &str) -> BlobResult<Blobs> {
+        let rest = url
+            .strip_prefix("s3://")
+            .ok_or_else(|| BlobError(format!("--object-store {url:?}: expected s3://bucket or s3://bucket/prefix")))?;
         let mut parts = rest.split('/').filter(|p| !p.is_empty());
-        let bucket = parts
-            .next()
-            .ok_or_else(|| StoreError::Blob(format!("--object-store {url:?}: the bucket name is missing")))?;
+        let bucket =
+            parts.next().ok_or_else(|| BlobError(format!("--object-store {url:?}: the bucket name is missing")))?;
         let prefix: Vec<String> = parts.map(str::to_string).collect();
         let store = AmazonS3Builder::from_env()
             .with_bucket_name(bucket)
             .build()
-            .map_err(|e| StoreError::Blob(format!("--object-store {url}: {e}")))?;
+            .map_err(|e| BlobError(format!("--object-store {url}: {e}")))?;
         Ok(Blobs { store: Arc::new(store), prefix, shown: url.to_string(), local: None })
     }
 
     /// `--object-store` if given, else the directory `blobs` under `data_dir`.
-    pub fn open(object_store: Option<&str>, data_dir: &std::path::Path) -> StoreResult<Blobs> {
+    pub fn open(object_store: Option<&str>, data_dir: &std::path::Path) -> BlobResult<Blobs> {
         match object_store {
             Some(url) => Blobs::s3(url),
             None => Blobs::local(&data_dir.join("blobs")),
@@ -86,14 +91,14 @@ impl Blobs {
         Path::from_iter(segments.map(PathPart::from))
     }
 
-    pub async fn put(&self, parts: &[&str], bytes: Vec<u8>) -> StoreResult<()> {
+    pub async fn put(&self, parts: &[&str], bytes: Vec<u8>) -> BlobResult<()> {
         let key = self.key(parts);
         self.store.put(&key, PutPayload::from(bytes)).await.map_err(|e| blob_error("cannot write", &key, e))?;
         Ok(())
     }
 
     /// The blob at `parts`; `None` if there is none.
-    pub async fn get(&self, parts: &[&str]) -> StoreResult<Option<Vec<u8>>> {
+    pub async fn get(&self, parts: &[&str]) -> BlobResult<Option<Vec<u8>>> {
         let key = self.key(parts);
         match self.store.get(&key).await {
             Ok(got) => Ok(Some(got.bytes().await.map_err(|e| blob_error("cannot read", &key, e))?.to_vec())),
@@ -103,12 +108,12 @@ impl Blobs {
     }
 
     /// The blob at `parts`, which a row of the database points to.
-    pub async fn get_existing(&self, parts: &[&str]) -> StoreResult<Vec<u8>> {
-        self.get(parts).await?.ok_or_else(|| StoreError::Blob(format!("the blob {} is missing", self.key(parts))))
+    pub async fn get_existing(&self, parts: &[&str]) -> BlobResult<Vec<u8>> {
+        self.get(parts).await?.ok_or_else(|| BlobError(format!("the blob {} is missing", self.key(parts))))
     }
 
     /// Remove every blob under `parts` (a job's folder, an old result set).
-    pub async fn delete_all(&self, parts: &[&str]) -> StoreResult<()> {
+    pub async fn delete_all(&self, parts: &[&str]) -> BlobResult<()> {
         let key = self.key(parts);
         let listed = self.store.list(Some(&key)).map(|m| m.map(|m| m.location)).boxed();
         let mut deleted = self.store.delete_stream(listed);
@@ -149,7 +154,7 @@ mod tests {
         assert!(!dir.path().join("jobs/j1").exists(), "the emptied folder is gone");
         assert_eq!(blobs.get(&["jobs", "j1", "results", "e1", "shape.glb"]).await.unwrap(), None);
         assert_eq!(blobs.get(&input_key("j2", "image")).await.unwrap().unwrap(), b"three");
-        assert!(matches!(blobs.get_existing(&input_key("j1", "x")).await, Err(StoreError::Blob(_))));
+        assert!(matches!(blobs.get_existing(&input_key("j1", "x")).await, Err(BlobError(_))));
     }
 
     #[test]

@@ -93,7 +93,8 @@ impl Service {
     /// the queue; on PostgreSQL their leases expire) and start the worker threads.
     /// Call from within a tokio runtime.
     pub async fn start_with(config: ServiceConfig) -> Result<Self, store::StoreError> {
-        let blobs = blobs::Blobs::open(config.object_store.as_deref(), &config.data_dir)?;
+        let blobs =
+            blobs::Blobs::open(config.object_store.as_deref(), &config.data_dir).map_err(store::StoreError::from)?;
         let store = store::open(&config.database, blobs).await?;
         let requeued = store.requeue_running().await?;
         if requeued > 0 {

@@ -13,7 +13,7 @@
 mod postgres;
 mod sqlite;
 
-use super::blobs::{input_key, Blobs};
+use super::blobs::{input_key, BlobError, Blobs};
 use crate::flow::{Checkpoint, Progress};
 use crate::jobs::{Frame, GlbContext, ResultFile};
 use std::collections::HashMap;
@@ -115,7 +115,7 @@ pub enum StoreError {
     LeaseLost(String),
     /// The blob store refused or failed.
     #[error("blob store: {0}")]
-    Blob(String),
+    Blob(#[from] BlobError),
 }
 
 pub type StoreResult<T> = Result<T, StoreError>;
@@ -295,9 +295,8 @@ pub trait JobStore: Send + Sync + 'static {
                 Some(key) => self.blobs().get_existing(&["jobs", id, "checkpoints", key]).await?,
                 None => row.data.into_bytes(),
             };
-            let frame = serde_json::from_slice(&bytes).map_err(|e| {
-                StoreError::Blob(format!("checkpoint {} of job {id} cannot be read: {e}", row.iteration))
-            })?;
+            let frame = serde_json::from_slice(&bytes)
+                .map_err(|e| BlobError(format!("checkpoint {} of job {id} cannot be read: {e}", row.iteration)))?;
             frames.push(frame);
         }
         Ok(frames)
@@ -354,7 +353,7 @@ pub trait JobStore: Send + Sync + 'static {
     /// Store what every glb of the job shares ([`GlbContext`]).
     async fn put_context(&self, id: &str, context: &GlbContext) -> StoreResult<()> {
         let json = serde_json::to_vec(context).expect("contexts serialize");
-        self.blobs().put(&["jobs", id, "context.json"], json).await
+        Ok(self.blobs().put(&["jobs", id, "context.json"], json).await?)
     }
 
     async fn context(&self, id: &str) -> StoreResult<Option<GlbContext>> {
@@ -365,7 +364,7 @@ pub trait JobStore: Send + Sync + 'static {
     /// Delete a job: its rows, then its blobs.
     async fn delete(&self, id: &str) -> StoreResult<()> {
         self.delete_rows(id).await?;
-        self.blobs().delete_all(&["jobs", id]).await
+        Ok(self.blobs().delete_all(&["jobs", id]).await?)
     }
 }
 
