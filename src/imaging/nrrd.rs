@@ -1,10 +1,14 @@
 //! NRRD volumes (<http://teem.sourceforge.net/nrrd/format.html>): a text header
 //! (`NRRD000x`, `field: value` lines, a blank line) followed by the attached data.
 //! Read: `dimension: 3`, types uint8/uint16/float32 (any of their NRRD spellings),
-//! `raw` or `gzip` encoding, either endianness. Written: uint8 masks, gzip.
+//! `raw` or `gzip` encoding, either endianness; the voxel spacing from `spacings`
+//! or `space directions` (the length of each axis's vector), an anisotropic volume
+//! resampled to cubic voxels of its smallest spacing as the other volume readers do
+//! ([`isotropic`]). Written: uint8 masks, gzip.
 
 use super::grid::{Grid, SampleKind};
 use super::limits::ImageLimits;
+use super::volumes::isotropic;
 use super::ImageError;
 use flate2::read::GzDecoder;
 use flate2::write::GzEncoder;
@@ -124,7 +128,39 @@ pub fn parse_nrrd(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Gri
     if let Some(i) = values.iter().position(|v| !v.is_finite()) {
         return Err(fail(format!("voxel {i} is not a finite number")));
     }
-    Ok(Grid::new(3, [sizes[0], sizes[1], sizes[2]], values, kind))
+    let spacing = voxel_spacing(get("spacings"), get("space directions")).map_err(fail)?;
+    isotropic(input, Grid::new(3, [sizes[0], sizes[1], sizes[2]], values, kind), spacing, limits)
+}
+
+/// The spacing of the three axes: from `spacings: a b c`, else from `space
+/// directions: (x,y,z) (x,y,z) (x,y,z)` (each vector's length), else 1; "nan"
+/// (an axis without spacing) counts as 1.
+fn voxel_spacing(spacings: Option<&str>, directions: Option<&str>) -> Result<[f64; 3], String> {
+    let checked = |values: Vec<f64>, field: &str| -> Result<[f64; 3], String> {
+        let values: Vec<f64> = values.into_iter().map(|v| if v.is_nan() { 1.0 } else { v }).collect();
+        match values[..] {
+            [a, b, c] if [a, b, c].iter().all(|v| v.is_finite() && *v > 0.0) => Ok([a, b, c]),
+            _ => Err(format!("has NRRD `{field}` {values:?}: three positive numbers are needed")),
+        }
+    };
+    if let Some(text) = spacings {
+        let values: Result<Vec<f64>, _> = text.split_whitespace().map(str::parse::<f64>).collect();
+        return checked(values.map_err(|_| format!("has a non-numeric NRRD `spacings` {text:?}"))?, "spacings");
+    }
+    if let Some(text) = directions {
+        let mut lengths = Vec::new();
+        for vector in text.split_whitespace() {
+            if vector == "none" {
+                continue;
+            }
+            let inner = vector.trim_start_matches('(').trim_end_matches(')');
+            let parts: Result<Vec<f64>, _> = inner.split(',').map(|c| c.trim().parse::<f64>()).collect();
+            let parts = parts.map_err(|_| format!("has a malformed NRRD `space directions` vector {vector:?}"))?;
+            lengths.push(parts.iter().map(|c| c * c).sum::<f64>().sqrt());
+        }
+        return checked(lengths, "space directions");
+    }
+    Ok([1.0; 3])
 }
 
 /// A 0/1 uint8 mask of `dims` as a gzip NRRD file.
@@ -174,6 +210,23 @@ mod tests {
         let m = parse_nrrd("m", &encode_nrrd_mask([4, 5, 6], &mask), &ImageLimits::default()).unwrap();
         assert_eq!(m.values.iter().filter(|&&v| v == 1.0).count(), 40);
         assert_eq!(m.kind, SampleKind::U8);
+    }
+
+    #[test]
+    fn spacings_are_read_and_anisotropic_volumes_resampled() {
+        assert_eq!(voxel_spacing(Some("1 2 0.5"), None).unwrap(), [1.0, 2.0, 0.5]);
+        assert_eq!(voxel_spacing(None, Some("(0.5,0,0) (0,0.5,0) (0,0,3)")).unwrap(), [0.5, 0.5, 3.0]);
+        assert_eq!(voxel_spacing(Some("nan nan nan"), None).unwrap(), [1.0; 3]);
+        assert_eq!(voxel_spacing(None, None).unwrap(), [1.0; 3]);
+        assert!(voxel_spacing(Some("1 -2 1"), None).unwrap_err().contains("spacings"));
+        assert!(voxel_spacing(Some("1 x 1"), None).unwrap_err().contains("non-numeric"));
+        assert!(voxel_spacing(None, Some("(1,0,0) (0,1,0)")).unwrap_err().contains("space directions"));
+        // a 4×4×4 volume with slices twice as far apart: 4×4×8 cubic voxels
+        let mut file =
+            b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 4\nspacings: 1 1 2\nencoding: raw\n\n".to_vec();
+        file.extend((0..64).map(|i| if i < 32 { 0u8 } else { 200 }));
+        let g = parse_nrrd("image", &file, &ImageLimits::default()).unwrap();
+        assert_eq!(g.dims, [4, 4, 8]);
     }
 
     #[test]

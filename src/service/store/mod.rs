@@ -1,7 +1,9 @@
 //! The job store: one trait, [`JobStore`], with a SQLite implementation (the
 //! embedded default, one node) and a PostgreSQL one (any number of nodes); SQL
 //! lives only in those two files. Each backend has its own migrations
-//! (`migrations/sqlite`, `migrations/postgres`).
+//! (`migrations/sqlite`, `migrations/postgres`). The large bytes (inputs,
+//! checkpoints with their fields, result files) go to the blob store
+//! ([`Blobs`]) before the rows that point to them; `types` has the rows.
 //!
 //! A running job holds a lease: its owner, an epoch (raised by every claim) and an
 //! expiry on the database's clock. Every write of a job's history, checkpoints and
@@ -12,179 +14,21 @@
 
 mod postgres;
 mod sqlite;
+mod types;
 
 use super::blobs::{input_key, BlobError, Blobs};
 use crate::flow::{Checkpoint, Progress};
 use crate::jobs::{Frame, GlbContext, ResultFile};
 use std::collections::HashMap;
 use std::sync::Arc;
-use std::time::Duration;
 
 pub use postgres::PgStore;
 pub use sqlite::SqliteStore;
-
-/// The status of a job (OGC API – Processes), as stored and as the API shows it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum JobStatus {
-    Accepted,
-    Running,
-    Successful,
-    Failed,
-    Dismissed,
-}
-
-impl JobStatus {
-    pub const ALL: [JobStatus; 5] =
-        [JobStatus::Accepted, JobStatus::Running, JobStatus::Successful, JobStatus::Failed, JobStatus::Dismissed];
-
-    pub fn as_str(self) -> &'static str {
-        match self {
-            JobStatus::Accepted => "accepted",
-            JobStatus::Running => "running",
-            JobStatus::Successful => "successful",
-            JobStatus::Failed => "failed",
-            JobStatus::Dismissed => "dismissed",
-        }
-    }
-
-    pub fn parse(s: &str) -> Option<JobStatus> {
-        JobStatus::ALL.into_iter().find(|x| x.as_str() == s)
-    }
-
-    /// The job has ended (it will not run again).
-    pub fn is_final(self) -> bool {
-        matches!(self, JobStatus::Successful | JobStatus::Failed | JobStatus::Dismissed)
-    }
-}
-
-/// A stored status text (the tables' CHECK constraints allow only these).
-pub(crate) fn status_of(text: &str) -> JobStatus {
-    JobStatus::parse(text).unwrap_or(JobStatus::Failed)
-}
-
-/// A job as stored.
-#[derive(Debug, Clone, PartialEq)]
-pub struct JobRow {
-    pub id: String,
-    /// Submission order (1, 2, ...).
-    pub seq: i64,
-    pub status: JobStatus,
-    pub spec: String,
-    pub created_at: String,
-    pub started_at: Option<String>,
-    pub finished_at: Option<String>,
-    pub message: Option<String>,
-    pub stop_reason: Option<String>,
-    pub progress: Option<Progress>,
-    /// The stored result files, once written.
-    pub results: Option<ResultIndex>,
-}
-
-/// The lease a worker holds on a running job.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Lease {
-    pub owner: String,
-    pub epoch: i64,
-}
-
-/// How claims behave.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ClaimPolicy {
-    /// Length of a lease; renewed by heartbeats every third of it.
-    pub lease: Duration,
-    /// A job whose lease expired this many times (its worker died each time) ends
-    /// failed instead of being claimed again.
-    pub max_takeovers: i64,
-}
-
-impl Default for ClaimPolicy {
-    fn default() -> Self {
-        ClaimPolicy { lease: Duration::from_secs(15), max_takeovers: 3 }
-    }
-}
-
-#[derive(Debug, thiserror::Error)]
-pub enum StoreError {
-    #[error(transparent)]
-    Db(#[from] sqlx::Error),
-    #[error("database migration: {0}")]
-    Migrate(#[from] sqlx::migrate::MigrateError),
-    /// The job's lease moved on (another node took the job over): nothing was written.
-    #[error("job {0}: the lease was lost to another worker")]
-    LeaseLost(String),
-    /// The blob store refused or failed.
-    #[error("blob store: {0}")]
-    Blob(#[from] BlobError),
-}
-
-pub type StoreResult<T> = Result<T, StoreError>;
-
-impl StoreError {
-    /// The database could not be reached (restarting, connection lost), or ended
-    /// the session (a transaction left idle too long while this node was paused:
-    /// 25P03): the same request may succeed a moment later on a new connection.
-    pub fn is_transient(&self) -> bool {
-        match self {
-            StoreError::Db(sqlx::Error::Database(e)) => {
-                e.code().is_some_and(|c| c.starts_with("08") || c.starts_with("57P") || c == "25P03")
-            }
-            StoreError::Db(e) => matches!(
-                e,
-                sqlx::Error::Io(_) | sqlx::Error::PoolTimedOut | sqlx::Error::Protocol(_) | sqlx::Error::WorkerCrashed
-            ),
-            _ => false,
-        }
-    }
-}
-
-/// A job claimed by a worker: the job and the lease it now holds.
-#[derive(Debug, Clone)]
-pub struct Claimed {
-    pub job: JobRow,
-    pub lease: Lease,
-    /// The job's lease had expired: this claim takes it over from a dead worker.
-    pub takeover: bool,
-}
-
-/// Which checkpoint rows to read.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Which {
-    Last,
-    At(i64),
-    All,
-}
-
-/// A checkpoint row: the key of its frame in the blob store, or (rows stored
-/// before blobs) the checkpoint's JSON itself.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CheckpointRow {
-    pub iteration: i64,
-    pub blob: Option<String>,
-    pub data: String,
-}
-
-/// An input row: its name, and its bytes unless they are in the blob store.
-#[derive(Debug, Clone, PartialEq)]
-pub struct InputRow {
-    pub name: String,
-    pub in_blob: bool,
-    pub data: Vec<u8>,
-}
-
-/// The result files a job's row points to: the blob folder `results/{set}` of the
-/// job and the files in it.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ResultIndex {
-    pub set: String,
-    pub files: Vec<ResultEntry>,
-}
-
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ResultEntry {
-    pub name: String,
-    pub media_type: String,
-}
+pub(crate) use types::status_of;
+pub use types::{
+    CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus, Lease, ResultEntry, ResultIndex, StoreError,
+    StoreResult, Which,
+};
 
 /// What every backend stores and how (see the module documentation). The
 /// required methods are SQL on the backend's rows; the provided ones put the

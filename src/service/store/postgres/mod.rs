@@ -4,12 +4,14 @@
 //! the channel [`CHANNEL`] (the job's id: a wake-up hint for event streams on
 //! every node, [`PgStore::watch`]).
 
+mod listen;
+
 use super::{
     crash_message, now, results_of, status_of, Blobs, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
     JobStore, Lease, StoreError, StoreResult, Which,
 };
 use crate::flow::Progress;
-use sqlx::postgres::{PgConnectOptions, PgListener, PgPool, PgPoolOptions, PgRow};
+use sqlx::postgres::{PgConnectOptions, PgPool, PgPoolOptions, PgRow};
 use sqlx::{Postgres, Row, Transaction};
 use std::str::FromStr;
 use std::sync::Arc;
@@ -101,42 +103,7 @@ impl JobStore for PgStore {
     /// task that listens on its own connection; after a lost connection (which may
     /// have dropped notifications) it sends `"*"`, on which every stream re-reads.
     fn watch(&self, events: broadcast::Sender<Arc<str>>) {
-        let pool = self.pool.clone();
-        tokio::spawn(async move {
-            loop {
-                let mut listener = match PgListener::connect_with(&pool).await {
-                    Ok(l) => l,
-                    Err(e) => {
-                        tracing::warn!("event listener: {e}; retrying");
-                        tokio::time::sleep(Duration::from_millis(500)).await;
-                        continue;
-                    }
-                };
-                if let Err(e) = listener.listen(CHANNEL).await {
-                    tracing::warn!("event listener: {e}; retrying");
-                    tokio::time::sleep(Duration::from_millis(500)).await;
-                    continue;
-                }
-                let _ = events.send(Arc::from("*"));
-                loop {
-                    match listener.try_recv().await {
-                        Ok(Some(n)) => {
-                            let _ = events.send(Arc::from(n.payload()));
-                        }
-                        // reconnected: notifications may have been missed
-                        Ok(None) => {
-                            let _ = events.send(Arc::from("*"));
-                        }
-                        Err(e) => {
-                            tracing::warn!("event listener: {e}; reconnecting");
-                            let _ = events.send(Arc::from("*"));
-                            tokio::time::sleep(Duration::from_millis(200)).await;
-                            break;
-                        }
-                    }
-                }
-            }
-        });
+        listen::forward(self.pool.clone(), CHANNEL, events);
     }
 
     async fn insert_rows(&self, id: &str, spec: &str, heads: &[(String, Vec<u8>)]) -> StoreResult<JobRow> {

