@@ -248,10 +248,8 @@ fn first_void(resolution: usize) -> (f64, f64) {
 /// walls welded over the void can carry the field across, which raises the
 /// Dirichlet energy) is a discretization effect that shrinks under refinement:
 /// measured 0.073, 0.060, 0.047 (0.039 at 192 vertices).
-// The two refinement studies are the longest tests: their names start with `a_`
-// so that the test runner, which starts tests in name order, starts them first.
 #[test]
-fn a_void_forms_at_a_time_stable_under_refinement() {
+fn the_void_forms_at_a_time_stable_under_refinement() {
     let runs: Vec<(f64, f64)> = std::thread::scope(|s| {
         let runs: Vec<_> = [64, 96, 128].map(|n| s.spawn(move || first_void(n))).into_iter().collect();
         runs.into_iter().map(|r| r.join().unwrap()).collect()
@@ -326,7 +324,7 @@ fn first_inclusion_with_bending(resolution: usize) -> (f64, f64, f64) {
 /// 2.5 %, 1.0 %), area 6.76e-3, 5.80e-3, 5.41e-3 (14 %, 6.9 %), height 0.183,
 /// 0.170, 0.170.
 #[test]
-fn a_bent_film_forms_its_inclusion_at_a_converged_time_and_size() {
+fn with_bending_the_inclusion_forms_at_a_converged_time_and_size() {
     let runs: Vec<(f64, f64, f64)> = std::thread::scope(|s| {
         let runs: Vec<_> =
             [64, 96, 128].map(|n| s.spawn(move || first_inclusion_with_bending(n))).into_iter().collect();
