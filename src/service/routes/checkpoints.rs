@@ -35,9 +35,9 @@ pub(super) async fn glb(
         .strip_suffix(".glb")
         .and_then(|n| n.parse().ok())
         .ok_or_else(|| ApiError::NotFound(format!("no checkpoint file {file:?}: expected {{iteration}}.glb")))?;
-    let (context, mut frames) = frames_to_draw(&state, &id, Which::At(n)).await?;
-    let frame =
-        frames.pop().ok_or_else(|| ApiError::NotFound(format!("job {id} has no checkpoint at iteration {n}")))?;
+    let missing = || ApiError::NotFound(format!("job {id} has no checkpoint at iteration {n}"));
+    let (context, mut frames) = frames_to_draw(&state, &id, Which::At(n)).await?.ok_or_else(missing)?;
+    let frame = frames.pop().ok_or_else(missing)?;
     let bytes = blocking(move || context.frame_glb(&frame)).await?;
     Ok(glb_response(bytes, &file))
 }

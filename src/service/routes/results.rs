@@ -33,16 +33,20 @@ async fn rebuild(state: &AppState, id: &str) -> Result<PreparedJob, ApiError> {
 }
 
 /// The frames `which` of job `id` and what their glb files share; frames stored
-/// without fields get them (the job prepared again).
+/// without fields get them (the job prepared again). `None` if there is no such
+/// frame.
 pub(super) async fn frames_to_draw(
     state: &AppState,
     id: &str,
     which: Which,
-) -> Result<(GlbContext, Vec<Frame>), ApiError> {
+) -> Result<Option<(GlbContext, Vec<Frame>)>, ApiError> {
     let frames = state.store.frames(id, which).await?;
+    if frames.is_empty() {
+        return Ok(None);
+    }
     let context = state.store.context(id).await?;
     if let (Some(context), true) = (&context, frames.iter().all(|f| f.fields.is_some())) {
-        return Ok((context.clone(), frames));
+        return Ok(Some((context.clone(), frames)));
     }
     let job = rebuild(state, id).await?;
     let (context, frames) = blocking(move || {
@@ -51,7 +55,7 @@ pub(super) async fn frames_to_draw(
     })
     .await?;
     state.store.put_context(id, &context).await?;
-    Ok((context, frames))
+    Ok(Some((context, frames)))
 }
 
 /// The stored result files of an ended job (computed and stored now if they are
@@ -63,10 +67,7 @@ async fn ended_results(state: &AppState, row: &JobRow) -> Result<Option<ResultIn
     if let Some(index) = &row.results {
         return Ok(Some(index.clone()));
     }
-    let (_, frames) = frames_to_draw(state, &row.id, Which::All).await?;
-    if frames.is_empty() {
-        return Ok(None);
-    }
+    let Some((_, frames)) = frames_to_draw(state, &row.id, Which::All).await? else { return Ok(None) };
     let job = rebuild(state, &row.id).await?;
     let files = blocking(move || result_files(&job, &frames)).await?;
     state.store.put_results(&row.id, None, &files).await?;
@@ -122,9 +123,9 @@ async fn stored(state: &AppState, id: &str, name: &str) -> Result<Option<Respons
 
 /// The latest frame of a running job, or 404.
 async fn latest(state: &AppState, id: &str) -> Result<(GlbContext, Frame), ApiError> {
-    let (context, mut frames) = frames_to_draw(state, id, Which::Last).await?;
-    let frame = frames.pop().ok_or_else(|| ApiError::NotFound(format!("job {id} has no result yet")))?;
-    Ok((context, frame))
+    let no_result = || ApiError::NotFound(format!("job {id} has no result yet"));
+    let (context, mut frames) = frames_to_draw(state, id, Which::Last).await?.ok_or_else(no_result)?;
+    Ok((context, frames.pop().ok_or_else(no_result)?))
 }
 
 /// `GET /v1/jobs/{id}/results/shape.json`: what the job's final state shows (a
@@ -182,9 +183,8 @@ pub(super) async fn evolution_glb(State(state): State<AppState>, Path(id): Path<
     if let Some(r) = stored(&state, &id, "evolution.glb").await? {
         return Ok(r);
     }
-    let (context, frames) = frames_to_draw(&state, &id, Which::All).await?;
-    let bytes = blocking(move || context.evolution_glb(&frames))
-        .await?
-        .ok_or_else(|| ApiError::NotFound(format!("job {id} has no checkpoint yet")))?;
+    let no_checkpoint = || ApiError::NotFound(format!("job {id} has no checkpoint yet"));
+    let (context, frames) = frames_to_draw(&state, &id, Which::All).await?.ok_or_else(no_checkpoint)?;
+    let bytes = blocking(move || context.evolution_glb(&frames)).await?.ok_or_else(no_checkpoint)?;
     Ok(glb_response(bytes, "evolution.glb"))
 }
