@@ -50,14 +50,20 @@ fn result_sets(dir: &Path, id: &str) -> Vec<PathBuf> {
     std::fs::read_dir(results).map(|d| d.filter_map(|e| e.ok()).map(|e| e.path()).collect()).unwrap_or_default()
 }
 
-#[test]
-fn an_ended_jobs_files_are_stored_blobs_served_as_stored() {
+/// A service on a temporary directory and its ended circle job.
+fn ended_circle() -> (tempfile::TempDir, PathBuf, Server, String) {
     let dir = tempfile::tempdir().unwrap();
     let db = dir.path().join("jobs.db");
     let srv = Server::start(&db, 1);
     let (_, job) = srv.json("POST", "/v1/jobs", Some(CIRCLE));
     let id = job["id"].as_str().unwrap().to_string();
     srv.wait_for(&id, |j| j["status"] == "successful");
+    (dir, db, srv, id)
+}
+
+#[test]
+fn an_ended_jobs_files_are_stored_blobs_served_as_stored() {
+    let (dir, db, srv, id) = ended_circle();
     // one result set, written by the worker, with the files the manifest lists
     let sets = result_sets(dir.path(), &id);
     assert_eq!(sets.len(), 1, "{sets:?}");
@@ -136,12 +142,7 @@ fn a_running_job_shows_its_latest_frame_and_image_results_come_at_the_end() {
 
 #[test]
 fn an_ended_job_without_stored_files_gets_them_on_first_request() {
-    let dir = tempfile::tempdir().unwrap();
-    let db = dir.path().join("jobs.db");
-    let srv = Server::start(&db, 1);
-    let (_, job) = srv.json("POST", "/v1/jobs", Some(CIRCLE));
-    let id = job["id"].as_str().unwrap().to_string();
-    srv.wait_for(&id, |j| j["status"] == "successful");
+    let (dir, db, srv, id) = ended_circle();
     let shape_before = download(srv.addr, &format!("/v1/jobs/{id}/results/shape.json")).2;
     // as an older version left it: checkpoints as JSON in their rows (no fields),
     // no result files, no glb context

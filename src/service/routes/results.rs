@@ -112,10 +112,8 @@ pub(super) async fn manifest(State(state): State<AppState>, Path(id): Path<Strin
 /// The stored file `name` of an ended job; `None` for a running job.
 async fn stored(state: &AppState, id: &str, name: &str) -> Result<Option<Response>, ApiError> {
     let row = find(state, id).await?;
-    if ended_results(state, &row).await?.is_none() {
-        return Ok(None);
-    }
-    match state.store.result_file(id, name).await? {
+    let Some(index) = ended_results(state, &row).await? else { return Ok(None) };
+    match state.store.result_file(id, &index, name).await? {
         Some((media, bytes)) => Ok(Some(([(header::CONTENT_TYPE, media)], bytes).into_response())),
         None => Err(ApiError::NotFound(format!("job {id} has no result {name}"))),
     }

@@ -186,9 +186,9 @@ pub trait JobStore: Send + Sync + 'static {
         Ok(changed)
     }
 
-    /// A stored result file of a job: its media type and bytes.
-    async fn result_file(&self, id: &str, name: &str) -> StoreResult<Option<(String, Vec<u8>)>> {
-        let Some(index) = self.job(id).await?.and_then(|j| j.results) else { return Ok(None) };
+    /// A stored result file of job `id` whose row points to `index`: its media
+    /// type and bytes.
+    async fn result_file(&self, id: &str, index: &ResultIndex, name: &str) -> StoreResult<Option<(String, Vec<u8>)>> {
         let Some(entry) = index.files.iter().find(|f| f.name == name) else { return Ok(None) };
         let bytes = self.blobs().get_existing(&["jobs", id, "results", &index.set, name]).await?;
         Ok(Some((entry.media_type.clone(), bytes)))
