@@ -1,13 +1,16 @@
 //! Service latency: `POST /v1/jobs` and `GET /v1/jobs/{id}` (p50/p99) with 50
 //! concurrent pollers while 2 workers compute, over real HTTP on 127.0.0.1; event
-//! streams (100 SSE clients and 20 pollers); the service's overhead on a short job
-//! (wall time from POST to `successful` minus the engine time of the same job run
-//! in-process); and the latency of a claim with 100,000 finished jobs in the table.
+//! streams (100 SSE clients and 20 pollers); the service's overhead on a short job,
+//! measured first on idle workers (wall time from POST to `successful`, or to the
+//! `status` event, minus the engine time of the same job run in-process, and minus
+//! what the CLI computes for it: the run, each checkpoint's fields, the result
+//! files); and the latency of a claim with 100,000 finished jobs in the table.
 //! On a temporary SQLite file, or on PostgreSQL when `SHAPEFLOW_BENCH_DATABASE` is
 //! a `postgres://` URL (an empty database: the bench fills it).
-//! `cargo bench --bench service`.
+//! `cargo bench --bench service` (`-- short`: the short job only).
 
-use shapeflow::jobs::{parse_spec, prepare, run_prepared};
+use shapeflow::flow::Checkpoint;
+use shapeflow::jobs::{parse_spec, prepare, result_files, run_prepared, Frame, RunEvents};
 use shapeflow::service::store::{self, ClaimPolicy, JobStatus};
 use shapeflow::service::{Service, ServiceConfig};
 use std::io::BufRead;
@@ -20,7 +23,10 @@ use std::time::{Duration, Instant};
 /// A job that keeps a worker busy for a while.
 const BUSY: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 2000},
   "flow": {"tau": 1e-6, "end_time": 1.0, "max_iterations": 20000, "tolerance": 0}, "output": {"checkpoint_every": 100}}"#;
-/// A short job (about a hundred milliseconds of engine time).
+/// Runs of the short job (the engine's time varies by a third from run to run on
+/// this machine; the medians of 11 are stable to a few per cent).
+const RUNS: usize = 11;
+/// A short job (about fifty milliseconds of engine time).
 const SHORT: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 256},
   "flow": {"tau": 1e-4, "end_time": 0.1, "max_iterations": 2000, "tolerance": 0}, "output": {"checkpoint_every": 100}}"#;
 
@@ -70,6 +76,66 @@ fn main() {
     let app = service.router();
     rt.spawn(async move { axum::serve(listener, app).await.unwrap() });
 
+    // overhead on a short job, first, with idle workers and an empty database
+    let job = prepare(parse_spec(SHORT).unwrap(), &Default::default()).unwrap();
+    let mut engine = Vec::new();
+    let mut whole = Vec::new();
+    let mut service_wall = Vec::new();
+    let mut streamed = Vec::new();
+    for _ in 0..RUNS {
+        let t = Instant::now();
+        run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
+        engine.push(t.elapsed().as_secs_f64() * 1e3);
+        // what the CLI computes for the same job: the run, each checkpoint's
+        // fields, the result files
+        let t = Instant::now();
+        let mut kept = Kept(Vec::new());
+        run_prepared(&job, None, &AtomicBool::new(false), &mut kept).unwrap();
+        let frames: Vec<Frame> = kept.0.iter().map(|c| Frame::of(&job, c)).collect();
+        std::hint::black_box(result_files(&job, &frames));
+        whole.push(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
+        let id = id_of(&http(addr, "POST", "/v1/jobs", Some(SHORT)).1);
+        loop {
+            let (_, body) = http(addr, "GET", &format!("/v1/jobs/{id}"), None);
+            if body.contains("\"successful\"") {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        service_wall.push(t.elapsed().as_secs_f64() * 1e3);
+        // the same, told by the job's event stream instead of polling
+        let t = Instant::now();
+        let id = id_of(&http(addr, "POST", "/v1/jobs", Some(SHORT)).1);
+        until_status_event(addr, &id);
+        streamed.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    let (e, w) = (percentile(&mut engine, 0.5), percentile(&mut service_wall, 0.5));
+    let sse = percentile(&mut streamed, 0.5);
+    let c = percentile(&mut whole, 0.5);
+    println!();
+    println!("| short job (1000 iterations, 256 vertices, checkpoints every 100) | median of {RUNS} |");
+    println!("|---|---|");
+    println!("| engine in-process | {e:.1} ms |");
+    println!("| service: POST → successful (polled every ms) | {w:.1} ms |");
+    println!("| overhead | {:.1} ms ({:.0} %) |", w - e, 100.0 * (w - e) / e);
+    println!("| service: POST → status event on the job's SSE stream | {sse:.1} ms |");
+    println!("| overhead | {:.1} ms ({:.0} %) |", sse - e, 100.0 * (sse - e) / e);
+    println!("| in-process as the CLI: run, checkpoint fields, result files | {c:.1} ms |");
+    println!("| service overhead beyond that, polled | {:.1} ms ({:.0} %) |", w - c, 100.0 * (w - c) / c);
+    println!("| service overhead beyond that, SSE | {:.1} ms ({:.0} %) |", sse - c, 100.0 * (sse - c) / c);
+    // `-- short`: only the short job (the overhead), without the load after it
+    if !std::env::args().any(|a| a == "short") {
+        under_load(addr);
+    }
+
+    rt.block_on(service.stop());
+    rt.block_on(claims(&database, dir.path()));
+}
+
+/// POST and GET latency with 50 pollers, then 100 event streams and 20 pollers,
+/// while two long jobs keep both workers busy.
+fn under_load(addr: SocketAddr) {
     // keep both workers busy
     let busy: Vec<String> = (0..2).map(|_| id_of(&http(addr, "POST", "/v1/jobs", Some(BUSY)).1)).collect();
     std::thread::sleep(Duration::from_millis(300));
@@ -172,44 +238,15 @@ fn main() {
         http(addr, "POST", &format!("/v1/jobs/{id}/cancel"), None);
     }
     std::thread::sleep(Duration::from_millis(500));
+}
 
-    // overhead on a short job with idle workers
-    let job = prepare(parse_spec(SHORT).unwrap(), &Default::default()).unwrap();
-    let mut engine = Vec::new();
-    let mut service_wall = Vec::new();
-    let mut streamed = Vec::new();
-    for _ in 0..5 {
-        let t = Instant::now();
-        run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
-        engine.push(t.elapsed().as_secs_f64() * 1e3);
-        let t = Instant::now();
-        let id = id_of(&http(addr, "POST", "/v1/jobs", Some(SHORT)).1);
-        loop {
-            let (_, body) = http(addr, "GET", &format!("/v1/jobs/{id}"), None);
-            if body.contains("\"successful\"") {
-                break;
-            }
-            std::thread::sleep(Duration::from_millis(1));
-        }
-        service_wall.push(t.elapsed().as_secs_f64() * 1e3);
-        // the same, told by the job's event stream instead of polling
-        let t = Instant::now();
-        let id = id_of(&http(addr, "POST", "/v1/jobs", Some(SHORT)).1);
-        until_status_event(addr, &id);
-        streamed.push(t.elapsed().as_secs_f64() * 1e3);
+/// Keeps the checkpoints of a run, as the CLI does.
+struct Kept(Vec<Checkpoint>);
+
+impl RunEvents for Kept {
+    fn checkpoint(&mut self, c: &Checkpoint) {
+        self.0.push(c.clone());
     }
-    let (e, w) = (percentile(&mut engine, 0.5), percentile(&mut service_wall, 0.5));
-    let sse = percentile(&mut streamed, 0.5);
-    println!();
-    println!("| short job (1000 iterations, 256 vertices, checkpoints every 100) | median of 5 |");
-    println!("|---|---|");
-    println!("| engine in-process | {e:.1} ms |");
-    println!("| service: POST → successful (polled every ms) | {w:.1} ms |");
-    println!("| overhead | {:.1} ms ({:.0} %) |", w - e, 100.0 * (w - e) / e);
-    println!("| service: POST → status event on the job's SSE stream | {sse:.1} ms |");
-    println!("| overhead | {:.1} ms ({:.0} %) |", sse - e, 100.0 * (sse - e) / e);
-    rt.block_on(service.stop());
-    rt.block_on(claims(&database, dir.path()));
 }
 
 /// Read the job's event stream until its `status` event.

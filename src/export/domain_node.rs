@@ -3,7 +3,7 @@
 //! it), not animated, with the outer boundary `Σ` and the two curves of the control
 //! region as `LINE_LOOP`s and ribbons (material `domain`), and the control region
 //! `D` between them filled (material `control region`). This module gives the
-//! geometry of its primitives; gltf.rs encodes them.
+//! geometry of its primitives; gltf/nodes.rs encodes them.
 
 use super::fill::{region_triangles, ribbon};
 
@@ -64,18 +64,10 @@ pub(super) fn domain_primitives(domain: &DomainOutline, ribbon_width: f64) -> Ve
     out
 }
 
-/// The diagonal of the bounding box of `points` (ribbons are a share of it wide:
-/// the curves' for a frame, `Σ`'s for the domain).
-pub(super) fn bounding_diagonal(points: &[[f64; 2]]) -> f64 {
-    let (lo, hi) = points.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
-        ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])
-    });
-    (hi[0] - lo[0]).hypot(hi[1] - lo[1])
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::export::fill::bounding_diagonal;
 
     /// A square `Σ` around a square annulus `D`: three loops, `D`'s area exact.
     #[test]

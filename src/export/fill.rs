@@ -7,10 +7,61 @@ use crate::flow::MeshData;
 use crate::geometry::segment_cycles;
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 
+/// Width of the curve ribbons, relative to the diagonal of the curves' bounding box.
+pub(super) const RIBBON_WIDTH: f64 = 0.004;
+
+/// What shows a 2D state in renderers that draw no lines: the region its curves
+/// enclose, triangulated, and a ribbon along each curve.
+pub(super) struct Filled {
+    /// The region's points and triangles (none if the curves enclose nothing).
+    pub points: Vec<[f64; 2]>,
+    pub region: Vec<[usize; 3]>,
+    /// The ribbons' vertices and triangles, and the state's vertex behind each
+    /// ribbon vertex (for its colour).
+    pub ribbon_points: Vec<[f64; 2]>,
+    pub ribbon_triangles: Vec<[u32; 3]>,
+    pub ribbon_source: Vec<usize>,
+    /// The ribbons' width.
+    pub width: f64,
+}
+
+impl Filled {
+    /// The region and ribbons of the curves of `m`; `None` for surfaces, an empty
+    /// state, or curves that cross (no region to fill). Periodic curves (the
+    /// stressed film) are drawn over one period, lifted: the region is the film
+    /// between its surface and the substrate `y = 0`, voids left open.
+    pub(super) fn of(m: &MeshData) -> Option<Filled> {
+        if m.dimension != 2 || m.elements.is_empty() {
+            return None;
+        }
+        let drawing = Drawing::of(m);
+        let region = region_triangles(&drawing.points, &drawing.region)?;
+        let width = RIBBON_WIDTH * bounding_diagonal(&drawing.points);
+        let (mut ribbon_points, mut ribbon_triangles, mut ribbon_source) = (Vec::new(), Vec::new(), Vec::new());
+        for (l, closed) in &drawing.curves {
+            let (v, t) = ribbon(&drawing.points, l, width, *closed);
+            let base = ribbon_points.len() as u32;
+            ribbon_points.extend(v);
+            ribbon_source.extend(l.iter().flat_map(|&i| [drawing.source[i]; 2]));
+            ribbon_triangles.extend(t.iter().map(|t| t.map(|i| i + base)));
+        }
+        Some(Filled { points: drawing.points, region, ribbon_points, ribbon_triangles, ribbon_source, width })
+    }
+}
+
+/// The diagonal of the bounding box of `points` (ribbons are a share of it wide:
+/// the curves' for a frame, `Σ`'s for the domain).
+pub(super) fn bounding_diagonal(points: &[[f64; 2]]) -> f64 {
+    let (lo, hi) = points.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
+        ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])
+    });
+    (hi[0] - lo[0]).hypot(hi[1] - lo[1])
+}
+
 /// The curves of a 2D state as drawn in the plane: points (periodic components
 /// lifted over one period), each curve with whether it is closed, the polygons
 /// whose even–odd interior is the region, and the state's vertex behind each point.
-pub(super) struct Drawing {
+struct Drawing {
     pub points: Vec<[f64; 2]>,
     pub source: Vec<usize>,
     pub curves: Vec<(Vec<usize>, bool)>,
@@ -18,7 +69,7 @@ pub(super) struct Drawing {
 }
 
 impl Drawing {
-    pub(super) fn of(m: &MeshData) -> Drawing {
+    fn of(m: &MeshData) -> Drawing {
         let cycles = segment_cycles(m.positions.len(), m.elements.iter().map(|e| (e[0], e[1])));
         let Some(period) = m.period else {
             let points = m.positions.iter().map(|p| [p[0], p[1]]).collect();

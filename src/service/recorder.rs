@@ -2,6 +2,7 @@
 //! checkpoints, in fenced transactions ([`super::store::JobStore::record`]) made
 //! by a writer task in submission order, so that the engine computes on while the
 //! database commits (at most [`QUEUE`] batches wait; beyond that the engine waits).
+//! The batches that wait are written together, in one transaction.
 //! A checkpoint is stored as a [`Frame`]: its per-vertex fields are computed once,
 //! by the writer, on the blocking pool.
 //! A lost lease or a storage error stops the run (through its cancel flag) and is
@@ -81,27 +82,35 @@ impl Recorder {
         let (id, lease) = (id.to_string(), lease.clone());
         let writer = rt.spawn(async move {
             let mut state = WriteState::default();
-            while let Some(b) = rx.recv().await {
+            while let Some(first) = rx.recv().await {
+                // the batches that queued while the last one was written go together,
+                // in one transaction: a writer that falls behind catches up
+                let mut rows = first.rows;
+                let mut checkpoints: Vec<Checkpoint> = first.checkpoint.into_iter().collect();
+                while let Ok(b) = rx.try_recv() {
+                    rows.extend(b.rows);
+                    checkpoints.extend(b.checkpoint);
+                }
                 if state.lost || state.error.is_some() {
                     continue; // drain: nothing more is written
                 }
-                let frame = match b.checkpoint {
-                    Some(cp) => {
-                        let job = job.clone();
-                        match tokio::task::spawn_blocking(move || Frame::of(&job, &cp)).await {
-                            Ok(frame) => Some(frame),
-                            Err(e) => {
-                                state.error = Some(format!("the fields of a checkpoint: {e}"));
-                                cancel.store(true, Ordering::Relaxed);
-                                continue;
-                            }
+                let frames = if checkpoints.is_empty() {
+                    Vec::new()
+                } else {
+                    let job = job.clone();
+                    let fields = move || checkpoints.iter().map(|cp| Frame::of(&job, cp)).collect::<Vec<_>>();
+                    match tokio::task::spawn_blocking(fields).await {
+                        Ok(frames) => frames,
+                        Err(e) => {
+                            state.error = Some(format!("the fields of a checkpoint: {e}"));
+                            cancel.store(true, Ordering::Relaxed);
+                            continue;
                         }
                     }
-                    None => None,
                 };
-                match retrying(|| store.record(&id, &lease, &b.rows, frame.as_ref())).await {
+                match retrying(|| store.record(&id, &lease, &rows, &frames)).await {
                     Ok(cancelled) => {
-                        state.frames.extend(frame);
+                        state.frames.extend(frames);
                         let _ = events.send(Arc::from(id.as_str()));
                         if cancelled {
                             cancel.store(true, Ordering::Relaxed);

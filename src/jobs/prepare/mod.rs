@@ -4,6 +4,7 @@
 //! `image_shapes`), plus the explicit initial shapes, the flow settings and the
 //! mesh settings.
 
+mod background;
 mod checks;
 mod design;
 mod film;

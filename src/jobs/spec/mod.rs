@@ -12,6 +12,7 @@ mod parse;
 mod path;
 mod problem;
 mod segmentation;
+mod unique_keys;
 
 pub use error::SpecError;
 pub use initial::InitialSpec;

@@ -1,7 +1,8 @@
 //! Parsing a spec from JSON text, with the failing field named.
 
-use super::path::{duplicate_key, locate};
+use super::path::locate;
 use super::segmentation::IMAGE_MESSAGE;
+use super::unique_keys::duplicate_key;
 use super::{JobSpec, SpecError};
 use serde::Deserialize;
 

@@ -19,6 +19,7 @@ mod types;
 use super::blobs::{input_key, BlobError, Blobs};
 use crate::flow::{Checkpoint, Progress};
 use crate::jobs::{Frame, GlbContext, ResultFile};
+use futures_util::TryFutureExt;
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -26,8 +27,8 @@ pub use postgres::PgStore;
 pub use sqlite::SqliteStore;
 pub(crate) use types::status_of;
 pub use types::{
-    CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus, Lease, ResultEntry, ResultIndex, StoreError,
-    StoreResult, Which,
+    CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus, Lease, ResultEntry, ResultIndex,
+    StoreError, StoreResult, Which,
 };
 
 /// What every backend stores and how (see the module documentation). The
@@ -69,16 +70,16 @@ pub trait JobStore: Send + Sync + 'static {
     /// Checkpoint rows of a job, oldest first.
     async fn checkpoint_rows(&self, id: &str, which: Which) -> StoreResult<Vec<CheckpointRow>>;
     /// Append history rows (replacing rows already present after a resume), update
-    /// the job's progress and add the row of a checkpoint (`(iteration, time, key
-    /// of its frame)`), in one transaction fenced by `lease`; on PostgreSQL also
-    /// one notification for the batch. Returns whether cancellation was requested
-    /// (read by the fence).
+    /// the job's progress and add the rows of checkpoints (their iteration, time
+    /// and the key of their frame), in one transaction fenced by `lease`; on
+    /// PostgreSQL also one notification for the batch. Returns whether
+    /// cancellation was requested (read by the fence).
     async fn record_rows(
         &self,
         id: &str,
         lease: &Lease,
         rows: &[Progress],
-        checkpoint: Option<(i64, f64, &str)>,
+        checkpoints: &[CheckpointKey],
     ) -> StoreResult<bool>;
     /// Drop history rows after a checkpoint (before resuming from it); fenced.
     async fn truncate_history(&self, id: &str, lease: &Lease, after: usize) -> StoreResult<()>;
@@ -151,16 +152,18 @@ pub trait JobStore: Send + Sync + 'static {
         Ok(self.frames(id, Which::Last).await?.pop().map(|f| f.state))
     }
 
-    /// History rows and, optionally, a checkpoint with its fields (its frame in the
-    /// blob store under a key with the lease's epoch, then its row): see
-    /// [`JobStore::record_rows`].
-    async fn record(&self, id: &str, lease: &Lease, rows: &[Progress], frame: Option<&Frame>) -> StoreResult<bool> {
-        let Some(frame) = frame else { return self.record_rows(id, lease, rows, None).await };
-        let key = format!("{}.e{}.json", frame.state.iteration, lease.epoch);
-        let json = serde_json::to_vec(frame).expect("frames serialize");
-        self.blobs().put(&["jobs", id, "checkpoints", &key], json).await?;
-        let (iteration, time) = (frame.state.iteration as i64, frame.state.time);
-        self.record_rows(id, lease, rows, Some((iteration, time, &key))).await
+    /// History rows and checkpoints with their fields (each frame in the blob store
+    /// under a key with the lease's epoch, then their rows), in one transaction:
+    /// see [`JobStore::record_rows`].
+    async fn record(&self, id: &str, lease: &Lease, rows: &[Progress], frames: &[Frame]) -> StoreResult<bool> {
+        let mut keys = Vec::with_capacity(frames.len());
+        for frame in frames {
+            let key = format!("{}.e{}.json", frame.state.iteration, lease.epoch);
+            let json = serde_json::to_vec(frame).expect("frames serialize");
+            self.blobs().put(&["jobs", id, "checkpoints", &key], json).await?;
+            keys.push(CheckpointKey { iteration: frame.state.iteration as i64, time: frame.state.time, key });
+        }
+        self.record_rows(id, lease, rows, &keys).await
     }
 
     /// Store the result files of a job (see [`JobStore::set_results`] for `lease`)
@@ -171,10 +174,17 @@ pub trait JobStore: Send + Sync + 'static {
             Some(l) => format!("e{}", l.epoch),
             None => format!("r{}", uuid::Uuid::new_v4().simple()),
         };
-        for f in files {
-            self.blobs().put(&["jobs", id, "results", &set, f.name], f.bytes.clone()).await?;
-        }
-        let before = self.job(id).await?.and_then(|j| j.results);
+        // the files at once (on S3 each is a request), the row's current index beside them
+        let set_ref = set.as_str();
+        let puts = files
+            .iter()
+            .map(|f| async move { self.blobs().put(&["jobs", id, "results", set_ref, f.name], f.bytes.clone()).await });
+        let (_, job) = futures_util::future::try_join(
+            futures_util::future::try_join_all(puts).map_err(StoreError::from),
+            self.job(id),
+        )
+        .await?;
+        let before = job.and_then(|j| j.results);
         let entries =
             files.iter().map(|f| ResultEntry { name: f.name.into(), media_type: f.media_type.into() }).collect();
         let index = serde_json::to_string(&ResultIndex { set: set.clone(), files: entries }).expect("serializes");

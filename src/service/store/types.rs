@@ -167,3 +167,12 @@ pub struct ResultEntry {
     pub name: String,
     pub media_type: String,
 }
+
+/// The row of a stored checkpoint: its iteration and time, and the key of its
+/// frame in the blob store.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CheckpointKey {
+    pub iteration: i64,
+    pub time: f64,
+    pub key: String,
+}

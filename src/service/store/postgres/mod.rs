@@ -7,12 +7,12 @@
 mod listen;
 
 use super::{
-    crash_message, now, results_of, status_of, Blobs, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
-    JobStore, Lease, StoreError, StoreResult, Which,
+    now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
+    JobStore, Lease, StoreResult, Which,
 };
 use crate::flow::Progress;
 use sqlx::postgres::{PgConnectOptions, PgPool, PgPoolOptions, PgRow};
-use sqlx::{Postgres, Row, Transaction};
+use sqlx::Row;
 use std::str::FromStr;
 use std::sync::Arc;
 use std::time::Duration;
@@ -27,6 +27,9 @@ macro_rules! clock_ms {
         "(extract(epoch from clock_timestamp()) * 1000)::bigint"
     };
 }
+
+mod leases;
+use leases::fence;
 
 #[derive(Clone)]
 pub struct PgStore {
@@ -56,19 +59,6 @@ fn job_from_row(r: &PgRow) -> JobRow {
         }),
         results: results_of(r.get("results")),
     }
-}
-
-/// Within `tx`: lock the job's row and refuse unless `lease` is still its lease;
-/// whether cancellation was requested.
-async fn fence(tx: &mut Transaction<'_, Postgres>, id: &str, lease: &Lease) -> StoreResult<bool> {
-    let held = sqlx::query(
-        "SELECT cancel_requested FROM jobs WHERE id = $1 AND lease_epoch = $2 AND status = 'running' FOR UPDATE",
-    )
-    .bind(id)
-    .bind(lease.epoch)
-    .fetch_optional(&mut **tx)
-    .await?;
-    held.map(|r| r.get::<bool, _>(0)).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
 }
 
 impl PgStore {
@@ -174,78 +164,15 @@ impl JobStore for PgStore {
     }
 
     async fn claim_next(&self, owner: &str, policy: &ClaimPolicy) -> StoreResult<Option<Claimed>> {
-        let lease_ms = policy.lease.as_millis() as i64;
-        loop {
-            let mut tx = self.pool.begin().await?;
-            let pick = sqlx::query(concat!(
-                "SELECT id, status, takeovers FROM jobs WHERE status IN ('accepted', 'running') \
-                 AND (status = 'accepted' OR lease_expires < ",
-                clock_ms!(),
-                ") ORDER BY seq LIMIT 1 FOR UPDATE SKIP LOCKED"
-            ))
-            .fetch_optional(&mut *tx)
-            .await?;
-            let Some(pick) = pick else { return Ok(None) };
-            let id: String = pick.get("id");
-            let takeover = pick.get::<&str, _>("status") == "running";
-            let takeovers = pick.get::<i32, _>("takeovers") as i64 + takeover as i64;
-            if takeover && takeovers > policy.max_takeovers {
-                sqlx::query(
-                    "UPDATE jobs SET status = 'failed', message = $2, finished_at = $3, takeovers = $4, \
-                     lease_epoch = lease_epoch + 1, lease_expires = NULL WHERE id = $1",
-                )
-                .bind(&id)
-                .bind(crash_message(takeovers - 1))
-                .bind(now())
-                .bind(takeovers as i32)
-                .execute(&mut *tx)
-                .await?;
-                sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind(&id).execute(&mut *tx).await?;
-                tx.commit().await?;
-                continue;
-            }
-            let r = sqlx::query(concat!(
-                "UPDATE jobs SET status = 'running', started_at = COALESCE(started_at, $2), lease_owner = $3, \
-                 lease_epoch = lease_epoch + 1, lease_expires = ",
-                clock_ms!(),
-                " + $4, takeovers = $5 WHERE id = $1 RETURNING *"
-            ))
-            .bind(&id)
-            .bind(now())
-            .bind(owner)
-            .bind(lease_ms)
-            .bind(takeovers as i32)
-            .fetch_one(&mut *tx)
-            .await?;
-            tx.commit().await?;
-            let lease = Lease { owner: owner.to_string(), epoch: r.get("lease_epoch") };
-            return Ok(Some(Claimed { job: job_from_row(&r), lease, takeover }));
-        }
+        leases::claim_next(&self.pool, owner, policy).await
     }
 
     async fn renew(&self, id: &str, lease: &Lease, policy: &ClaimPolicy) -> StoreResult<bool> {
-        let done = sqlx::query(concat!(
-            "UPDATE jobs SET lease_expires = ",
-            clock_ms!(),
-            " + $3 WHERE id = $1 AND lease_epoch = $2 AND status = 'running'"
-        ))
-        .bind(id)
-        .bind(lease.epoch)
-        .bind(policy.lease.as_millis() as i64)
-        .execute(&self.pool)
-        .await?;
-        Ok(done.rows_affected() == 1)
+        leases::renew(&self.pool, id, lease, policy).await
     }
 
     async fn release(&self, id: &str, lease: &Lease) -> StoreResult<()> {
-        let mut tx = self.pool.begin().await?;
-        fence(&mut tx, id, lease).await?;
-        sqlx::query("UPDATE jobs SET status = 'accepted', lease_expires = NULL WHERE id = $1")
-            .bind(id)
-            .execute(&mut *tx)
-            .await?;
-        sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind("queue").execute(&mut *tx).await?;
-        Ok(tx.commit().await?)
+        leases::release(&self.pool, id, lease).await
     }
 
     async fn checkpoint_index(&self, id: &str) -> StoreResult<Vec<(i64, f64)>> {
@@ -281,7 +208,7 @@ impl JobStore for PgStore {
         id: &str,
         lease: &Lease,
         rows: &[Progress],
-        checkpoint: Option<(i64, f64, &str)>,
+        checkpoints: &[CheckpointKey],
     ) -> StoreResult<bool> {
         let mut tx = self.pool.begin().await?;
         let cancel = fence(&mut tx, id, lease).await?;
@@ -319,15 +246,15 @@ impl JobStore for PgStore {
             .execute(&mut *tx)
             .await?;
         }
-        if let Some((iteration, time, key)) = checkpoint {
+        for c in checkpoints {
             sqlx::query(
                 "INSERT INTO checkpoints (job_id, iteration, time, data, blob) VALUES ($1, $2, $3, '', $4) \
                  ON CONFLICT (job_id, iteration) DO UPDATE SET time = EXCLUDED.time, data = '', blob = EXCLUDED.blob",
             )
             .bind(id)
-            .bind(iteration)
-            .bind(time)
-            .bind(key)
+            .bind(c.iteration)
+            .bind(c.time)
+            .bind(&c.key)
             .execute(&mut *tx)
             .await?;
         }

@@ -3,14 +3,17 @@
 //! PostgreSQL, and jobs left running at a restart go back to the queue.
 
 use super::{
-    crash_message, now, results_of, status_of, Blobs, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
-    JobStore, Lease, StoreError, StoreResult, Which,
+    now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
+    JobStore, Lease, StoreResult, Which,
 };
 use crate::flow::Progress;
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous};
-use sqlx::{Row, Sqlite, Transaction};
+use sqlx::{Row, Sqlite};
 use std::path::Path;
 use std::time::Duration;
+
+/// History rows per INSERT (7 parameters each, well below SQLite's 32,766).
+const HISTORY_ROWS_PER_STATEMENT: usize = 512;
 
 /// The database clock in ms since the Unix epoch, as SQL.
 macro_rules! clock_ms {
@@ -18,6 +21,9 @@ macro_rules! clock_ms {
         "CAST((julianday('now') - 2440587.5) * 86400000.0 AS INTEGER)"
     };
 }
+
+mod leases;
+use leases::fence;
 
 #[derive(Clone)]
 pub struct SqliteStore {
@@ -58,18 +64,6 @@ fn progress_from_row(r: &sqlx::sqlite::SqliteRow) -> Progress {
         vertices: r.get::<i64, _>("vertices") as usize,
         components: r.get::<i64, _>("components") as usize,
     }
-}
-
-/// Within `tx`: refuse unless `lease` is still the job's; whether cancellation
-/// was requested.
-async fn fence(tx: &mut Transaction<'_, Sqlite>, id: &str, lease: &Lease) -> StoreResult<bool> {
-    let held =
-        sqlx::query("SELECT cancel_requested FROM jobs WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running'")
-            .bind(id)
-            .bind(lease.epoch)
-            .fetch_optional(&mut **tx)
-            .await?;
-    held.map(|r| r.get::<i64, _>(0) != 0).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
 }
 
 impl SqliteStore {
@@ -168,66 +162,11 @@ impl JobStore for SqliteStore {
     }
 
     async fn claim_next(&self, owner: &str, policy: &ClaimPolicy) -> StoreResult<Option<Claimed>> {
-        let lease_ms = policy.lease.as_millis() as i64;
-        loop {
-            let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
-            let pick = sqlx::query(concat!(
-                "SELECT id, status, takeovers FROM jobs WHERE status IN ('accepted', 'running') \
-                 AND (status = 'accepted' OR lease_expires < ",
-                clock_ms!(),
-                ") ORDER BY seq LIMIT 1"
-            ))
-            .fetch_optional(&mut *tx)
-            .await?;
-            let Some(pick) = pick else { return Ok(None) };
-            let id: String = pick.get("id");
-            let takeover = pick.get::<&str, _>("status") == "running";
-            let takeovers = pick.get::<i64, _>("takeovers") + takeover as i64;
-            if takeover && takeovers > policy.max_takeovers {
-                sqlx::query(
-                    "UPDATE jobs SET status = 'failed', message = ?2, finished_at = ?3, takeovers = ?4, \
-                     lease_epoch = lease_epoch + 1 WHERE id = ?1",
-                )
-                .bind(&id)
-                .bind(crash_message(takeovers - 1))
-                .bind(now())
-                .bind(takeovers)
-                .execute(&mut *tx)
-                .await?;
-                tx.commit().await?;
-                continue;
-            }
-            let r = sqlx::query(concat!(
-                "UPDATE jobs SET status = 'running', started_at = COALESCE(started_at, ?2), lease_owner = ?3, \
-                 lease_epoch = lease_epoch + 1, lease_expires = ",
-                clock_ms!(),
-                " + ?4, takeovers = ?5 WHERE id = ?1 RETURNING *"
-            ))
-            .bind(&id)
-            .bind(now())
-            .bind(owner)
-            .bind(lease_ms)
-            .bind(takeovers)
-            .fetch_one(&mut *tx)
-            .await?;
-            tx.commit().await?;
-            let lease = Lease { owner: owner.to_string(), epoch: r.get("lease_epoch") };
-            return Ok(Some(Claimed { job: job_from_row(&r), lease, takeover }));
-        }
+        leases::claim_next(&self.pool, owner, policy).await
     }
 
     async fn renew(&self, id: &str, lease: &Lease, policy: &ClaimPolicy) -> StoreResult<bool> {
-        let done = sqlx::query(concat!(
-            "UPDATE jobs SET lease_expires = ",
-            clock_ms!(),
-            " + ?3 WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running'"
-        ))
-        .bind(id)
-        .bind(lease.epoch)
-        .bind(policy.lease.as_millis() as i64)
-        .execute(&self.pool)
-        .await?;
-        Ok(done.rows_affected() == 1)
+        leases::renew(&self.pool, id, lease, policy).await
     }
 
     /// One node: a stopped node's jobs stay `running` and go back to the queue at
@@ -268,19 +207,23 @@ impl JobStore for SqliteStore {
         id: &str,
         lease: &Lease,
         rows: &[Progress],
-        checkpoint: Option<(i64, f64, &str)>,
+        checkpoints: &[CheckpointKey],
     ) -> StoreResult<bool> {
         let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
         let cancel = fence(&mut tx, id, lease).await?;
-        for p in rows {
-            sqlx::query("INSERT OR REPLACE INTO history VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)")
-                .bind(id)
-                .bind(p.iteration as i64)
-                .bind(p.time)
-                .bind(p.tau)
-                .bind(p.energy)
-                .bind(p.vertices as i64)
-                .bind(p.components as i64)
+        // one statement per chunk: a statement is a round trip to the connection's thread
+        for chunk in rows.chunks(HISTORY_ROWS_PER_STATEMENT) {
+            sqlx::QueryBuilder::<Sqlite>::new("INSERT OR REPLACE INTO history ")
+                .push_values(chunk, |mut row, p| {
+                    row.push_bind(id)
+                        .push_bind(p.iteration as i64)
+                        .push_bind(p.time)
+                        .push_bind(p.tau)
+                        .push_bind(p.energy)
+                        .push_bind(p.vertices as i64)
+                        .push_bind(p.components as i64);
+                })
+                .build()
                 .execute(&mut *tx)
                 .await?;
         }
@@ -299,14 +242,14 @@ impl JobStore for SqliteStore {
             .execute(&mut *tx)
             .await?;
         }
-        if let Some((iteration, time, key)) = checkpoint {
+        for c in checkpoints {
             sqlx::query(
                 "INSERT OR REPLACE INTO checkpoints (job_id, iteration, time, data, blob) VALUES (?1, ?2, ?3, '', ?4)",
             )
             .bind(id)
-            .bind(iteration)
-            .bind(time)
-            .bind(key)
+            .bind(c.iteration)
+            .bind(c.time)
+            .bind(&c.key)
             .execute(&mut *tx)
             .await?;
         }

@@ -1,0 +1,175 @@
+//! Volumes in the formats microscopy and medical imaging use: multi-page TIFF
+//! stacks (one page per slice, the first at the bottom) and NIfTI-1 (`.nii`,
+//! gzip-compressed `.nii.gz`; single file, `n+1`). Voxel spacing is honoured: an
+//! anisotropic volume (ImageJ's `spacing=` and the X resolution of a TIFF stack;
+//! `pixdim` of NIfTI) is resampled by trilinear interpolation to cubic voxels of
+//! its smallest spacing, so that lengths, areas and volumes in the unit box are
+//! physical. The same limits and errors as the other readers: every error names
+//! the input.
+
+mod nifti;
+mod tiff_stack;
+
+pub use nifti::{decode_nifti, is_nifti};
+pub use tiff_stack::{decode_tiff_stack, is_tiff, tiff_pages};
+
+use super::grid::Grid;
+use super::limits::ImageLimits;
+use super::ImageError;
+
+/// `grid` resampled (trilinear) to cubic voxels of its smallest spacing when its
+/// spacings differ by more than 1 %; unchanged otherwise.
+pub fn isotropic(input: &str, grid: Grid, spacing: [f64; 3], limits: &ImageLimits) -> Result<Grid, ImageError> {
+    let h = spacing.iter().copied().fold(f64::INFINITY, f64::min);
+    if spacing.iter().all(|&s| s <= 1.01 * h) {
+        return Ok(grid);
+    }
+    let dims: [usize; 3] = std::array::from_fn(|a| ((grid.dims[a] as f64 * spacing[a] / h).round() as usize).max(1));
+    limits.check(input, &dims).map_err(|e| {
+        ImageError::new(input, format!("resampled to cubic voxels of its spacing {h} ({spacing:?}): {}", e.message))
+    })?;
+    let at = |a: usize, i: usize| {
+        // the new sample centre in old sample coordinates, clamped to the grid
+        (((i as f64 + 0.5) * h / spacing[a]) - 0.5).clamp(0.0, (grid.dims[a] - 1) as f64)
+    };
+    let mut values = Vec::with_capacity(dims.iter().product());
+    for k in 0..dims[2] {
+        let z = at(2, k);
+        for j in 0..dims[1] {
+            let y = at(1, j);
+            for i in 0..dims[0] {
+                let x = at(0, i);
+                let (x0, y0, z0) = (x.floor() as usize, y.floor() as usize, z.floor() as usize);
+                let (x1, y1, z1) =
+                    ((x0 + 1).min(grid.dims[0] - 1), (y0 + 1).min(grid.dims[1] - 1), (z0 + 1).min(grid.dims[2] - 1));
+                let (fx, fy, fz) = (x - x0 as f64, y - y0 as f64, z - z0 as f64);
+                let v = |i, j, k| grid.values[grid.index(i, j, k)];
+                let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
+                let c00 = lerp(v(x0, y0, z0), v(x1, y0, z0), fx);
+                let c10 = lerp(v(x0, y1, z0), v(x1, y1, z0), fx);
+                let c01 = lerp(v(x0, y0, z1), v(x1, y0, z1), fx);
+                let c11 = lerp(v(x0, y1, z1), v(x1, y1, z1), fx);
+                values.push(lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz));
+            }
+        }
+    }
+    Ok(Grid::new(3, dims, values, grid.kind))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Cursor;
+
+    /// A NIfTI-1 header for `dims`, float32, spacing `pixdim`.
+    fn nifti(dims: [i16; 3], pixdim: [f32; 3], data: &[f32], big_endian: bool) -> Vec<u8> {
+        let mut h = vec![0u8; 352];
+        let put_i32 = |h: &mut Vec<u8>, o: usize, v: i32| {
+            h[o..o + 4].copy_from_slice(&if big_endian { v.to_be_bytes() } else { v.to_le_bytes() })
+        };
+        let put_i16 = |h: &mut Vec<u8>, o: usize, v: i16| {
+            h[o..o + 2].copy_from_slice(&if big_endian { v.to_be_bytes() } else { v.to_le_bytes() })
+        };
+        let put_f32 = |h: &mut Vec<u8>, o: usize, v: f32| {
+            h[o..o + 4].copy_from_slice(&if big_endian { v.to_be_bytes() } else { v.to_le_bytes() })
+        };
+        put_i32(&mut h, 0, 348);
+        put_i16(&mut h, 40, 3);
+        for a in 0..3 {
+            put_i16(&mut h, 42 + 2 * a, dims[a]);
+            put_f32(&mut h, 80 + 4 * a, pixdim[a]);
+        }
+        put_i16(&mut h, 70, 16);
+        put_i16(&mut h, 72, 32);
+        put_f32(&mut h, 108, 352.0);
+        h[344..348].copy_from_slice(b"n+1\0");
+        for v in data {
+            h.extend(if big_endian { v.to_be_bytes() } else { v.to_le_bytes() });
+        }
+        h
+    }
+
+    #[test]
+    fn nifti_plain_gzip_and_big_endian() {
+        let data: Vec<f32> = (0..4 * 5 * 6).map(|i| i as f32).collect();
+        let limits = ImageLimits::default();
+        for be in [false, true] {
+            let b = nifti([4, 5, 6], [1.0, 1.0, 1.0], &data, be);
+            assert!(is_nifti(&b));
+            let g = decode_nifti("v", &b, &limits).unwrap();
+            assert_eq!(g.dims, [4, 5, 6]);
+            assert_eq!(g.values[g.index(3, 4, 5)], 119.0);
+        }
+        let b = nifti([4, 5, 6], [1.0, 1.0, 1.0], &data, false);
+        let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        std::io::Write::write_all(&mut gz, &b).unwrap();
+        let gz = gz.finish().unwrap();
+        assert!(is_nifti(&gz));
+        assert_eq!(decode_nifti("v", &gz, &limits).unwrap().values, decode_nifti("v", &b, &limits).unwrap().values);
+        // truncated, wrong type, not NIfTI: errors naming the input
+        let e = decode_nifti("vol", &b[..400], &limits).unwrap_err();
+        assert!(e.to_string().contains("`vol`") && e.to_string().contains("truncated"), "{e}");
+        let mut bad = b.clone();
+        bad[70] = 99;
+        assert!(decode_nifti("vol", &bad, &limits).unwrap_err().to_string().contains("datatype 99"));
+        assert!(!is_nifti(b"NRRD0004\n"));
+    }
+
+    /// A stack of `pages` gray 8-bit pages of 6×5, value `10·page + column`, with
+    /// ImageJ's `spacing` and an X resolution.
+    fn tiff_stack(pages: usize, spacing: f64, resolution: u32) -> Vec<u8> {
+        use tiff::encoder::{colortype::Gray8, Rational, TiffEncoder};
+        let mut out = Cursor::new(Vec::new());
+        let mut enc = TiffEncoder::new(&mut out).unwrap();
+        for p in 0..pages {
+            let mut image = enc.new_image::<Gray8>(6, 5).unwrap();
+            image
+                .encoder()
+                .write_tag(
+                    tiff::tags::Tag::ImageDescription,
+                    format!("ImageJ=1.11a\nimages={pages}\nspacing={spacing}\n").as_str(),
+                )
+                .unwrap();
+            image.resolution(tiff::tags::ResolutionUnit::None, Rational { n: resolution, d: 1 });
+            let data: Vec<u8> = (0..30).map(|i| (10 * p + i % 6) as u8).collect();
+            image.write_data(&data).unwrap();
+        }
+        out.into_inner()
+    }
+
+    #[test]
+    fn tiff_stacks() {
+        let limits = ImageLimits::default();
+        let b = tiff_stack(4, 1.0, 1);
+        assert!(is_tiff(&b));
+        assert_eq!(tiff_pages(&b, 10), 4);
+        let g = decode_tiff_stack("stack", &b, &limits).unwrap();
+        assert_eq!(g.dims, [6, 5, 4]);
+        assert_eq!(g.values[g.index(3, 0, 2)], 23.0);
+        // slices 3 pixels apart: 12 slices after resampling
+        let g = decode_tiff_stack("stack", &tiff_stack(4, 3.0, 1), &limits).unwrap();
+        assert_eq!(g.dims, [6, 5, 12]);
+        // pixels 0.5 apart (resolution 2 per unit), slices 1 apart: twice the slices
+        let g = decode_tiff_stack("stack", &tiff_stack(4, 1.0, 2), &limits).unwrap();
+        assert_eq!(g.dims, [6, 5, 8]);
+        let e = decode_tiff_stack("stack", &b[..b.len() / 2], &limits).unwrap_err();
+        assert!(e.to_string().contains("`stack`"), "{e}");
+        let small = ImageLimits { max_voxels: 100, ..limits };
+        assert!(decode_tiff_stack("stack", &b, &small).unwrap_err().to_string().contains("limit"));
+    }
+
+    /// Slices 2 apart with pixels 1 apart: resampled to twice the slices, a linear
+    /// ramp in z kept exactly.
+    #[test]
+    fn anisotropic_spacing_is_resampled() {
+        let data: Vec<f32> = (0..4 * 4 * 5).map(|i| (i / 16) as f32 * 10.0).collect();
+        let b = nifti([4, 4, 5], [1.0, 1.0, 2.0], &data, false);
+        let g = decode_nifti("v", &b, &ImageLimits::default()).unwrap();
+        assert_eq!(g.dims, [4, 4, 10]);
+        // new slice k has its centre at old z = (k + ½)/2 − ½ (clamped), value 10 z
+        for k in 1..9 {
+            let z = ((k as f64 + 0.5) / 2.0 - 0.5).clamp(0.0, 4.0);
+            assert!((g.values[g.index(1, 2, k)] - 10.0 * z).abs() < 1e-9);
+        }
+    }
+}

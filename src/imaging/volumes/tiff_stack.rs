@@ -1,0 +1,114 @@
+//! Multi-page TIFF stacks (one page per slice, the first at the bottom), with the
+//! spacing of ImageJ's `spacing=` and the X resolution.
+
+use super::isotropic;
+use crate::imaging::grid::{Grid, SampleKind};
+use crate::imaging::limits::ImageLimits;
+use crate::imaging::ImageError;
+use std::io::Cursor;
+
+/// Whether `bytes` start like a TIFF file.
+pub fn is_tiff(bytes: &[u8]) -> bool {
+    bytes.starts_with(b"II*\0") || bytes.starts_with(b"MM\0*")
+}
+
+/// The number of pages of a TIFF file, counted up to `cap`.
+pub fn tiff_pages(bytes: &[u8], cap: usize) -> usize {
+    let Ok(mut d) = tiff::decoder::Decoder::new(Cursor::new(bytes)) else { return 0 };
+    let mut n = 1;
+    while n < cap && d.more_images() {
+        if d.next_image().is_err() {
+            break;
+        }
+        n += 1;
+    }
+    n
+}
+
+/// A multi-page TIFF as a volume (gray, or colour reduced to luminance; 8, 16 or
+/// 32-bit integer or float samples).
+pub fn decode_tiff_stack(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Grid, ImageError> {
+    let fail = |m: String| ImageError::new(input, m);
+    let mut limits_tiff = tiff::decoder::Limits::default();
+    limits_tiff.decoding_buffer_size = limits.max_voxels.saturating_mul(16);
+    let mut d = tiff::decoder::Decoder::new(Cursor::new(bytes))
+        .map_err(|e| fail(format!("is not a readable TIFF: {e}")))?
+        .with_limits(limits_tiff);
+    let description = d.get_tag_ascii_string(tiff::tags::Tag::ImageDescription).unwrap_or_default();
+    // XResolution is a rational (pixels per unit)
+    let xy_spacing = match d.get_tag(tiff::tags::Tag::XResolution) {
+        Ok(tiff::decoder::ifd::Value::Rational(n, q)) if n > 0 && q > 0 => q as f64 / n as f64,
+        Ok(v) => v.into_f64().ok().filter(|r| r.is_finite() && *r > 0.0).map_or(1.0, |r| 1.0 / r),
+        Err(_) => 1.0,
+    };
+    let z_spacing = imagej_value(&description, "spacing").unwrap_or(xy_spacing);
+    let (mut values, mut dims) = (Vec::new(), [0usize; 2]);
+    let mut kind;
+    let mut page = 0usize;
+    loop {
+        let (w, h) = d.dimensions().map_err(|e| fail(format!("page {page}: {e}")))?;
+        let (w, h) = (w as usize, h as usize);
+        if page == 0 {
+            dims = [w, h];
+            limits.check(input, &[w, h])?;
+        } else if [w, h] != dims {
+            return Err(fail(format!("page {page} is {w}×{h}, but page 0 is {}×{}", dims[0], dims[1])));
+        }
+        if (page + 1).saturating_mul(w * h) > limits.max_voxels {
+            return Err(fail(format!("has more than {} voxels, the limit", limits.max_voxels)));
+        }
+        let channels = match d.colortype().map_err(|e| fail(format!("page {page}: {e}")))? {
+            tiff::ColorType::Gray(_) => 1,
+            tiff::ColorType::GrayA(_) => 2,
+            tiff::ColorType::RGB(_) => 3,
+            tiff::ColorType::RGBA(_) => 4,
+            other => return Err(fail(format!("page {page}: unsupported colour type {other:?}"))),
+        };
+        let (samples, k) = samples(d.read_image().map_err(|e| fail(format!("page {page}: {e}")))?)
+            .ok_or_else(|| fail(format!("page {page}: unsupported sample type")))?;
+        kind = k;
+        if samples.len() != w * h * channels {
+            return Err(fail(format!("page {page}: {} samples for {w}×{h}×{channels}", samples.len())));
+        }
+        // rows flipped (j = 0 at the bottom, as 2D images); colour to luminance
+        for j in (0..h).rev() {
+            for i in 0..w {
+                let s = &samples[(i + w * j) * channels..][..channels];
+                values.push(if channels >= 3 { 0.2126 * s[0] + 0.7152 * s[1] + 0.0722 * s[2] } else { s[0] });
+            }
+        }
+        page += 1;
+        if !d.more_images() {
+            break;
+        }
+        d.next_image().map_err(|e| fail(format!("page {page}: {e}")))?;
+    }
+    limits.check(input, &[dims[0], dims[1], page])?;
+    let grid = Grid::new(3, [dims[0], dims[1], page], values, kind);
+    isotropic(input, grid, [xy_spacing, xy_spacing, z_spacing], limits)
+}
+
+/// A `key=value` number of an ImageJ image description.
+fn imagej_value(description: &str, key: &str) -> Option<f64> {
+    description
+        .lines()
+        .find_map(|l| l.strip_prefix(key).and_then(|r| r.strip_prefix('=')))
+        .and_then(|v| v.trim().parse().ok())
+        .filter(|v: &f64| v.is_finite() && *v > 0.0)
+}
+
+/// The samples of one page as `f64`, and their kind.
+fn samples(r: tiff::decoder::DecodingResult) -> Option<(Vec<f64>, SampleKind)> {
+    use tiff::decoder::DecodingResult as R;
+    Some(match r {
+        R::U8(v) => (v.into_iter().map(f64::from).collect(), SampleKind::U8),
+        R::U16(v) => (v.into_iter().map(f64::from).collect(), SampleKind::U16),
+        R::U32(v) => (v.into_iter().map(f64::from).collect(), SampleKind::F32),
+        R::I8(v) => (v.into_iter().map(f64::from).collect(), SampleKind::U8),
+        R::I16(v) => (v.into_iter().map(f64::from).collect(), SampleKind::U16),
+        R::I32(v) => (v.into_iter().map(f64::from).collect(), SampleKind::F32),
+        R::F32(v) => (v.into_iter().map(f64::from).collect(), SampleKind::F32),
+        R::F64(v) => (v, SampleKind::F32),
+        _ => return None,
+    })
+}

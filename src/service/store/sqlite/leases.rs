@@ -1,0 +1,86 @@
+//! Leases on SQLite: claims in `BEGIN IMMEDIATE` transactions (one writer at a
+//! time), renewals and the fence, on the database's clock, as on PostgreSQL.
+
+use super::job_from_row;
+use crate::service::store::{crash_message, now, ClaimPolicy, Claimed, Lease, StoreError, StoreResult};
+use sqlx::sqlite::SqlitePool;
+use sqlx::{Row, Sqlite, Transaction};
+
+/// Within `tx`: refuse unless `lease` is still the job's; whether cancellation
+/// was requested.
+pub(super) async fn fence(tx: &mut Transaction<'_, Sqlite>, id: &str, lease: &Lease) -> StoreResult<bool> {
+    let held =
+        sqlx::query("SELECT cancel_requested FROM jobs WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running'")
+            .bind(id)
+            .bind(lease.epoch)
+            .fetch_optional(&mut **tx)
+            .await?;
+    held.map(|r| r.get::<i64, _>(0) != 0).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
+}
+
+/// Claim the oldest accepted job, or a running one whose lease expired (failing
+/// it instead once it has been taken over `policy.max_takeovers` times).
+pub(super) async fn claim_next(pool: &SqlitePool, owner: &str, policy: &ClaimPolicy) -> StoreResult<Option<Claimed>> {
+    let lease_ms = policy.lease.as_millis() as i64;
+    loop {
+        let mut tx = pool.begin_with("BEGIN IMMEDIATE").await?;
+        let pick = sqlx::query(concat!(
+            "SELECT id, status, takeovers FROM jobs WHERE status IN ('accepted', 'running') \
+             AND (status = 'accepted' OR lease_expires < ",
+            clock_ms!(),
+            ") ORDER BY seq LIMIT 1"
+        ))
+        .fetch_optional(&mut *tx)
+        .await?;
+        let Some(pick) = pick else { return Ok(None) };
+        let id: String = pick.get("id");
+        let takeover = pick.get::<&str, _>("status") == "running";
+        let takeovers = pick.get::<i64, _>("takeovers") + takeover as i64;
+        if takeover && takeovers > policy.max_takeovers {
+            sqlx::query(
+                "UPDATE jobs SET status = 'failed', message = ?2, finished_at = ?3, takeovers = ?4, \
+                 lease_epoch = lease_epoch + 1 WHERE id = ?1",
+            )
+            .bind(&id)
+            .bind(crash_message(takeovers - 1))
+            .bind(now())
+            .bind(takeovers)
+            .execute(&mut *tx)
+            .await?;
+            tx.commit().await?;
+            continue;
+        }
+        let r = sqlx::query(concat!(
+            "UPDATE jobs SET status = 'running', started_at = COALESCE(started_at, ?2), lease_owner = ?3, \
+             lease_epoch = lease_epoch + 1, lease_expires = ",
+            clock_ms!(),
+            " + ?4, takeovers = ?5 WHERE id = ?1 RETURNING *"
+        ))
+        .bind(&id)
+        .bind(now())
+        .bind(owner)
+        .bind(lease_ms)
+        .bind(takeovers)
+        .fetch_one(&mut *tx)
+        .await?;
+        tx.commit().await?;
+        let lease = Lease { owner: owner.to_string(), epoch: r.get("lease_epoch") };
+        return Ok(Some(Claimed { job: job_from_row(&r), lease, takeover }));
+    }
+}
+
+/// Extend `lease` by the policy's length, on the database's clock; false if it
+/// is no longer the job's lease.
+pub(super) async fn renew(pool: &SqlitePool, id: &str, lease: &Lease, policy: &ClaimPolicy) -> StoreResult<bool> {
+    let done = sqlx::query(concat!(
+        "UPDATE jobs SET lease_expires = ",
+        clock_ms!(),
+        " + ?3 WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running'"
+    ))
+    .bind(id)
+    .bind(lease.epoch)
+    .bind(policy.lease.as_millis() as i64)
+    .execute(pool)
+    .await?;
+    Ok(done.rows_affected() == 1)
+}
