@@ -138,17 +138,10 @@ fn type_of(p: &Value) -> String {
 
 fn bounds(p: &Value) -> String {
     let mut b = Vec::new();
-    if let Some(v) = p.get("exclusiveMinimum") {
-        b.push(format!("> {v}"));
-    }
-    if let Some(v) = p.get("minimum") {
-        b.push(format!("≥ {v}"));
-    }
-    if let Some(v) = p.get("maximum") {
-        b.push(format!("≤ {v}"));
-    }
-    if let Some(v) = p.get("exclusiveMaximum") {
-        b.push(format!("< {v}"));
+    for (key, sign) in [("exclusiveMinimum", ">"), ("minimum", "≥"), ("maximum", "≤"), ("exclusiveMaximum", "<")] {
+        if let Some(v) = p.get(key) {
+            b.push(format!("{sign} {}", number(v)));
+        }
     }
     if let Some(v) = p.get("minItems") {
         if p.get("maxItems") != Some(v) {
@@ -156,6 +149,14 @@ fn bounds(p: &Value) -> String {
         }
     }
     b.join(", ")
+}
+
+/// A bound as a reader writes it: `64`, not `64.0`.
+fn number(v: &Value) -> String {
+    match v.as_f64() {
+        Some(x) if x.fract() == 0.0 && x.abs() < 1e15 => format!("{}", x as i64),
+        _ => v.to_string(),
+    }
 }
 
 fn join_values(values: &[Value]) -> String {

@@ -19,19 +19,6 @@ pub(super) fn finite(field: &str, v: &[f64]) -> Result<(), SpecError> {
     }
 }
 
-pub(super) fn in_range<T: PartialOrd + std::fmt::Display + Copy>(
-    field: &str,
-    v: T,
-    lo: T,
-    hi: T,
-) -> Result<T, SpecError> {
-    if v >= lo && v <= hi {
-        Ok(v)
-    } else {
-        Err(SpecError::new(field, format!("must be between {lo} and {hi}, got {v}")))
-    }
-}
-
 pub(super) fn mesh_err(field: &str, e: MeshError) -> SpecError {
     SpecError::new(field, format!("invalid shape: {e}"))
 }

@@ -7,7 +7,7 @@ use crate::geometry::{CurveMesh, MeshError, Point};
 use crate::jobs::spec::{FilmBoundarySpec, InitialSpec, SpecError, StressedFilmSpec};
 
 /// Most vertices of an initial film surface.
-use crate::limits::MAX_FILM_VERTICES;
+use crate::jobs::spec::bounds::FILM_RESOLUTION;
 
 /// The cell of a spec (`problem.length`, `problem.boundary`).
 pub fn film_cell(spec: &StressedFilmSpec) -> Result<FilmCell, SpecError> {
@@ -42,12 +42,7 @@ pub fn initial_film(cell: &FilmCell, initial: Option<&InitialSpec>) -> Result<Cu
             if amplitude.abs() >= h {
                 return Err(SpecError::new("initial.amplitude", format!("must be below the height {h} in size")));
             }
-            if !(8..=MAX_FILM_VERTICES).contains(resolution) {
-                return Err(SpecError::new(
-                    "initial.resolution",
-                    format!("must be between 8 and {MAX_FILM_VERTICES}, got {resolution}"),
-                ));
-            }
+            FILM_RESOLUTION.check("initial.resolution", *resolution)?;
             if *mode == 0 || 4 * *mode as usize > *resolution {
                 return Err(SpecError::new("initial.mode", "must be at least 1 and at most resolution / 4"));
             }
@@ -69,13 +64,7 @@ pub fn initial_film(cell: &FilmCell, initial: Option<&InitialSpec>) -> Result<Cu
             let pts: Vec<Point<2>> = points.iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
             let pts = match resolution {
                 None => pts,
-                Some(n) if (8..=MAX_FILM_VERTICES).contains(n) => resample(&pts, l, *n),
-                Some(n) => {
-                    return Err(SpecError::new(
-                        "initial.resolution",
-                        format!("must be between 8 and {MAX_FILM_VERTICES}, got {n}"),
-                    ))
-                }
+                Some(n) => resample(&pts, l, FILM_RESOLUTION.check("initial.resolution", *n)?),
             };
             polyline_film(l, &pts).map_err(|e| mesh_err("initial.points", e))
         }

@@ -1,8 +1,9 @@
 //! `flow`: the flow settings, resolved from the spec and the problem's defaults.
 
-use super::checks::{in_range, positive};
+use super::checks::positive;
 use super::ProblemKind;
 use crate::flow::{FlowSettings, Problem, ScalarProduct, SolverKind};
+use crate::jobs::spec::bounds::MAX_ITERATIONS;
 use crate::jobs::spec::{FlowSpec, SpecError};
 
 /// Default `flow.tau` of the stressed film (its rates are `γk⁴` for wavenumbers `k`).
@@ -93,7 +94,7 @@ pub(super) fn flow_settings(f: &FlowSpec, problem: &ProblemKind) -> Result<FlowS
         return Err(SpecError::new("flow.alpha", format!("must be a nonnegative number, got {alpha}")));
     }
     let beta = positive("flow.beta", f.beta.unwrap_or(d.beta))?;
-    let max_iterations = in_range("flow.max_iterations", f.max_iterations.unwrap_or(d.max_iterations), 1, 100_000_000)?;
+    let max_iterations = MAX_ITERATIONS.check("flow.max_iterations", f.max_iterations.unwrap_or(d.max_iterations))?;
     let settings = FlowSettings {
         scalar_product,
         solver: f.solver.unwrap_or_default(),

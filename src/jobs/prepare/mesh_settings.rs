@@ -1,9 +1,10 @@
 //! `mesh`: the mesh management of curves and surfaces, resolved from the spec and
 //! the initial mesh.
 
-use super::checks::{in_range, positive};
+use super::checks::positive;
 use crate::flow::{CurveManager, SurfaceManager};
 use crate::geometry::{CurveMesh, SurfaceMesh};
+use crate::jobs::spec::bounds::{MAX_ANGLE, SWEEPS};
 use crate::jobs::spec::{MeshSpec, SpecError};
 
 /// `(ε, h_min, h_max)`: the spec's values where given, else the defaults; checked.
@@ -27,8 +28,8 @@ pub(super) fn surface_manager(
     }
     let (mut params, _) = SurfaceManager::defaults_for(initial);
     (params.epsilon, params.h_min, params.h_max) = sizes(m, (params.epsilon, params.h_min, params.h_max))?;
-    params.max_angle_deg = in_range("mesh.max_angle", m.max_angle, 90.0, 179.0)?;
-    let sweeps = in_range("mesh.sweeps", m.sweeps.unwrap_or(3), 0, 1000)?;
+    params.max_angle_deg = MAX_ANGLE.check("mesh.max_angle", m.max_angle)?;
+    let sweeps = SWEEPS.check("mesh.sweeps", m.sweeps.unwrap_or(3))?;
     let pinch_curvature = pinch_off.then_some(2.0 / params.h_min);
     Ok(Some(SurfaceManager { regularize: m.regularize, sweeps, adapt: m.adapt, params, pinch_curvature }))
 }
@@ -42,7 +43,7 @@ pub(super) fn curve_manager(m: &MeshSpec, initial: &CurveMesh) -> Result<Option<
     if let Some(a) = m.min_area {
         params.min_area = positive("mesh.min_area", a)?;
     }
-    let sweeps = in_range("mesh.sweeps", m.sweeps.unwrap_or(1), 0, 1000)?;
+    let sweeps = SWEEPS.check("mesh.sweeps", m.sweeps.unwrap_or(1))?;
     Ok(Some(CurveManager {
         regularize: m.regularize,
         sweeps,

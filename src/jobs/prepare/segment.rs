@@ -5,7 +5,7 @@
 //! in a [`SegmentationSetup`] that the results report.
 
 use super::background::{border_polarity, flatten, minus};
-use super::checks::{in_range, positive};
+use super::checks::positive;
 use super::image_shapes::{inscribed, seeds, threshold_mesh, threshold_objects, Levels};
 use super::inputs::load_image;
 use super::ProblemKind;
@@ -14,6 +14,7 @@ use crate::imaging::{
     gaussian_smooth, histogram_mode, noise_level, otsu, smoothed_noise, smoothing_for_noise, EdgeField, Grid,
     Normalization, PERCENTILES,
 };
+use crate::jobs::spec::bounds::{LEVEL, MIN_SIZE, PERCENTILE, SIGMA, WEIGHT};
 use crate::jobs::spec::{
     BackgroundModel, ImageSource, InitialSpec, MeansKind, Polarity, SegmentationModel, SegmentationSpec, SpecError,
 };
@@ -91,12 +92,12 @@ pub(super) fn prepare_segmentation(
     let pre = preprocess(spec, &grid, model)?;
     let d = grid.dimension;
     let min_size = match spec.min_size {
-        Some(m) => in_range("problem.min_size", m, 0.0, 1e9)?,
+        Some(m) => MIN_SIZE.check("problem.min_size", m)?,
         None => default_min_size(d),
     };
-    let mu = in_range("problem.mu", spec.mu.unwrap_or(default_mu(pre.noise)), 0.0, 1000.0)?;
-    let lambda_in = in_range("problem.lambda_in", spec.lambda_in.unwrap_or(1.0), 0.0, 1000.0)?;
-    let lambda_out = in_range("problem.lambda_out", spec.lambda_out.unwrap_or(1.0), 0.0, 1000.0)?;
+    let mu = WEIGHT.check("problem.mu", spec.mu.unwrap_or(default_mu(pre.noise)))?;
+    let lambda_in = WEIGHT.check("problem.lambda_in", spec.lambda_in.unwrap_or(1.0))?;
+    let lambda_out = WEIGHT.check("problem.lambda_out", spec.lambda_out.unwrap_or(1.0))?;
     // the geodesic model's weights are checked whichever model runs
     for (field, v) in [("problem.lambda", spec.lambda), ("problem.lambda_final", spec.lambda_final)] {
         if let Some(v) = v.filter(|v| !(v.is_finite() && *v >= 0.0)) {
@@ -107,7 +108,7 @@ pub(super) fn prepare_segmentation(
         positive("problem.epsilon", e)?;
     }
     if let Some(k) = spec.edge_contrast {
-        in_range("problem.edge_contrast", positive("problem.edge_contrast", k)?, 0.0, 1000.0)?;
+        WEIGHT.check("problem.edge_contrast", positive("problem.edge_contrast", k)?)?;
     }
     let means = spec.means.unwrap_or(MeansKind::PerObject);
     let merge = spec.merge.unwrap_or(false);
@@ -168,8 +169,8 @@ fn constant_image(source: &ImageSource) -> SpecError {
 fn preprocess(spec: &SegmentationSpec, grid: &Grid, model: SegmentationModel) -> Result<Preprocessed, SpecError> {
     let d = grid.dimension;
     let percentiles = spec.percentiles.unwrap_or([PERCENTILES.0, PERCENTILES.1]);
-    in_range("problem.percentiles[0]", percentiles[0], 0.0, 100.0)?;
-    in_range("problem.percentiles[1]", percentiles[1], 0.0, 100.0)?;
+    PERCENTILE.check("problem.percentiles[0]", percentiles[0])?;
+    PERCENTILE.check("problem.percentiles[1]", percentiles[1])?;
     if percentiles[0] >= percentiles[1] {
         return Err(SpecError::new("problem.percentiles", "the first must be below the second"));
     }
@@ -179,8 +180,9 @@ fn preprocess(spec: &SegmentationSpec, grid: &Grid, model: SegmentationModel) ->
     let noise = noise_level(&unit);
     let sigma = match spec.sigma {
         Some(s) => {
-            if !(s.is_finite() && (0.0..=64.0).contains(&s)) {
-                return Err(SpecError::new("problem.sigma", format!("must be between 0 and 64 pixels, got {s}")));
+            if !(s.is_finite() && (SIGMA.min..=SIGMA.max).contains(&s)) {
+                let (lo, hi) = (SIGMA.min, SIGMA.max);
+                return Err(SpecError::new("problem.sigma", format!("must be between {lo} and {hi} pixels, got {s}")));
             }
             s
         }
@@ -203,7 +205,7 @@ fn preprocess(spec: &SegmentationSpec, grid: &Grid, model: SegmentationModel) ->
     // the Chan–Vese fit averages the noise over regions itself: it sees the image
     // smoothed by data_sigma only
     let data_sigma = match spec.data_sigma {
-        Some(s) => in_range("problem.data_sigma", s, 0.0, 64.0)?,
+        Some(s) => SIGMA.check("problem.data_sigma", s)?,
         None => 0.0,
     };
     let data = gaussian_smooth(&unit, data_sigma);
@@ -212,14 +214,14 @@ fn preprocess(spec: &SegmentationSpec, grid: &Grid, model: SegmentationModel) ->
         None => (smoothed, data),
     };
     let threshold = match spec.threshold {
-        Some(t) => in_range("problem.threshold", t, 0.0, 1.0)?,
+        Some(t) => LEVEL.check("problem.threshold", t)?,
         None => otsu(&smoothed.values).ok_or_else(constant)?,
     };
     // dim objects: above the background level by DIM_OBJECT_SNR times the smoothed
     // noise (a threshold only where it is more permissive than the main one)
     let sign = if polarity == Polarity::Bright { 1.0 } else { -1.0 };
     let dim = match spec.dim_threshold {
-        Some(t) => in_range("problem.dim_threshold", t, 0.0, 1.0)?,
+        Some(t) => LEVEL.check("problem.dim_threshold", t)?,
         None => {
             let level = histogram_mode(&smoothed.values);
             (level + sign * DIM_OBJECT_SNR * smoothed_noise(noise, sigma, d)).clamp(0.0, 1.0)

@@ -1,10 +1,11 @@
 //! `initial`: the explicit starting shapes (circles to tori, polygons, unions and
 //! uploaded mesh files).
 
-use super::checks::{curve, finite, in_range, positive, surface};
+use super::checks::{curve, finite, positive, surface};
 use super::inputs::input;
 use crate::formats::read_mesh_file;
 use crate::geometry::{self, AnyMesh, Mesh, MeshError, Point, SurfaceMesh};
+use crate::jobs::spec::bounds::{CURVE_RESOLUTION, SPHERE_LEVEL, TORUS_RESOLUTION};
 use crate::jobs::spec::{InitialSpec, SpecError};
 use crate::limits::MAX_VERTICES;
 use std::collections::HashMap;
@@ -15,7 +16,7 @@ pub(super) fn build_initial(
     inputs: &HashMap<String, Vec<u8>>,
 ) -> Result<AnyMesh, SpecError> {
     let at = |name: &str| format!("{field}.{name}");
-    let curve_res = |r: usize| in_range(&at("resolution"), r, 3, MAX_VERTICES);
+    let curve_res = |r: usize| CURVE_RESOLUTION.check(&at("resolution"), r);
     match s {
         InitialSpec::Circle { center, radius, resolution } => {
             finite(&at("center"), center)?;
@@ -84,14 +85,17 @@ pub(super) fn build_initial(
         InitialSpec::Sphere { center, radius, resolution } => {
             finite(&at("center"), center)?;
             let r = positive(&at("radius"), *radius)?;
-            surface(field, geometry::icosphere(*center, r, in_range(&at("resolution"), *resolution, 0, 8)?))
+            surface(field, geometry::icosphere(*center, r, SPHERE_LEVEL.check(&at("resolution"), *resolution)?))
         }
         InitialSpec::Ellipsoid { center, semi_axes, resolution } => {
             finite(&at("center"), center)?;
             for (i, a) in semi_axes.iter().enumerate() {
                 positive(&format!("{field}.semi_axes[{i}]"), *a)?;
             }
-            surface(field, geometry::ellipsoid(*center, *semi_axes, in_range(&at("resolution"), *resolution, 0, 8)?))
+            surface(
+                field,
+                geometry::ellipsoid(*center, *semi_axes, SPHERE_LEVEL.check(&at("resolution"), *resolution)?),
+            )
         }
         InitialSpec::Box { center, size, resolution } => {
             finite(&at("center"), center)?;
@@ -118,7 +122,7 @@ pub(super) fn build_initial(
             if small >= big {
                 return Err(SpecError::new(at("minor_radius"), "must be smaller than major_radius"));
             }
-            let n = in_range(&at("resolution"), *resolution, 3, 4096)?;
+            let n = TORUS_RESOLUTION.check(&at("resolution"), *resolution)?;
             let n_minor = ((n as f64 * small / big).round() as usize).max(8);
             if n * n_minor > MAX_VERTICES {
                 return Err(SpecError::new(

@@ -1,5 +1,6 @@
 //! `initial`: the starting shape.
 
+use super::bounds::{CURVE_RESOLUTION, FILM_RESOLUTION, SPHERE_LEVEL, TORUS_RESOLUTION};
 use super::defaults::{
     box_resolution, curve_resolution, film_mode, film_resolution, origin2, origin3, sphere_resolution, torus_resolution,
 };
@@ -18,7 +19,7 @@ pub enum InitialSpec {
         #[schemars(extend("exclusiveMinimum" = 0))]
         radius: f64,
         #[serde(default = "curve_resolution")]
-        #[schemars(range(min = 3, max = 2_000_000))]
+        #[schemars(range(min = CURVE_RESOLUTION.min, max = CURVE_RESOLUTION.max))]
         resolution: usize,
     },
     Ellipse {
@@ -29,7 +30,7 @@ pub enum InitialSpec {
         #[serde(default)]
         rotation: f64,
         #[serde(default = "curve_resolution")]
-        #[schemars(range(min = 3, max = 2_000_000))]
+        #[schemars(range(min = CURVE_RESOLUTION.min, max = CURVE_RESOLUTION.max))]
         resolution: usize,
     },
     Rectangle {
@@ -38,13 +39,13 @@ pub enum InitialSpec {
         #[schemars(extend("items" = {"type": "number", "format": "double", "exclusiveMinimum": 0}))]
         size: [f64; 2],
         #[serde(default = "curve_resolution")]
-        #[schemars(range(min = 3, max = 2_000_000))]
+        #[schemars(range(min = CURVE_RESOLUTION.min, max = CURVE_RESOLUTION.max))]
         resolution: usize,
     },
     Polygon {
         points: Vec<[f64; 2]>,
         #[serde(default)]
-        #[schemars(range(min = 3, max = 2_000_000))]
+        #[schemars(range(min = CURVE_RESOLUTION.min, max = CURVE_RESOLUTION.max))]
         resolution: Option<usize>,
     },
     /// A film surface (stressed film): `y = height + amplitude·cos(2π mode x / L)`
@@ -58,7 +59,7 @@ pub enum InitialSpec {
         #[schemars(range(min = 1))]
         mode: u32,
         #[serde(default = "film_resolution")]
-        #[schemars(range(min = 8, max = 100_000))]
+        #[schemars(range(min = FILM_RESOLUTION.min, max = FILM_RESOLUTION.max))]
         resolution: usize,
     },
     /// A film surface through the points (one period, `0 ≤ x < L`, in `+x`; it may
@@ -67,7 +68,7 @@ pub enum InitialSpec {
         #[schemars(length(min = 3))]
         points: Vec<[f64; 2]>,
         #[serde(default)]
-        #[schemars(range(min = 8, max = 100_000))]
+        #[schemars(range(min = FILM_RESOLUTION.min, max = FILM_RESOLUTION.max))]
         resolution: Option<usize>,
     },
     Union {
@@ -79,7 +80,7 @@ pub enum InitialSpec {
         #[schemars(extend("exclusiveMinimum" = 0))]
         radius: f64,
         #[serde(default = "sphere_resolution")]
-        #[schemars(range(max = 8))]
+        #[schemars(range(max = SPHERE_LEVEL.max))]
         resolution: u32,
     },
     Ellipsoid {
@@ -88,7 +89,7 @@ pub enum InitialSpec {
         #[schemars(extend("items" = {"type": "number", "format": "double", "exclusiveMinimum": 0}))]
         semi_axes: [f64; 3],
         #[serde(default = "sphere_resolution")]
-        #[schemars(range(max = 8))]
+        #[schemars(range(max = SPHERE_LEVEL.max))]
         resolution: u32,
     },
     Box {
@@ -108,7 +109,7 @@ pub enum InitialSpec {
         #[schemars(extend("exclusiveMinimum" = 0))]
         minor_radius: f64,
         #[serde(default = "torus_resolution")]
-        #[schemars(range(min = 3, max = 4096))]
+        #[schemars(range(min = TORUS_RESOLUTION.min, max = TORUS_RESOLUTION.max))]
         resolution: usize,
     },
     /// (Addition, segmentation) contours from the image itself, the default when

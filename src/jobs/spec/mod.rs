@@ -5,6 +5,7 @@
 //! output sections here, the error type (`error`), and parsing with the error's
 //! location (`parse`, `path`).
 
+pub mod bounds;
 mod defaults;
 mod error;
 mod initial;
@@ -82,7 +83,7 @@ pub struct FlowSpec {
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub tau_min: Option<f64>,
     /// Default 1000.
-    #[schemars(range(min = 1, max = 100_000_000))]
+    #[schemars(range(min = bounds::MAX_ITERATIONS.min, max = bounds::MAX_ITERATIONS.max))]
     pub max_iterations: Option<usize>,
     /// Stop at this time; the last step is shortened to end exactly there.
     #[schemars(extend("exclusiveMinimum" = 0))]
@@ -123,6 +124,7 @@ pub struct MeshSpec {
     /// Curves: merge and split where segments cross.
     pub topology_changes: bool,
     /// Regularization sweeps per step (default 1 for curves, 3 for surfaces).
+    #[schemars(range(min = bounds::SWEEPS.min, max = bounds::SWEEPS.max))]
     pub sweeps: Option<usize>,
     /// Refinement threshold for `h_S β_S`; default 1.5 × the initial mesh's largest.
     pub epsilon: Option<f64>,
@@ -133,6 +135,7 @@ pub struct MeshSpec {
     /// Components with a smaller enclosed area are dropped after a topological change.
     pub min_area: Option<f64>,
     /// Angle-width control (surfaces): split edges opposite wider angles (degrees).
+    #[schemars(range(min = bounds::MAX_ANGLE.min, max = bounds::MAX_ANGLE.max))]
     pub max_angle: f64,
     /// Surfaces: stop with `pinch_off` when a neck radius falls below `h_min/2`
     /// (default on, except for segmentation, whose creases are not necks).

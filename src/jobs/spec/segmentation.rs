@@ -1,6 +1,7 @@
 //! `problem` of type `segmentation`: the image, the model and the automatic
 //! choices a user may override, with their documented defaults.
 
+use super::bounds::{LEVEL, MIN_SIZE, PERCENTILE, SIGMA, WEIGHT};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -23,12 +24,12 @@ pub struct SegmentationSpec {
     /// indicator see; default from the image's noise level (1–4 pixels; at least
     /// 1.5 for the geodesic model).
     #[serde(default)]
-    #[schemars(range(min = 0, max = 64))]
+    #[schemars(range(min = SIGMA.min, max = SIGMA.max))]
     pub sigma: Option<f64>,
     /// (Addition, Chan–Vese) Gaussian smoothing in pixels of the image the fit
     /// sees; default 0 (the fit averages the noise over regions).
     #[serde(default)]
-    #[schemars(range(min = 0, max = 64))]
+    #[schemars(range(min = SIGMA.min, max = SIGMA.max))]
     pub data_sigma: Option<f64>,
     /// Weight of the region term (balloon force); default `0.3 L` (2D) or `0.15 L`
     /// (3D), `L` the number of samples along the image's longest side.
@@ -50,7 +51,7 @@ pub struct SegmentationSpec {
     /// noise's gradient (about 1 on the paper's images, lower where the objects
     /// are dim and the noise is low).
     #[serde(default)]
-    #[schemars(extend("exclusiveMinimum" = 0), range(max = 1000))]
+    #[schemars(extend("exclusiveMinimum" = 0), range(max = WEIGHT.max))]
     pub edge_contrast: Option<f64>,
     /// Threshold ε of the Newton weight β (paper §4.2.1); default `0.1 L²`.
     #[serde(default)]
@@ -65,15 +66,15 @@ pub struct SegmentationSpec {
     /// pixels (the image normalized to [0, 1]); default `max(0.05, noise/2)` with
     /// the noise's standard deviation on that scale.
     #[serde(default)]
-    #[schemars(range(min = 0, max = 1000))]
+    #[schemars(range(min = WEIGHT.min, max = WEIGHT.max))]
     pub mu: Option<f64>,
     /// (Addition, Chan–Vese) weight of the fit inside the objects; default 1.
     #[serde(default)]
-    #[schemars(range(min = 0, max = 1000))]
+    #[schemars(range(min = WEIGHT.min, max = WEIGHT.max))]
     pub lambda_in: Option<f64>,
     /// (Addition, Chan–Vese) weight of the fit outside the objects; default 1.
     #[serde(default)]
-    #[schemars(range(min = 0, max = 1000))]
+    #[schemars(range(min = WEIGHT.min, max = WEIGHT.max))]
     pub lambda_out: Option<f64>,
     /// (Addition, Chan–Vese) `per_object` (default: each object has its own mean
     /// intensity, so that dim and bright objects are both fitted) or `global` (one
@@ -83,7 +84,7 @@ pub struct SegmentationSpec {
     /// (Addition) intensity normalization: the percentiles of the image mapped to
     /// 0 and 1 (values beyond are clipped); default [0.5, 99.5].
     #[serde(default)]
-    #[schemars(extend("items" = {"type": "number", "format": "double", "minimum": 0, "maximum": 100}))]
+    #[schemars(extend("items" = {"type": "number", "format": "double", "minimum": PERCENTILE.min, "maximum": PERCENTILE.max}))]
     pub percentiles: Option<[f64; 2]>,
     /// (Addition) the background model removed before thresholding and fitting:
     /// `quadratic` (default: a quadratic illumination fitted to the background) or
@@ -97,18 +98,18 @@ pub struct SegmentationSpec {
     /// (Addition) the threshold of the automatic initial shape on the normalized
     /// scale [0, 1]; default Otsu's.
     #[serde(default)]
-    #[schemars(range(min = 0, max = 1))]
+    #[schemars(range(min = LEVEL.min, max = LEVEL.max))]
     pub threshold: Option<f64>,
     /// (Addition) the threshold (normalized scale) at which dim objects that the
     /// main threshold misses entirely are found; default: the background level
     /// (the histogram's mode) plus 8 standard deviations of the smoothed noise.
     #[serde(default)]
-    #[schemars(range(min = 0, max = 1))]
+    #[schemars(range(min = LEVEL.min, max = LEVEL.max))]
     pub dim_threshold: Option<f64>,
     /// (Addition) objects of fewer pixels (voxels) are dropped from the automatic
     /// initial shape, and holes of fewer are filled; default 16 (2D), 64 (3D).
     #[serde(default)]
-    #[schemars(range(min = 0, max = 1e9))]
+    #[schemars(range(min = MIN_SIZE.min, max = MIN_SIZE.max))]
     pub min_size: Option<f64>,
     /// (Addition) the automatic initial shape splits objects that touch, where a
     /// neck is clearly narrower than both sides (a watershed of the distance
