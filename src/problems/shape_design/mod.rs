@@ -29,37 +29,9 @@ use crate::geometry::{resolve_intersections, winding_number, CurveMesh, Mesh, Po
 use serde::{Deserialize, Serialize};
 use std::sync::{Arc, Mutex};
 
-/// The target `z_g` on `D`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Target {
-    Constant(f64),
-    /// `log(R / |x − c|)`: the state of the annulus with `Γ` the unit circle around `c`
-    /// and `Σ` the circle of radius `R` (paper §4.3.2).
-    LogRadial {
-        center: Point<2>,
-        radius: f64,
-    },
-    /// `a + b cos(kθ)` in polar coordinates around `c` (paper §4.3.3, Figure 7).
-    Polar {
-        center: Point<2>,
-        a: f64,
-        b: f64,
-        k: f64,
-    },
-}
+mod target;
 
-impl Target {
-    pub fn value(&self, x: Point<2>) -> f64 {
-        match *self {
-            Target::Constant(c) => c,
-            Target::LogRadial { center, radius } => (radius / (x - center).norm()).ln(),
-            Target::Polar { center, a, b, k } => {
-                let d = x - center;
-                a + b * (k * d.y.atan2(d.x)).cos()
-            }
-        }
-    }
-}
+pub use target::Target;
 
 /// How the shape gradient `G` is computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema)]
