@@ -1,6 +1,8 @@
 //! The SQLite store: the embedded default, for one node. One pool with a single
-//! connection serializes writers (WAL, synchronous=NORMAL); leases work as on
-//! PostgreSQL, and jobs left running at a restart go back to the queue.
+//! connection serializes writers (WAL, synchronous=NORMAL); the reads of requests
+//! and event streams go through [`READERS`] read-only connections beside it;
+//! leases work as on PostgreSQL, and jobs left running at a restart go back to the
+//! queue.
 
 use super::{
     now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
@@ -27,9 +29,16 @@ use leases::fence;
 
 #[derive(Clone)]
 pub struct SqliteStore {
+    /// One connection: the writer (SQLite has one at a time).
     pool: SqlitePool,
+    /// Read-only connections for the reads of requests and event streams, which
+    /// WAL lets run beside the writer and each other.
+    reader: SqlitePool,
     blobs: Blobs,
 }
+
+/// Read-only connections beside the writer.
+const READERS: u32 = 4;
 
 fn job_from_row(r: &sqlx::sqlite::SqliteRow) -> JobRow {
     let iteration: Option<i64> = r.get("iteration");
@@ -76,9 +85,10 @@ impl SqliteStore {
             .synchronous(SqliteSynchronous::Normal)
             .busy_timeout(Duration::from_secs(10))
             .foreign_keys(true);
-        let pool = SqlitePoolOptions::new().max_connections(1).connect_with(options).await?;
+        let pool = SqlitePoolOptions::new().max_connections(1).connect_with(options.clone()).await?;
         sqlx::migrate!("./migrations/sqlite").run(&pool).await?;
-        Ok(SqliteStore { pool, blobs })
+        let reader = SqlitePoolOptions::new().max_connections(READERS).connect_with(options.read_only(true)).await?;
+        Ok(SqliteStore { pool, reader, blobs })
     }
 }
 
@@ -118,7 +128,7 @@ impl JobStore for SqliteStore {
     async fn input_magics(&self, id: &str) -> StoreResult<Vec<Vec<u8>>> {
         let rows = sqlx::query("SELECT COALESCE(head, substr(data, 1, 8)) AS head FROM inputs WHERE job_id = ?1")
             .bind(id)
-            .fetch_all(&self.pool)
+            .fetch_all(&self.reader)
             .await?;
         Ok(rows.iter().map(|r| r.get::<Vec<u8>, _>("head")).collect())
     }
@@ -126,7 +136,7 @@ impl JobStore for SqliteStore {
     async fn input_rows(&self, id: &str) -> StoreResult<Vec<InputRow>> {
         let rows = sqlx::query("SELECT name, in_blob, data FROM inputs WHERE job_id = ?1")
             .bind(id)
-            .fetch_all(&self.pool)
+            .fetch_all(&self.reader)
             .await?;
         Ok(rows
             .iter()
@@ -135,7 +145,7 @@ impl JobStore for SqliteStore {
     }
 
     async fn job(&self, id: &str) -> StoreResult<Option<JobRow>> {
-        let r = sqlx::query("SELECT * FROM jobs WHERE id = ?1").bind(id).fetch_optional(&self.pool).await?;
+        let r = sqlx::query("SELECT * FROM jobs WHERE id = ?1").bind(id).fetch_optional(&self.reader).await?;
         Ok(r.as_ref().map(job_from_row))
     }
 
@@ -148,7 +158,7 @@ impl JobStore for SqliteStore {
         .bind(status)
         .bind(before)
         .bind(limit)
-        .fetch_all(&self.pool)
+        .fetch_all(&self.reader)
         .await?;
         Ok(rows.iter().map(job_from_row).collect())
     }
@@ -178,7 +188,7 @@ impl JobStore for SqliteStore {
     async fn checkpoint_index(&self, id: &str) -> StoreResult<Vec<(i64, f64)>> {
         let rows = sqlx::query("SELECT iteration, time FROM checkpoints WHERE job_id = ?1 ORDER BY iteration")
             .bind(id)
-            .fetch_all(&self.pool)
+            .fetch_all(&self.reader)
             .await?;
         Ok(rows.iter().map(|r| (r.get::<i64, _>("iteration"), r.get::<f64, _>("time"))).collect())
     }
@@ -195,7 +205,7 @@ impl JobStore for SqliteStore {
                 ("SELECT iteration, blob, data FROM checkpoints WHERE job_id = ?1 AND ?2 = ?2 ORDER BY iteration", 0)
             }
         };
-        let rows = sqlx::query(sql).bind(id).bind(iteration).fetch_all(&self.pool).await?;
+        let rows = sqlx::query(sql).bind(id).bind(iteration).fetch_all(&self.reader).await?;
         Ok(rows
             .iter()
             .map(|r| CheckpointRow { iteration: r.get("iteration"), blob: r.get("blob"), data: r.get("data") })
@@ -309,8 +319,10 @@ impl JobStore for SqliteStore {
     }
 
     async fn cancel_requested(&self, id: &str) -> StoreResult<bool> {
-        let r =
-            sqlx::query("SELECT cancel_requested FROM jobs WHERE id = ?1").bind(id).fetch_optional(&self.pool).await?;
+        let r = sqlx::query("SELECT cancel_requested FROM jobs WHERE id = ?1")
+            .bind(id)
+            .fetch_optional(&self.reader)
+            .await?;
         Ok(r.map(|r| r.get::<i64, _>("cancel_requested") != 0).unwrap_or(true))
     }
 
@@ -334,7 +346,7 @@ impl JobStore for SqliteStore {
                 .bind(id)
                 .bind(from as i64)
                 .bind(limit.min(i64::MAX as usize) as i64)
-                .fetch_all(&self.pool)
+                .fetch_all(&self.reader)
                 .await?;
         Ok(rows.iter().map(progress_from_row).collect())
     }
