@@ -158,18 +158,6 @@ pub fn polygon(points: &[Point<2>], n: Option<usize>) -> Result<CurveMesh, MeshE
     from_polylines(vec![pts])
 }
 
-/// Several curves as one mesh (the components keep their own orientation). The
-/// parts must not intersect each other (checked by the mesh constructor).
-pub fn union(parts: &[CurveMesh]) -> Result<CurveMesh, MeshError> {
-    let mut polylines = Vec::new();
-    for part in parts {
-        for cyc in part.cycles() {
-            polylines.push(cyc.iter().map(|&v| part.positions()[v]).collect());
-        }
-    }
-    from_polylines(polylines)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -190,15 +178,5 @@ mod tests {
         assert_eq!(m.num_vertices(), 40);
         let bow = [[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]].map(|p| Point::<2>::new(p[0], p[1]));
         assert!(matches!(polygon(&bow, None), Err(MeshError::SelfIntersection { .. })));
-    }
-
-    #[test]
-    fn union_counts_components_and_rejects_overlap() {
-        let a = circle([0.0, 0.0], 1.0, 64).unwrap();
-        let b = circle([3.0, 0.0], 1.0, 64).unwrap();
-        let u = union(&[a.clone(), b]).unwrap();
-        assert_eq!(u.num_components(), 2);
-        let c = circle([1.5, 0.0], 1.0, 64).unwrap();
-        assert!(matches!(union(&[a, c]), Err(MeshError::SelfIntersection { .. })));
     }
 }

@@ -17,13 +17,14 @@ mod objects;
 pub mod simplex;
 mod surface_remesh;
 mod surfaces;
+mod unions;
 mod validate;
 pub use validate::degenerate_measure;
 
 pub use crossing_watch::CrossingWatch;
 pub use curve_remesh::{adapt_curve, manage_curve, regularize_curve, CurveRemeshSettings};
 pub use curve_topology::{mesh_winding_number, resolve_crossings, resolve_intersections, winding_number};
-pub use curves::{all_loops_below, circle, curves_from_loops, drop_small_loops, ellipse, polygon, rectangle, union};
+pub use curves::{all_loops_below, circle, curves_from_loops, drop_small_loops, ellipse, polygon, rectangle};
 pub use intersect::{find_periodic_intersections, find_segment_intersections, SegmentHit};
 pub use measures::{vertex_normals, MeshQuality};
 pub use mesh::{segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};
@@ -32,6 +33,7 @@ pub use surface_remesh::{
     adapt_surface, edge_statistics, regularize_surface, surface_edges, SurfaceEdge, SurfaceRemeshSettings,
 };
 pub use surfaces::{box_surface, ellipsoid, icosphere, torus};
+pub use unions::{surface_union, union};
 
 /// A point of `R^D`.
 pub type Point<const D: usize> = nalgebra::SVector<f64, D>;

@@ -3,7 +3,6 @@
 //! the circle or sphere inscribed in the image box.
 
 use super::checks::{curve, positive, surface};
-use super::shapes::surface_union;
 use crate::geometry::AnyMesh;
 use crate::geometry::{self, Mesh, Point};
 use crate::imaging::labels::{clean_mask, components, distance_transform, separate, split_touching};
@@ -223,7 +222,7 @@ pub(super) fn seeds(grid: &Grid, spacing: Option<f64>, radius: Option<f64>) -> R
                 }
             }
         }
-        surface("initial", surface_union(&parts))
+        surface("initial", geometry::surface_union(&parts))
     }
 }
 

@@ -4,7 +4,7 @@
 use super::checks::{curve, finite, positive, surface};
 use super::inputs::input;
 use crate::formats::read_mesh_file;
-use crate::geometry::{self, AnyMesh, Mesh, MeshError, Point, SurfaceMesh};
+use crate::geometry::{self, AnyMesh, Point};
 use crate::jobs::spec::bounds::{CURVE_RESOLUTION, SPHERE_LEVEL, TORUS_RESOLUTION};
 use crate::jobs::spec::{InitialSpec, SpecError};
 use crate::limits::MAX_VERTICES;
@@ -78,7 +78,7 @@ pub(super) fn build_initial(
                 return Err(SpecError::new(at("parts"), "mixes curves (2D) and surfaces (3D)"));
             }
             if !surfaces.is_empty() {
-                return surface(field, surface_union(&surfaces));
+                return surface(field, geometry::surface_union(&surfaces));
             }
             curve(field, geometry::union(&curves))
         }
@@ -146,15 +146,4 @@ pub(super) fn build_initial(
             read_mesh_file(name, bytes).map_err(|e| SpecError::new(at("file"), e.to_string()))
         }
     }
-}
-
-pub(super) fn surface_union(parts: &[SurfaceMesh]) -> Result<SurfaceMesh, MeshError> {
-    let mut positions = Vec::new();
-    let mut elements = Vec::new();
-    for p in parts {
-        let base = positions.len();
-        positions.extend_from_slice(p.positions());
-        elements.extend(p.elements().iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
-    }
-    Mesh::new(positions, elements)
 }
