@@ -7,7 +7,7 @@
 //! Memory: peak resident set size after each size. `cargo bench --bench design`.
 
 use shapeflow::bulk::{solve_design_fields, BulkMesh};
-use shapeflow::flow::{Flow, Problem};
+use shapeflow::flow::Flow;
 use shapeflow::geometry::{ellipse, Point};
 use shapeflow::jobs::{parse_spec, prepare, ProblemKind};
 use std::collections::HashMap;
@@ -42,12 +42,12 @@ fn main() {
         let t_solve = time_it(0.5, || {
             std::hint::black_box(solve_design_fields(&bulk, &target).unwrap());
         });
-        // flow steps (fresh problem copies so that no cached solution is reused)
+        // flow steps (a fresh run each time, so that no solution is reused)
         let mut steps = 0usize;
         let start = Instant::now();
         while steps < 5 || start.elapsed().as_secs_f64() < 1.0 {
-            let p = problem.clone();
-            let mut flow = Flow::new(&p as &dyn Problem<2>, curve.clone(), job.settings.clone()).unwrap();
+            let mut run = problem.start();
+            let mut flow = Flow::new(&mut run, curve.clone(), job.settings.clone()).unwrap();
             flow.step().unwrap();
             steps += 1;
         }
@@ -55,7 +55,7 @@ fn main() {
         let t_step = start.elapsed().as_secs_f64() / steps as f64 - (t_mesh + t_solve);
         println!(
             "| {n} | {} | {:.1} ms | {:.1} ms | {:.1} ms | {:.2} | {:.0} MB |",
-            bulk.triangles.len(),
+            bulk.mesh.triangles.len(),
             t_mesh * 1e3,
             t_solve * 1e3,
             t_step * 1e3,

@@ -3,7 +3,7 @@
 //! then, and the cost per step (bulk meshing + field solve + surface step), for
 //! 64, 128 and 256 vertices (`cargo bench --bench film [-- 64 128]`).
 
-use shapeflow::flow::{Flow, MeshManager, Problem};
+use shapeflow::flow::{Flow, MeshManager};
 use shapeflow::jobs::{parse_spec, prepare, AnyMesh, ProblemKind};
 use std::collections::HashMap;
 use std::time::Instant;
@@ -27,7 +27,8 @@ fn main() {
         let (ProblemKind::StressedFilm(problem), AnyMesh::Curve(mesh)) = (&job.problem, &job.mesh) else {
             unreachable!()
         };
-        let mut flow = Flow::new(problem as &dyn Problem<2>, mesh.clone(), job.settings.clone())
+        let mut run = problem.start();
+        let mut flow = Flow::new(&mut run, mesh.clone(), job.settings.clone())
             .unwrap()
             .with_mesh_manager(Box::new(job.curve_manager.unwrap()) as Box<dyn MeshManager<2>>);
         let (area0, energy0) = (flow.mesh().enclosed_measure(), flow.energy());

@@ -93,7 +93,7 @@ impl MeshManager<2> for Timed {
 /// `steps` steps with the default curve management: mean seconds per step of the
 /// management, of the whole step (management included), and the mesh at the end.
 fn curve_flow_run(mesh: &CurveMesh, steps: usize) -> (f64, f64, CurveMesh) {
-    let problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
+    let mut problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
     let settings = FlowSettings { tau: 1e-4, tolerance: 0.0, ..FlowSettings::default() };
     let spent = Arc::new(Mutex::new((0.0, 0, 0, 0, 0)));
     let manager = CurveManager {
@@ -103,7 +103,7 @@ fn curve_flow_run(mesh: &CurveMesh, steps: usize) -> (f64, f64, CurveMesh) {
         topology_changes: true,
         params: CurveManager::defaults_for(mesh),
     };
-    let mut flow = Flow::new(&problem, mesh.clone(), settings)
+    let mut flow = Flow::new(&mut problem, mesh.clone(), settings)
         .unwrap()
         .with_mesh_manager(Box::new(Timed { inner: manager.watched(), spent: spent.clone() }));
     flow.step().unwrap(); // warm-up: the first pass settles the sampling

@@ -22,7 +22,6 @@
 pub mod bulk;
 pub mod export;
 pub mod fem;
-pub mod film;
 pub mod flow;
 pub mod formats;
 pub mod geometry;

@@ -25,7 +25,7 @@ fn manager(regularize: bool, adapt: bool, topology: bool, params: CurveRemeshSet
 
 /// Runs curvature flow and returns the worst longest/shortest edge ratio seen.
 fn worst_edge_ratio(mesh: CurveMesh, regularize: bool) -> (f64, f64) {
-    let problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
+    let mut problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
     let params = CurveManager::defaults_for(&mesh);
     let settings = FlowSettings {
         tau: 2e-4,
@@ -34,7 +34,7 @@ fn worst_edge_ratio(mesh: CurveMesh, regularize: bool) -> (f64, f64) {
         tolerance: 0.0,
         ..FlowSettings::default()
     };
-    let mut flow = Flow::new(&problem, mesh, settings).unwrap();
+    let mut flow = Flow::new(&mut problem, mesh, settings).unwrap();
     if regularize {
         flow = flow.with_mesh_manager(manager(true, false, false, params));
     }
@@ -70,7 +70,7 @@ fn regularization_keeps_a_nonuniform_dumbbell_regular() {
 }
 
 fn run_with_topology(mesh: CurveMesh, lambda: f64, end: f64) -> Flow<'static, 2> {
-    let problem: &'static CurvatureFlow = Box::leak(Box::new(CurvatureFlow { gamma: 1.0, lambda }));
+    let problem: &'static mut CurvatureFlow = Box::leak(Box::new(CurvatureFlow { gamma: 1.0, lambda }));
     let params = CurveManager::defaults_for(&mesh);
     let settings = FlowSettings {
         tau: 1e-3,
@@ -141,20 +141,23 @@ fn adaptivity_keeps_the_exact_circle_and_grades_an_ellipse() {
         step_control: None,
         ..FlowSettings::default()
     };
-    let problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
-    let mut flow = Flow::new(&problem, start, settings).unwrap().with_mesh_manager(manager(true, true, true, params));
+    let mut problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
+    let mut flow =
+        Flow::new(&mut problem, start, settings).unwrap().with_mesh_manager(manager(true, true, true, params));
     flow.run(&AtomicBool::new(false), |_| {}).unwrap();
     let exact = 0.5f64.sqrt();
     let err = flow.mesh().positions().iter().map(|p| (p.norm() - exact).abs()).fold(0.0, f64::max);
     eprintln!("circle with management: error {err:e}, vertices {}", flow.mesh().num_vertices());
     assert!(err < 1e-3, "{err}");
+    drop(flow);
 
     // a 4:1 ellipse sampled uniformly: refinement at the tips, coarsening on the flanks
     let start = shapeflow::geometry::ellipse([0.0, 0.0], [2.0, 0.5], 0.0, 200).unwrap();
     let mut params = CurveManager::defaults_for(&start);
     params.epsilon *= 0.3;
     let settings = FlowSettings { tau: 1e-4, max_iterations: 20, tolerance: 0.0, ..FlowSettings::default() };
-    let mut flow = Flow::new(&problem, start, settings).unwrap().with_mesh_manager(manager(true, true, false, params));
+    let mut flow =
+        Flow::new(&mut problem, start, settings).unwrap().with_mesh_manager(manager(true, true, false, params));
     flow.run(&AtomicBool::new(false), |_| {}).unwrap();
     let m = flow.mesh();
     let mean_len = |pred: &dyn Fn(f64) -> bool| {
@@ -186,8 +189,8 @@ fn shrinking_sphere_keeps_its_exact_solution_with_surface_management() {
         step_control: None,
         ..FlowSettings::default()
     };
-    let problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
-    let mut flow = Flow::new(&problem, start, settings).unwrap().with_mesh_manager(Box::new(mgr));
+    let mut problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
+    let mut flow = Flow::new(&mut problem, start, settings).unwrap().with_mesh_manager(Box::new(mgr));
     assert_eq!(flow.run(&AtomicBool::new(false), |_| {}).unwrap(), StopReason::EndTime);
     let exact = (1.0f64 - 0.4).sqrt();
     let err = flow.mesh().positions().iter().map(|p| (p.norm() - exact).abs()).fold(0.0, f64::max);

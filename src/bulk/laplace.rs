@@ -6,18 +6,15 @@
 //! adjoint: −Δp = χ_D (y − z_g) in Ω,   p = 0 on Σ,   ∂_ν p = 0 on Γ
 //! ```
 //!
-//! Both share the stiffness matrix `K_ij = ∫_Ω ∇φ_i·∇φ_j` with the Dirichlet rows
-//! and columns of `Σ` replaced by the identity: one sparse Cholesky factorization
-//! (faer), two solves. The data misfit `½∫_D (y − z_g)²` and the adjoint load
+//! Both are solves with one [`DirichletLaplace`] (`K_ij = ∫_Ω ∇φ_i·∇φ_j`, Dirichlet
+//! on `Σ`): one factorization, two solves. The data misfit `½∫_D (y − z_g)²` and the adjoint load
 //! `∫_D (y − z_g) φ_i` use the degree-5 seven-point rule on every triangle of `D`
 //! (the mesh conforms to `∂D`, so only the geometry of `∂D` is approximated).
 
+use super::dirichlet::DirichletLaplace;
 use super::mesh::{triangle_area, BulkMesh};
 use super::BulkError;
-use crate::fem::element::cotangent_stiffness;
-use crate::fem::Pattern;
 use crate::geometry::Point;
-use crate::linalg::SparseCholesky;
 
 /// Barycentric coordinates and weights (summing to 1) of the seven-point rule.
 const RULE7: [([f64; 3], f64); 7] = {
@@ -48,52 +45,25 @@ pub struct DesignFields {
 }
 
 /// Solves the state and adjoint problems for the target `z_g`.
-pub fn solve_design_fields(mesh: &BulkMesh, target: &dyn Fn(Point<2>) -> f64) -> Result<DesignFields, BulkError> {
+pub fn solve_design_fields(bulk: &BulkMesh, target: &dyn Fn(Point<2>) -> f64) -> Result<DesignFields, BulkError> {
+    let mesh = &bulk.mesh;
     let n = mesh.points.len();
-    let pattern = Pattern::<3>::new(n, &mesh.triangles);
-    let mut k = vec![0.0; pattern.nnz()];
-    for (e, t) in mesh.triangles.iter().enumerate() {
-        let p = t.map(|i| mesh.points[i]);
-        let area = triangle_area(&mesh.points, t);
-        if !(area > 0.0) {
-            return Err(BulkError::Meshing(format!("bulk triangle {e} is degenerate (area {area:e})")));
-        }
-        let local = cotangent_stiffness(&p, area);
-        let slots = &pattern.slots()[e];
-        for a in 0..3 {
-            for b in 0..3 {
-                k[slots[a][b]] += local[(a, b)];
-            }
-        }
-    }
-    // Dirichlet rows and columns → identity
-    let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
-    for j in 0..n {
-        for s in cp[j]..cp[j + 1] {
-            let i = ri[s];
-            if mesh.on_outer[i] || mesh.on_outer[j] {
-                k[s] = if i == j { 1.0 } else { 0.0 };
-            }
-        }
-    }
-    let sym = pattern.symbolic().as_ref();
-    let mut chol = SparseCholesky::<f64>::new(sym).map_err(BulkError::Solver)?;
-    chol.factorize(sym, &k).map_err(BulkError::Solver)?;
+    let laplace = DirichletLaplace::new(mesh, "bulk")?;
 
     // state: Neumann load ∫_Γ φ_i
-    let mut y = vec![0.0; n];
-    for &[a, b] in &mesh.curve_edges {
+    let mut load = vec![0.0; n];
+    for &[a, b] in &bulk.curve_edges {
         let len = (mesh.points[b] - mesh.points[a]).norm();
-        y[a] += 0.5 * len;
-        y[b] += 0.5 * len;
+        load[a] += 0.5 * len;
+        load[b] += 0.5 * len;
     }
-    chol.solve_in_place(&mut y);
+    let y = laplace.solve(load, None);
     check_finite("state", &y)?;
 
     // misfit and adjoint load on D
     let mut p = vec![0.0; n];
     let mut misfit = 0.0;
-    for (t, _) in mesh.triangles.iter().zip(&mesh.in_control).filter(|(_, &c)| c) {
+    for (t, _) in mesh.triangles.iter().zip(&bulk.in_control).filter(|(_, &c)| c) {
         let area = triangle_area(&mesh.points, t);
         let x = t.map(|i| mesh.points[i]);
         for (l, w) in RULE7 {
@@ -105,12 +75,7 @@ pub fn solve_design_fields(mesh: &BulkMesh, target: &dyn Fn(Point<2>) -> f64) ->
             }
         }
     }
-    for (pi, &d) in p.iter_mut().zip(&mesh.on_outer) {
-        if d {
-            *pi = 0.0;
-        }
-    }
-    chol.solve_in_place(&mut p);
+    let p = laplace.solve(p, None);
     check_finite("adjoint", &p)?;
     if !misfit.is_finite() {
         return Err(BulkError::Solver("the misfit ½∫_D (y − z_g)² is not finite (check the target)".into()));
@@ -151,7 +116,8 @@ fn basis_gradients(p: &[Point<2>; 3], area: f64) -> [Point<2>; 3] {
 /// while `∂_c ∫_e p = t_e (p_c + p_d)/2` and `∂_c |e| = t_e` on a curve edge
 /// `e = (c, d)` with `t_e = (X_c − X_d)/|e|`. `D` does not touch `Γ`, so the misfit
 /// has no explicit dependence.
-pub fn curve_sensitivity(mesh: &BulkMesh, fields: &DesignFields, gamma: f64) -> Vec<Point<2>> {
+pub fn curve_sensitivity(bulk: &BulkMesh, fields: &DesignFields, gamma: f64) -> Vec<Point<2>> {
+    let mesh = &bulk.mesh;
     let nc = mesh.curve_vertices;
     let mut grad = vec![Point::<2>::zeros(); nc];
     for t in mesh.triangles.iter().filter(|t| t.iter().any(|&v| v < nc)) {
@@ -164,7 +130,7 @@ pub fn curve_sensitivity(mesh: &BulkMesh, fields: &DesignFields, gamma: f64) -> 
             grad[t[a]] -= (g[a] * gy.dot(&gp) - gp * g[a].dot(&gy) - gy * g[a].dot(&gp)) * area;
         }
     }
-    for &[a, b] in &mesh.curve_edges {
+    for &[a, b] in &bulk.curve_edges {
         let d = mesh.points[a] - mesh.points[b];
         let t = d / d.norm();
         let w = 0.5 * (fields.p[a] + fields.p[b]) + gamma;

@@ -49,22 +49,32 @@ enum Boundary {
     Interior,
 }
 
-/// A P1 triangulation of `Ω`.
+/// A P1 triangulation of a plane domain bounded by a moving curve `Γ` and fixed
+/// boundaries: shape design's `Ω` between `Γ` and `Σ`, the stressed film below its
+/// surface.
 ///
 /// The first `curve_vertices` vertices are the vertices of `Γ`, in the order of the
 /// curve mesh; every vertex belongs to at least one triangle.
 #[derive(Debug, Clone)]
-pub struct BulkMesh {
+pub struct DomainMesh {
     pub points: Vec<Point<2>>,
-    /// Counter-clockwise triangles of `Ω`.
+    /// Counter-clockwise triangles.
     pub triangles: Vec<[usize; 3]>,
+    /// Per vertex: does it carry a Dirichlet value (shape design: on `Σ`; the film:
+    /// on the substrate or a wall)?
+    pub dirichlet: Vec<bool>,
+    pub curve_vertices: usize,
+}
+
+/// Shape design's triangulation of `Ω`: the domain mesh (Dirichlet on `Σ`) and where
+/// `D`, `Γ` and the free vertices are.
+#[derive(Debug, Clone)]
+pub struct BulkMesh {
+    pub mesh: DomainMesh,
     /// Per triangle: does it lie in `D`?
     pub in_control: Vec<bool>,
-    /// Per vertex: on `Σ` (Dirichlet)?
-    pub on_outer: Vec<bool>,
     /// Edges of the triangulation on `Γ` (the curve's segments, renumbered).
     pub curve_edges: Vec<[usize; 2]>,
-    pub curve_vertices: usize,
     /// Per vertex: on none of `Γ`, `Σ`, `∂D` (a refinement point or a seed).
     pub free: Vec<bool>,
 }
@@ -116,12 +126,9 @@ impl BulkMesh {
             .map(|&(a, b)| [t.index[a], t.index[b]])
             .collect();
         Ok(BulkMesh {
-            points: t.points,
-            triangles: t.triangles,
+            mesh: DomainMesh { points: t.points, triangles: t.triangles, dirichlet: on_outer, curve_vertices: n_curve },
             in_control: t.second,
-            on_outer,
             curve_edges,
-            curve_vertices: n_curve,
             free,
         })
     }
@@ -130,17 +137,19 @@ impl BulkMesh {
     /// other vertices fixed), if every triangle at the curve keeps its orientation and
     /// an angle of at least `min_angle_deg`; `None` otherwise (then re-mesh).
     pub fn with_curve_positions(&self, positions: &[Point<2>], min_angle_deg: f64) -> Option<BulkMesh> {
-        if positions.len() != self.curve_vertices {
+        let nc = self.mesh.curve_vertices;
+        if positions.len() != nc {
             return None;
         }
         let mut moved = self.clone();
-        moved.points[..self.curve_vertices].copy_from_slice(positions);
+        moved.mesh.points[..nc].copy_from_slice(positions);
+        let (points, triangles) = (&moved.mesh.points, &moved.mesh.triangles);
         let min_sin = min_angle_deg.to_radians().sin();
-        for t in moved.triangles.iter().filter(|t| t.iter().any(|&v| v < self.curve_vertices)) {
-            let area = triangle_area(&moved.points, t);
+        for t in triangles.iter().filter(|t| t.iter().any(|&v| v < nc)) {
+            let area = triangle_area(points, t);
             // sin of every angle = 2·area / (product of its two sides)
             for k in 0..3 {
-                let (a, b, c) = (moved.points[t[k]], moved.points[t[(k + 1) % 3]], moved.points[t[(k + 2) % 3]]);
+                let (a, b, c) = (points[t[k]], points[t[(k + 1) % 3]], points[t[(k + 2) % 3]]);
                 if !(2.0 * area >= min_sin * (b - a).norm() * (c - a).norm()) {
                     return None;
                 }
@@ -152,8 +161,8 @@ impl BulkMesh {
     /// Area of `Ω` and of `Ω ∩ D`.
     pub fn areas(&self) -> (f64, f64) {
         let (mut total, mut control) = (0.0, 0.0);
-        for (t, &c) in self.triangles.iter().zip(&self.in_control) {
-            let a = triangle_area(&self.points, t);
+        for (t, &c) in self.mesh.triangles.iter().zip(&self.in_control) {
+            let a = triangle_area(&self.mesh.points, t);
             total += a;
             if c {
                 control += a;
@@ -165,9 +174,10 @@ impl BulkMesh {
     /// Smallest interior angle, in degrees.
     pub fn min_angle_deg(&self) -> f64 {
         let mut worst = 180.0f64;
-        for t in &self.triangles {
+        let p = &self.mesh.points;
+        for t in &self.mesh.triangles {
             for k in 0..3 {
-                let (a, b, c) = (self.points[t[k]], self.points[t[(k + 1) % 3]], self.points[t[(k + 2) % 3]]);
+                let (a, b, c) = (p[t[k]], p[t[(k + 1) % 3]], p[t[(k + 2) % 3]]);
                 let (u, v) = (b - a, c - a);
                 worst = worst.min(u.angle(&v).to_degrees());
             }

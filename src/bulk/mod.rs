@@ -1,16 +1,19 @@
 //! The bulk domain of 2D shape design (paper §1.2, §4.3): the region `Ω` between the
 //! moving curve `Γ` and the fixed outer boundary `Σ`, its triangulation (spade
 //! constrained Delaunay with refinement, conforming to the control region `D`) and
-//! the P1 state and adjoint solves (faer sparse Cholesky).
+//! the P1 state and adjoint solves; the Dirichlet Laplace solve that the stressed
+//! film's field shares.
 
+mod dirichlet;
 mod domain;
 mod laplace;
 mod mesh;
 
+pub use dirichlet::DirichletLaplace;
 pub use domain::{DesignDomain, Polygon};
 pub use laplace::{curve_sensitivity, solve_design_fields, DesignFields};
 pub(crate) use mesh::{region_parities, triangulate};
-pub use mesh::{triangle_area, BulkMesh, MeshingOptions};
+pub use mesh::{triangle_area, BulkMesh, DomainMesh, MeshingOptions};
 
 /// Errors of bulk meshing and solving.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -51,7 +54,7 @@ mod tests {
         let opts = MeshingOptions::for_domain(&d, 2.0 * std::f64::consts::PI / n as f64);
         let mesh = BulkMesh::build(&d, &circle([0.0, 0.0], 1.0, n).unwrap(), &opts).unwrap();
         let f = solve_design_fields(&mesh, &|x: Point<2>| (3.0 / x.norm()).ln()).unwrap();
-        let err = mesh.points.iter().zip(&f.y).map(|(x, y)| (y - (3.0 / x.norm()).ln()).abs()).fold(0.0, f64::max);
+        let err = mesh.mesh.points.iter().zip(&f.y).map(|(x, y)| (y - (3.0 / x.norm()).ln()).abs()).fold(0.0, f64::max);
         (err, mesh, f)
     }
 
@@ -65,7 +68,7 @@ mod tests {
         assert!((control - 2.25 * pi).abs() < 0.01 * 2.25 * pi, "|D| = {control}");
         assert!(mesh.min_angle_deg() > 20.0, "min angle {}", mesh.min_angle_deg());
         assert_eq!(mesh.curve_edges.len(), 64);
-        assert!(mesh.on_outer.iter().filter(|&&b| b).count() >= 192);
+        assert!(mesh.mesh.dirichlet.iter().filter(|&&b| b).count() >= 192);
     }
 
     #[test]
@@ -98,7 +101,7 @@ mod tests {
             let rr = r.max(2.0);
             outer + (2.5f64 * 2.5 - rr * rr) / 4.0 - 2.0 * (2.5 / rr).ln()
         };
-        let err = mesh.points.iter().zip(&f.p).map(|(x, p)| (p - p_at(x.norm())).abs()).fold(0.0, f64::max);
+        let err = mesh.mesh.points.iter().zip(&f.p).map(|(x, p)| (p - p_at(x.norm())).abs()).fold(0.0, f64::max);
         assert!(err < 5e-3 * p_at(1.0), "max error {err} vs p(1) = {}", p_at(1.0));
         let misfit_exact = 0.5 * 2.25 * std::f64::consts::PI;
         assert!((f.misfit - misfit_exact).abs() < 5e-3 * misfit_exact, "misfit {}", f.misfit);

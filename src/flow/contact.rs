@@ -26,7 +26,7 @@ const CONTACT_BISECTIONS: usize = 10;
 /// usual).
 #[allow(clippy::type_complexity)]
 pub(super) fn first_contact<const D: usize>(
-    problem: &dyn Problem<D>,
+    problem: &mut dyn Problem<D>,
     solver: &mut SemiImplicitStep,
     sys: &LinearSystem<'_, D>,
     full: (&Mesh<D>, f64),

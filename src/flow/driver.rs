@@ -65,7 +65,7 @@ impl StepReport {
 
 /// A running gradient flow on a mesh of dimension `D`.
 pub struct Flow<'p, const D: usize> {
-    pub(super) problem: &'p dyn Problem<D>,
+    pub(super) problem: &'p mut dyn Problem<D>,
     pub(super) settings: FlowSettings,
     pub(super) mesh: Mesh<D>,
     pub(super) pattern: Pattern<D>,
@@ -92,9 +92,9 @@ impl<'p, const D: usize> Flow<'p, D> {
     }
 
     /// Start a flow at iteration 0, time 0.
-    pub fn new(problem: &'p dyn Problem<D>, mesh: Mesh<D>, settings: FlowSettings) -> Result<Self, FlowError> {
+    pub fn new(problem: &'p mut dyn Problem<D>, mesh: Mesh<D>, settings: FlowSettings) -> Result<Self, FlowError> {
         check_settings(&settings)?;
-        check_bending(problem, &settings)?;
+        check_bending(&*problem, &settings)?;
         let energy = problem.energy(&mesh).map_err(|e| FlowError::Problem(e.0))?;
         if !energy.is_finite() {
             return Err(FlowError::NonFiniteEnergy { value: energy, iteration: 0 });
@@ -105,7 +105,7 @@ impl<'p, const D: usize> Flow<'p, D> {
 
     /// Continue from a checkpoint (its mesh validated: it may come from a file).
     pub fn resume(
-        problem: &'p dyn Problem<D>,
+        problem: &'p mut dyn Problem<D>,
         checkpoint: &Checkpoint,
         settings: FlowSettings,
     ) -> Result<Self, FlowError> {
@@ -118,7 +118,7 @@ impl<'p, const D: usize> Flow<'p, D> {
     /// again (the flow keeps its meshes valid up to the tolerances of its own
     /// checks, which are not those of a file read from outside).
     pub fn continue_from(
-        problem: &'p dyn Problem<D>,
+        problem: &'p mut dyn Problem<D>,
         checkpoint: &Checkpoint,
         settings: FlowSettings,
     ) -> Result<Self, FlowError> {
@@ -131,13 +131,13 @@ impl<'p, const D: usize> Flow<'p, D> {
 
     /// The flow at `checkpoint`'s iteration, time, τ and energy on `mesh`.
     fn from_checkpoint(
-        problem: &'p dyn Problem<D>,
+        problem: &'p mut dyn Problem<D>,
         checkpoint: &Checkpoint,
         mesh: Result<Mesh<D>, FlowError>,
         settings: FlowSettings,
     ) -> Result<Self, FlowError> {
         check_settings(&settings)?;
-        check_bending(problem, &settings)?;
+        check_bending(&*problem, &settings)?;
         Ok(Self::assemble_state(
             problem,
             mesh?,
@@ -150,7 +150,7 @@ impl<'p, const D: usize> Flow<'p, D> {
     }
 
     fn assemble_state(
-        problem: &'p dyn Problem<D>,
+        problem: &'p mut dyn Problem<D>,
         mesh: Mesh<D>,
         settings: FlowSettings,
         iteration: usize,
@@ -323,7 +323,9 @@ impl<'p, const D: usize> Flow<'p, D> {
             if energy > self.energy && energy.is_finite() && s.backtracking && self.problem.merges(&candidate) {
                 // a merge is an event of the flow, not a descent step: shorten the
                 // step to just past the first contact and take it
-                if let Some((t, c, e)) = first_contact(self.problem, &mut self.solver, &sys, (&candidate, energy))? {
+                if let Some((t, c, e)) =
+                    first_contact(&mut *self.problem, &mut self.solver, &sys, (&candidate, energy))?
+                {
                     (tau, candidate, energy, report.contact) = (t, c, e, true);
                 }
             }

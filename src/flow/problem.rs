@@ -45,13 +45,19 @@ pub struct SurfaceState<'a, const D: usize> {
 pub struct ProblemError(pub String);
 
 /// A shape functional `J(Ω)` with shape derivative `dJ(Ω; V) = ∫_Γ (g κ + f) V`.
+///
+/// The driver holds the problem it runs as `&mut`: `energy`, `shape_gradient` and
+/// `rediscretize` may update state that follows the shape from call to call (shape
+/// design: the bulk mesh that trial curves reuse; the film: the last field). Such a
+/// problem keeps that state in a run of its own, apart from its description (see
+/// `problems::ShapeDesign::start`), so that a description is plain data.
 pub trait Problem<const D: usize>: Send {
     /// Name as in the job spec (`problem.type`).
     fn name(&self) -> &'static str;
     /// `J(Γ)`; `+∞` marks an inadmissible shape (the flow then shortens the step).
-    fn energy(&self, mesh: &Mesh<D>) -> Result<f64, ProblemError>;
+    fn energy(&mut self, mesh: &Mesh<D>) -> Result<f64, ProblemError>;
     /// `g` and `f` at the vertices of `Γ_n`.
-    fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError>;
+    fn shape_gradient(&mut self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError>;
     /// α and β of the problem's own weighted H1 product (`h1_newton`), if it has one.
     fn h1_weights(&self, _state: &SurfaceState<'_, D>, _grad: &ShapeGradient) -> Option<H1Weights> {
         None
@@ -83,7 +89,7 @@ pub trait Problem<const D: usize>: Send {
     /// fresh one. `None` if the problem keeps no such state. The driver calls this
     /// when backtracking fails: the trials may then differ from the current shape
     /// by the discretization error of a new bulk mesh rather than by the step.
-    fn rediscretize(&self, _mesh: &Mesh<D>) -> Result<Option<f64>, ProblemError> {
+    fn rediscretize(&mut self, _mesh: &Mesh<D>) -> Result<Option<f64>, ProblemError> {
         Ok(None)
     }
     /// `ε ≥ 0` of an added bending energy `ε/2 ∫_Γ κ²` (an addition to the paper's
@@ -122,7 +128,7 @@ pub(crate) fn curvature_and_normals<const D: usize>(
 /// discrete curvature of the flow. Used to check shape gradients against finite
 /// differences of `J`.
 pub fn shape_derivative<const D: usize>(
-    problem: &dyn Problem<D>,
+    problem: &mut dyn Problem<D>,
     mesh: &Mesh<D>,
     field: &[Point<D>],
 ) -> Result<f64, ProblemError> {

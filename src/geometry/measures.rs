@@ -182,8 +182,8 @@ fn vertex_normals_by<const D: usize>(
 #[cfg(test)]
 mod tests {
     use super::super::{circle, icosphere, union};
-    use crate::film::cosine_film;
     use crate::geometry::Point;
+    use crate::problems::cosine_film;
 
     /// Each component is scaled differently; the offsets restore every measure up to
     /// the second order of the offset (relative changes of 2e-4 → below 1e-7).

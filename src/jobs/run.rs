@@ -2,8 +2,8 @@
 //! iteration, checkpoints every `checkpoint_every` iterations (and at the start and
 //! the end), cancellation, and resumption from a checkpoint.
 
-use super::{AnyMesh, PreparedJob};
-use crate::flow::{Checkpoint, Flow, FlowError, MeshManager, Progress, StopReason, VertexFields};
+use super::{AnyMesh, PreparedJob, ProblemKind};
+use crate::flow::{Checkpoint, Flow, FlowError, MeshManager, Problem, Progress, StopReason, VertexFields};
 use crate::geometry::Mesh;
 use std::sync::atomic::AtomicBool;
 
@@ -48,19 +48,28 @@ pub fn run_prepared(
     match &job.mesh {
         AnyMesh::Curve(m) => {
             let manager = || job.curve_manager.map(|c| Box::new(c.watched()) as Box<dyn MeshManager<2>>);
-            run_stages::<2>(job, m, &manager, resume, cancel, events)
+            let dim = Dimension { problem: &|p| Ok(p.curve_problem()), manager: &manager };
+            run_stages::<2>(job, m, &dim, resume, cancel, events)
         }
         AnyMesh::Surface(m) => {
             let manager = || job.surface_manager.map(|c| Box::new(c) as Box<dyn MeshManager<3>>);
-            run_stages::<3>(job, m, &manager, resume, cancel, events)
+            let dim = Dimension { problem: &ProblemKind::surface_problem, manager: &manager };
+            run_stages::<3>(job, m, &dim, resume, cancel, events)
         }
     }
+}
+
+/// What a run needs in its dimension: the run of a stage's problem and a fresh
+/// mesh manager.
+struct Dimension<'a, const D: usize> {
+    problem: &'a dyn Fn(&ProblemKind) -> Result<Box<dyn Problem<D>>, FlowError>,
+    manager: &'a dyn Fn() -> Option<Box<dyn MeshManager<D>>>,
 }
 
 fn run_stages<const D: usize>(
     job: &PreparedJob,
     mesh: &Mesh<D>,
-    manager: &dyn Fn() -> Option<Box<dyn MeshManager<D>>>,
+    dim: &Dimension<'_, D>,
     resume: Option<&Checkpoint>,
     cancel: &AtomicBool,
     events: &mut dyn RunEvents,
@@ -70,7 +79,7 @@ fn run_stages<const D: usize>(
     // the state a later stage starts from was reported as the end of the one before
     let mut reported = false;
     loop {
-        let out = run_stage::<D>(job, stage, mesh, manager(), start.as_ref(), reported, cancel, events)?;
+        let out = run_stage::<D>(job, stage, mesh, dim, start.as_ref(), reported, cancel, events)?;
         if stage == 0 && job.second_stage.is_some() && out.stop == StopReason::Converged {
             (start, stage, reported) = (Some(Checkpoint { stage: 1, ..out.last }), 1, true);
             continue;
@@ -86,14 +95,24 @@ fn run_stage<const D: usize>(
     job: &PreparedJob,
     stage: usize,
     mesh: &Mesh<D>,
-    manager: Option<Box<dyn MeshManager<D>>>,
+    dim: &Dimension<'_, D>,
     start: Option<&Checkpoint>,
     reported: bool,
     cancel: &AtomicBool,
     events: &mut dyn RunEvents,
 ) -> Result<JobOutcome, Box<JobFailure>> {
-    let problem = job.stage_problem(stage).as_dyn::<D>();
     let fail = |error: FlowError, last: Checkpoint| Box::new(JobFailure { error, last });
+    let start_of = |c: Option<&Checkpoint>| {
+        c.cloned().unwrap_or_else(|| Checkpoint {
+            iteration: 0,
+            time: 0.0,
+            tau: job.settings.tau,
+            energy: f64::NAN,
+            mesh: mesh.into(),
+            stage,
+        })
+    };
+    let mut problem = (dim.problem)(job.stage_problem(stage)).map_err(|e| fail(e, start_of(start)))?;
     let tagged = |c: Checkpoint| Checkpoint { stage, ..c };
     let mut settings = job.settings.clone();
     if let (1.., Some(cp)) = (stage, start) {
@@ -101,7 +120,8 @@ fn run_stage<const D: usize>(
         // same shape: without the balloon term the energy of a segmentation is a few
         // hundred times smaller, and re-meshing noise would keep it from converging
         if let Some(m) = cp.mesh.to_mesh_unvalidated::<D>() {
-            let (first, here) = (job.problem.as_dyn::<D>().energy(&m), problem.energy(&m));
+            let first = (dim.problem)(&job.problem).map_err(|e| fail(e, start_of(start)))?.energy(&m);
+            let here = problem.energy(&m);
             if let (Ok(first), Ok(here)) = (first, here) {
                 let scale = (first / here).abs();
                 if scale.is_finite() && scale > 1.0 {
@@ -112,22 +132,12 @@ fn run_stage<const D: usize>(
     }
     let mut flow = match start {
         // the end of the stage before, in memory
-        Some(cp) if reported => Flow::continue_from(problem, cp, settings),
-        Some(cp) => Flow::resume(problem, cp, settings),
-        None => Flow::new(problem, mesh.clone(), settings),
+        Some(cp) if reported => Flow::continue_from(&mut *problem, cp, settings),
+        Some(cp) => Flow::resume(&mut *problem, cp, settings),
+        None => Flow::new(&mut *problem, mesh.clone(), settings),
     }
-    .map_err(|e| {
-        let start = start.cloned().unwrap_or_else(|| Checkpoint {
-            iteration: 0,
-            time: 0.0,
-            tau: job.settings.tau,
-            energy: f64::NAN,
-            mesh: mesh.into(),
-            stage,
-        });
-        fail(e, start)
-    })?;
-    if let Some(m) = manager {
+    .map_err(|e| fail(e, start_of(start)))?;
+    if let Some(m) = (dim.manager)() {
         flow = flow.with_mesh_manager(m);
     }
     let every = job.checkpoint_every.max(1);
@@ -168,12 +178,17 @@ fn run_stage<const D: usize>(
 /// normal velocity of the next step and the problem's own field (see
 /// [`Flow::vertex_fields`]).
 pub fn vertex_fields(job: &PreparedJob, state: &Checkpoint) -> Result<VertexFields, FlowError> {
-    fn in_dim<const D: usize>(job: &PreparedJob, state: &Checkpoint) -> Result<VertexFields, FlowError> {
-        Flow::resume(job.stage_problem(state.stage).as_dyn::<D>(), state, job.settings.clone())?.vertex_fields()
+    fn in_dim<const D: usize>(
+        mut problem: Box<dyn Problem<D>>,
+        job: &PreparedJob,
+        state: &Checkpoint,
+    ) -> Result<VertexFields, FlowError> {
+        Flow::resume(&mut *problem, state, job.settings.clone())?.vertex_fields()
     }
+    let kind = job.stage_problem(state.stage);
     match state.mesh.dimension {
-        2 => in_dim::<2>(job, state),
-        3 => in_dim::<3>(job, state),
+        2 => in_dim::<2>(kind.curve_problem(), job, state),
+        3 => in_dim::<3>(kind.surface_problem()?, job, state),
         d => Err(FlowError::Checkpoint(format!("dimension {d}"))),
     }
 }

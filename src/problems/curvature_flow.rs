@@ -20,11 +20,11 @@ impl<const D: usize> Problem<D> for CurvatureFlow {
         "curvature_flow"
     }
 
-    fn energy(&self, mesh: &Mesh<D>) -> Result<f64, ProblemError> {
+    fn energy(&mut self, mesh: &Mesh<D>) -> Result<f64, ProblemError> {
         Ok(self.gamma * mesh.boundary_measure() + self.lambda * mesh.enclosed_measure())
     }
 
-    fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
+    fn shape_gradient(&mut self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
         let n = state.mesh.num_vertices();
         Ok(ShapeGradient { g: vec![self.gamma; n], f: vec![self.lambda; n], aux: Vec::new() })
     }

@@ -12,8 +12,10 @@ pub use chan_vese::ChanVese;
 pub use curvature_flow::CurvatureFlow;
 pub use edge_refinement::{blur_variance, refine_to_edges, EdgeRefinement};
 pub use segmentation::Segmentation;
-pub use shape_design::{alpha_84, DesignSolution, GradientKind, ShapeDesign, Target};
-pub use stressed_film::StressedFilm;
+pub use shape_design::{alpha_84, DesignRun, DesignSolution, GradientKind, ShapeDesign, Target};
+pub use stressed_film::{
+    cosine_film, film_mesh, polyline_film, solve_stress, BoundaryData, FilmCell, FilmRun, StressField, StressedFilm,
+};
 pub use surface_diffusion::SurfaceDiffusion;
 
 /// The error of an image problem run on a mesh of the other dimension.

@@ -19,21 +19,13 @@ use crate::imaging::{EdgeField, EdgeSample};
 use std::sync::Arc;
 
 /// The geodesic active contour functional of one image.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Segmentation {
     pub field: Arc<EdgeField>,
     /// Weight `λ ≥ 0` of the region term (balloon force).
     pub lambda: f64,
     /// Lower threshold `ε > 0` of the Newton weight β.
     pub epsilon: f64,
-}
-
-impl PartialEq for Segmentation {
-    fn eq(&self, other: &Self) -> bool {
-        self.lambda == other.lambda
-            && self.epsilon == other.epsilon
-            && (Arc::ptr_eq(&self.field, &other.field) || self.field == other.field)
-    }
 }
 
 /// Two-point Gauss rule on `[0, 1]`.
@@ -195,13 +187,13 @@ impl<const D: usize> Problem<D> for Segmentation {
         "segmentation"
     }
 
-    fn energy(&self, mesh: &Mesh<D>) -> Result<f64, ProblemError> {
+    fn energy(&mut self, mesh: &Mesh<D>) -> Result<f64, ProblemError> {
         self.check_dimension::<D>()?;
         let (boundary, region) = integrals(self, mesh);
         Ok(boundary + self.lambda * region)
     }
 
-    fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
+    fn shape_gradient(&mut self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
         self.check_dimension::<D>()?;
         let n = state.mesh.num_vertices();
         let (mut g, mut f, mut aux) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(2 * n));
@@ -250,15 +242,15 @@ mod tests {
     fn constant_field_gives_perimeter_and_area() {
         let c = 0.7;
         let f2 = Arc::new(EdgeField::from_coefficients(2, [20, 10, 1], vec![c; 200]));
-        let seg = Segmentation { field: f2, lambda: 3.0, epsilon: 1e3 };
+        let mut seg = Segmentation { field: f2, lambda: 3.0, epsilon: 1e3 };
         let m = circle([0.4, 0.3], 0.2, 64).unwrap();
-        let j = Problem::<2>::energy(&seg, &m).unwrap();
+        let j = Problem::<2>::energy(&mut seg, &m).unwrap();
         let want = c * m.boundary_measure() + 3.0 * c * m.enclosed_measure();
         assert!((j - want).abs() < 1e-12 * want, "{j} {want}");
         let f3 = Arc::new(EdgeField::from_coefficients(3, [8, 8, 8], vec![c; 512]));
-        let seg = Segmentation { field: f3, lambda: 3.0, epsilon: 1e3 };
+        let mut seg = Segmentation { field: f3, lambda: 3.0, epsilon: 1e3 };
         let s = icosphere([0.5, 0.5, 0.5], 0.3, 2).unwrap();
-        let j = Problem::<3>::energy(&seg, &s).unwrap();
+        let j = Problem::<3>::energy(&mut seg, &s).unwrap();
         let want = c * s.boundary_measure() + 3.0 * c * s.enclosed_measure();
         assert!((j - want).abs() < 1e-12 * want, "{j} {want}");
     }
@@ -270,15 +262,15 @@ mod tests {
         let n = 32;
         let coef: Vec<f64> = (0..n * n).map(|i| 1.0 + 0.05 * (i % n) as f64).collect();
         let field = Arc::new(EdgeField::from_coefficients(2, [n, n, 1], coef));
-        let seg = Segmentation { field: field.clone(), lambda: 1.0, epsilon: 1.0 };
+        let mut seg = Segmentation { field: field.clone(), lambda: 1.0, epsilon: 1.0 };
         let m = circle([0.5, 0.5], 0.25, 2000).unwrap();
         // H(x, y) = 1 + 0.05 (x n - 1/2) exactly (B-splines reproduce linears)
         let h = |x: f64| 1.0 + 0.05 * (x * n as f64 - 0.5);
         let area = m.enclosed_measure();
-        let region = Problem::<2>::energy(&seg, &m).unwrap() - {
+        let region = Problem::<2>::energy(&mut seg, &m).unwrap() - {
             // boundary term by the same quadrature with λ = 0
-            let s0 = Segmentation { lambda: 0.0, ..seg.clone() };
-            Problem::<2>::energy(&s0, &m).unwrap()
+            let mut s0 = Segmentation { lambda: 0.0, ..seg.clone() };
+            Problem::<2>::energy(&mut s0, &m).unwrap()
         };
         assert!((region - area * h(0.5)).abs() < 1e-6, "{region} {}", area * h(0.5));
     }

@@ -7,7 +7,7 @@ use shapeflow::bulk::{DesignDomain, MeshingOptions, Polygon};
 use shapeflow::flow::{shape_derivative, Flow, MeshManager, Problem};
 use shapeflow::geometry::{circle, CurveMesh, Point};
 use shapeflow::jobs::{parse_spec, prepare, run_prepared, AnyMesh, JobOutcome, PreparedJob, ProblemKind, RunEvents};
-use shapeflow::problems::{GradientKind, ShapeDesign, Target};
+use shapeflow::problems::{DesignRun, GradientKind, ShapeDesign, Target};
 use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::sync::atomic::AtomicBool;
@@ -54,10 +54,11 @@ fn shape_derivative_matches_finite_differences() {
     // the paper's formula: to discretization error; the discrete gradient: exact for
     // the bulk mesh that follows the curve (errors O(d²) of the central differences)
     for (kind, bound) in [(GradientKind::Continuous, 1e-2), (GradientKind::Discrete, 1e-4)] {
-        let mut problem = test1(0.05, 2.0 * PI * 0.8 / n as f64);
-        problem.gradient = kind;
+        let mut design = test1(0.05, 2.0 * PI * 0.8 / n as f64);
+        design.gradient = kind;
+        let mut problem = design.start();
         for (name, v) in &fields {
-            let exact = shape_derivative(&problem, &mesh, v).unwrap();
+            let exact = shape_derivative(&mut problem, &mesh, v).unwrap();
             let d = 1e-3;
             let fd = (problem.energy(&moved(&mesh, v, d)).unwrap() - problem.energy(&moved(&mesh, v, -d)).unwrap())
                 / (2.0 * d);
@@ -72,11 +73,11 @@ fn shape_derivative_matches_finite_differences() {
 #[test]
 fn discrete_sensitivity_is_exact() {
     let n = 96;
-    let problem = test1(0.1, 2.0 * PI * 0.8 / n as f64);
+    let mut problem = test1(0.1, 2.0 * PI * 0.8 / n as f64).start();
     let mesh = circle([0.3, 0.2], 0.8, n).unwrap();
     let base = problem.solve(&mesh).unwrap();
     // fix the base mesh that trial curves follow
-    shape_derivative(&problem, &mesh, &vec![Point::<2>::zeros(); n]).unwrap();
+    shape_derivative(&mut problem, &mesh, &vec![Point::<2>::zeros(); n]).unwrap();
     let scale = base.sensitivity.iter().fold(0.0f64, |m, g| m.max(g.norm()));
     for k in [0, 17, 50] {
         for dir in [Point::<2>::new(1.0, 0.0), Point::<2>::new(0.0, 1.0)] {
@@ -94,7 +95,7 @@ fn discrete_sensitivity_is_exact() {
 #[test]
 fn the_unit_circle_is_optimal_in_test_1() {
     let n = 128;
-    let problem = test1(0.05, 2.0 * PI / n as f64);
+    let mut problem = test1(0.05, 2.0 * PI / n as f64).start();
     let mesh = circle([0.0, 0.0], 1.0, n).unwrap();
     let j = problem.energy(&mesh).unwrap();
     assert!(j < 1e-6, "J(unit circle) = {j:e}");
@@ -102,7 +103,7 @@ fn the_unit_circle_is_optimal_in_test_1() {
     let dilation: Vec<Point<2>> = mesh.positions().to_vec();
     let translation = vec![Point::<2>::new(1.0, 0.0); n];
     for v in [&dilation, &translation] {
-        let d = shape_derivative(&problem, &mesh, v).unwrap();
+        let d = shape_derivative(&mut problem, &mesh, v).unwrap();
         assert!(d.abs() < 1e-4, "dJ = {d:e}");
     }
     let sol = problem.solve(&mesh).unwrap();
@@ -171,7 +172,7 @@ fn h1_flow_from_an_ellipse_approaches_the_unit_circle() {
 
 /// Per vertex: `|θ_i − ½(θ_{i−1} + θ_{i+1})|` (θ the turning angles, a mesh-level
 /// oscillation indicator) and `p`.
-fn oscillation(problem: &ShapeDesign, mesh: &CurveMesh) -> Vec<(f64, f64)> {
+fn oscillation(problem: &mut DesignRun, mesh: &CurveMesh) -> Vec<(f64, f64)> {
     let sol = problem.solve(mesh).unwrap();
     let mut out = Vec::new();
     for cyc in mesh.cycles() {
@@ -200,14 +201,18 @@ fn l2_flow_oscillates_where_p_is_negative() {
         let job = prepared(&TEST1.replace("PRODUCT", product).replace("ITERATIONS", "100"));
         let ProblemKind::ShapeDesign(problem) = &job.problem else { unreachable!() };
         let AnyMesh::Curve(mesh) = &job.mesh else { unreachable!() };
-        let mut flow = Flow::new(problem as &dyn Problem<2>, mesh.clone(), job.settings.clone()).unwrap();
+        let mut run = problem.start();
+        let mut flow = Flow::new(&mut run, mesh.clone(), job.settings.clone()).unwrap();
         if let Some(m) = job.curve_manager {
             flow = flow.with_mesh_manager(Box::new(m) as Box<dyn MeshManager<2>>);
         }
         for _ in 0..10 {
             flow.step().unwrap();
         }
-        let o = oscillation(problem, flow.mesh());
+        // the run keeps the flow's last solve and the bulk mesh it follows
+        let mesh = flow.mesh().clone();
+        drop(flow);
+        let o = oscillation(&mut run, &mesh);
         let neg: Vec<f64> = o.iter().filter(|x| x.1 < 0.0).map(|x| x.0).collect();
         assert!(neg.len() >= 10, "{product}: p < 0 on {} of {} vertices", neg.len(), o.len());
         mean_osc.push(neg.iter().sum::<f64>() / neg.len() as f64);
@@ -226,7 +231,7 @@ fn square_ring_initial_energy_matches_the_paper() {
     let job = prepared(&spec);
     let ProblemKind::ShapeDesign(problem) = &job.problem else { unreachable!() };
     let AnyMesh::Curve(mesh) = &job.mesh else { unreachable!() };
-    let j = Problem::<2>::energy(problem, mesh).unwrap();
+    let j = problem.start().energy(mesh).unwrap();
     let paper = 0.97481 / 2.0;
     assert!((j - paper).abs() < 5e-3 * paper, "J = {j} vs {paper}");
 }

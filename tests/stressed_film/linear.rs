@@ -38,10 +38,10 @@ fn small_cosine_decays_at_the_linear_rate() {
     let k = TAU / l;
     let rate = gamma * k.powi(4);
     let mesh = cosine_film(l, 0.5, 1e-3, 1, 64).unwrap();
-    let problem = film(l, BoundaryData::constant(0.0), gamma, l / 64.0);
+    let mut problem = film(l, BoundaryData::constant(0.0), gamma, l / 64.0).start();
     let a0 = cosine_amplitude(&mesh, l, 1.0);
     let end = 1.0 / rate;
-    let mut flow = Flow::new(&problem, mesh, settings(end / 200.0, end)).unwrap();
+    let mut flow = Flow::new(&mut problem, mesh, settings(end / 200.0, end)).unwrap();
     while flow.step().unwrap().stop.is_none() {}
     let a1 = cosine_amplitude(flow.mesh(), l, 1.0);
     let measured = (a0 / a1).ln() / flow.time();
@@ -58,10 +58,10 @@ fn with_bending_a_small_cosine_decays_at_gamma_k4_plus_eps_k6() {
     let eps = gamma / (k * k);
     let rate = gamma * k.powi(4) + eps * k.powi(6);
     let mesh = cosine_film(l, 0.5, 1e-3, 1, 64).unwrap();
-    let problem = film(l, BoundaryData::constant(0.0), gamma, l / 64.0).with_bending(eps);
+    let mut problem = film(l, BoundaryData::constant(0.0), gamma, l / 64.0).with_bending(eps).start();
     let a0 = cosine_amplitude(&mesh, l, 1.0);
     let end = 1.0 / rate;
-    let mut flow = Flow::new(&problem, mesh, settings(end / 200.0, end)).unwrap();
+    let mut flow = Flow::new(&mut problem, mesh, settings(end / 200.0, end)).unwrap();
     let e0 = flow.energy();
     while flow.step().unwrap().stop.is_none() {}
     let a1 = cosine_amplitude(flow.mesh(), l, 1.0);
@@ -85,10 +85,10 @@ fn growth_rate(gamma: f64, n: usize) -> (f64, f64) {
     let k = TAU / l;
     let sigma = 2.0 * k.powi(3) * (k * height).tanh() - gamma * k.powi(4);
     let mesh = cosine_film(l, height, 1e-3, 1, n).unwrap();
-    let problem = film(l, BoundaryData::x(), gamma, l / n as f64);
+    let mut problem = film(l, BoundaryData::x(), gamma, l / n as f64).start();
     let a0 = cosine_amplitude(&mesh, l, 1.0);
     let end = 1.0 / sigma.abs();
-    let mut flow = Flow::new(&problem, mesh, settings(end / 400.0, end)).unwrap();
+    let mut flow = Flow::new(&mut problem, mesh, settings(end / 400.0, end)).unwrap();
     while flow.step().unwrap().stop.is_none() {}
     let a1 = cosine_amplitude(flow.mesh(), l, 1.0);
     ((a1 / a0).ln() / flow.time(), sigma)

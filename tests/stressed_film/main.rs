@@ -6,11 +6,10 @@ mod voids;
 mod wetting;
 
 use shapeflow::export::shape_json;
-use shapeflow::film::{cosine_film, BoundaryData, FilmCell};
-use shapeflow::flow::{Flow, FlowSettings, MeshData, MeshManager, Problem, ScalarProduct};
+use shapeflow::flow::{Flow, FlowSettings, MeshData, MeshManager, ScalarProduct};
 use shapeflow::geometry::CurveMesh;
 use shapeflow::jobs::{parse_spec, prepare, AnyMesh, PreparedJob, ProblemKind};
-use shapeflow::problems::StressedFilm;
+use shapeflow::problems::{cosine_film, BoundaryData, FilmCell, FilmRun, StressedFilm};
 use std::collections::HashMap;
 use std::f64::consts::TAU;
 
@@ -30,10 +29,11 @@ fn void_areas(c: &CurveMesh) -> Vec<f64> {
         .collect()
 }
 
-/// The flow of a film job with its mesh manager.
-fn managed_flow(job: &PreparedJob) -> Flow<'_, 2> {
+/// The flow of a film job with its mesh manager (its run lives as long as the test).
+fn managed_flow(job: &PreparedJob) -> Flow<'static, 2> {
     let (ProblemKind::StressedFilm(problem), AnyMesh::Curve(mesh)) = (&job.problem, &job.mesh) else { unreachable!() };
-    Flow::new(problem as &dyn Problem<2>, mesh.clone(), job.settings.clone())
+    let run: &'static mut FilmRun = Box::leak(Box::new(problem.start()));
+    Flow::new(run, mesh.clone(), job.settings.clone())
         .unwrap()
         .with_mesh_manager(Box::new(job.curve_manager.unwrap()) as Box<dyn MeshManager<2>>)
 }

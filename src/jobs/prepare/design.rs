@@ -5,7 +5,10 @@
 use super::checks::{finite, positive};
 use crate::bulk::{BulkError, DesignDomain, MeshingOptions, Polygon};
 use crate::geometry::{self, CurveMesh, Point};
-use crate::jobs::spec::{BoundarySpec, ShapeDesignSpec, SpecError, TargetSpec};
+use crate::jobs::spec::{
+    BoundarySpec, CircleBoundary, ConstantTarget, LogRadialTarget, PolarTarget, PolygonBoundary, ShapeDesignSpec,
+    SpecError, SquareBoundary, TargetSpec,
+};
 use crate::problems::{ShapeDesign, Target};
 use std::sync::Arc;
 
@@ -26,9 +29,9 @@ fn count(field: &str, length: f64, h: f64) -> Result<usize, SpecError> {
 /// The perimeter of a boundary spec (for the default spacing).
 fn perimeter(b: &BoundarySpec) -> f64 {
     match b {
-        BoundarySpec::Circle { radius, .. } => std::f64::consts::TAU * radius,
-        BoundarySpec::Square { size, .. } => 4.0 * size,
-        BoundarySpec::Polygon { points } => {
+        BoundarySpec::Circle(CircleBoundary { radius, .. }) => std::f64::consts::TAU * radius,
+        BoundarySpec::Square(SquareBoundary { size, .. }) => 4.0 * size,
+        BoundarySpec::Polygon(PolygonBoundary { points }) => {
             let n = points.len();
             (0..n).map(|i| (Point::<2>::from(points[(i + 1) % n]) - Point::<2>::from(points[i])).norm()).sum()
         }
@@ -39,17 +42,17 @@ fn perimeter(b: &BoundarySpec) -> f64 {
 /// circle; squares and polygons keep their corners).
 fn polygon(field: &str, b: &BoundarySpec, h: f64) -> Result<Polygon, SpecError> {
     let curve = match b {
-        BoundarySpec::Circle { center, radius } => {
+        BoundarySpec::Circle(CircleBoundary { center, radius }) => {
             finite(&format!("{field}.center"), center)?;
             let r = positive(&format!("{field}.radius"), *radius)?;
             geometry::circle(*center, r, count(field, perimeter(b), h)?.max(16))
         }
-        BoundarySpec::Square { center, size } => {
+        BoundarySpec::Square(SquareBoundary { center, size }) => {
             finite(&format!("{field}.center"), center)?;
             let s = positive(&format!("{field}.size"), *size)?;
             geometry::rectangle(*center, [s, s], count(field, perimeter(b), h)?.max(4))
         }
-        BoundarySpec::Polygon { points } => {
+        BoundarySpec::Polygon(PolygonBoundary { points }) => {
             if points.len() < 3 {
                 return Err(SpecError::new(
                     format!("{field}.points"),
@@ -89,16 +92,16 @@ fn target(spec: &TargetSpec, domain: &DesignDomain) -> Result<Target, SpecError>
         Ok(p)
     };
     Ok(match spec {
-        TargetSpec::Constant { value } => {
+        TargetSpec::Constant(ConstantTarget { value }) => {
             finite("problem.target.value", &[*value])
                 .map_err(|_| SpecError::new("problem.target.value", "must be a finite number"))?;
             Target::Constant(*value)
         }
-        TargetSpec::LogRadial { center, radius } => {
+        TargetSpec::LogRadial(LogRadialTarget { center, radius }) => {
             let center = centre_outside_d(center)?;
             Target::LogRadial { center, radius: positive("problem.target.radius", *radius)? }
         }
-        TargetSpec::Polar { center, a, b, k } => {
+        TargetSpec::Polar(PolarTarget { center, a, b, k }) => {
             let center = centre_outside_d(center)?;
             for (name, v) in [("a", a), ("b", b), ("k", k)] {
                 if !v.is_finite() {
@@ -130,9 +133,9 @@ pub fn shape_design(
     if !(h.is_finite() && h > 0.0) {
         // name the bad radius or size when there is one
         match &spec.outer {
-            BoundarySpec::Circle { radius, .. } => positive("problem.outer.radius", *radius)?,
-            BoundarySpec::Square { size, .. } => positive("problem.outer.size", *size)?,
-            BoundarySpec::Polygon { .. } => 0.0,
+            BoundarySpec::Circle(CircleBoundary { radius, .. }) => positive("problem.outer.radius", *radius)?,
+            BoundarySpec::Square(SquareBoundary { size, .. }) => positive("problem.outer.size", *size)?,
+            BoundarySpec::Polygon(PolygonBoundary { .. }) => 0.0,
         };
         return Err(SpecError::new("problem.outer", "has no length, or one too large to sample"));
     }
@@ -145,7 +148,7 @@ pub fn shape_design(
     let meshing = MeshingOptions::for_domain(&domain, mean_edge);
     let mut problem = ShapeDesign::new(Arc::new(domain), target, gamma, merge, min_area, meshing);
     problem.gradient = spec.gradient;
-    match problem.solve(initial) {
+    match problem.start().solve(initial) {
         Ok(_) => Ok(problem),
         Err(BulkError::Inadmissible(m)) => {
             Err(SpecError::new("initial", format!("not admissible for shape design: {m}")))

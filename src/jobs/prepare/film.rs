@@ -2,9 +2,12 @@
 //! initial film surface (which needs the cell width `L`).
 
 use super::checks::{finite, positive};
-use crate::film::{cosine_film, polyline_film, BoundaryData, FilmCell};
 use crate::geometry::{CurveMesh, MeshError, Point};
-use crate::jobs::spec::{FilmBoundarySpec, InitialSpec, SpecError, StressedFilmSpec};
+use crate::jobs::spec::{
+    ConstantBoundary, FilmBoundarySpec, FilmPolylineShape, FilmShape, InitialSpec, LinearBoundary, SpecError,
+    StressedFilmSpec, XBoundary,
+};
+use crate::problems::{cosine_film, polyline_film, BoundaryData, FilmCell};
 
 /// Most vertices of an initial film surface.
 use crate::jobs::spec::bounds::FILM_RESOLUTION;
@@ -14,12 +17,12 @@ pub fn film_cell(spec: &StressedFilmSpec) -> Result<FilmCell, SpecError> {
     let length = positive("problem.length", spec.length)?;
     positive("problem.gamma", spec.gamma)?;
     let boundary = match spec.boundary {
-        FilmBoundarySpec::X {} => BoundaryData::x(),
-        FilmBoundarySpec::Constant { value } => {
+        FilmBoundarySpec::X(XBoundary {}) => BoundaryData::x(),
+        FilmBoundarySpec::Constant(ConstantBoundary { value }) => {
             finite("problem.boundary.value", &[value])?;
             BoundaryData::constant(value)
         }
-        FilmBoundarySpec::Linear { a, b, c } => {
+        FilmBoundarySpec::Linear(LinearBoundary { a, b, c }) => {
             finite("problem.boundary", &[a, b, c])?;
             BoundaryData { a, b, c }
         }
@@ -36,7 +39,7 @@ pub fn initial_film(cell: &FilmCell, initial: Option<&InitialSpec>) -> Result<Cu
     let l = cell.length;
     match initial {
         None => Err(SpecError::new("initial", "missing field `initial` (shape `film` or `film_polyline`)")),
-        Some(InitialSpec::Film { height, amplitude, mode, resolution }) => {
+        Some(InitialSpec::Film(FilmShape { height, amplitude, mode, resolution })) => {
             let h = positive("initial.height", *height)?;
             finite("initial.amplitude", &[*amplitude])?;
             if amplitude.abs() >= h {
@@ -48,7 +51,7 @@ pub fn initial_film(cell: &FilmCell, initial: Option<&InitialSpec>) -> Result<Cu
             }
             cosine_film(l, h, *amplitude, *mode, *resolution).map_err(|e| mesh_err("initial", e))
         }
-        Some(InitialSpec::FilmPolyline { points, resolution }) => {
+        Some(InitialSpec::FilmPolyline(FilmPolylineShape { points, resolution })) => {
             if points.len() < 3 {
                 return Err(SpecError::new("initial.points", format!("needs at least 3 points, got {}", points.len())));
             }

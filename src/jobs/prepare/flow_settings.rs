@@ -2,7 +2,7 @@
 
 use super::checks::positive;
 use super::ProblemKind;
-use crate::flow::{FlowSettings, Problem, ScalarProduct, SolverKind};
+use crate::flow::{FlowSettings, ScalarProduct, SolverKind};
 use crate::jobs::spec::bounds::MAX_ITERATIONS;
 use crate::jobs::spec::{FlowSpec, SpecError};
 
@@ -33,14 +33,7 @@ pub const SEGMENTATION_L2_TAU: f64 = 1e-3;
 /// The flow settings of `f` for `problem`, each default the problem's own and each
 /// bound checked with the field named.
 pub(super) fn flow_settings(f: &FlowSpec, problem: &ProblemKind) -> Result<FlowSettings, SpecError> {
-    let default_product = match problem {
-        ProblemKind::CurvatureFlow(p) => Problem::<2>::default_scalar_product(p),
-        ProblemKind::SurfaceDiffusion(p) => Problem::<2>::default_scalar_product(p),
-        ProblemKind::Segmentation(p) => Problem::<2>::default_scalar_product(p),
-        ProblemKind::ChanVese(p) => Problem::<2>::default_scalar_product(p),
-        ProblemKind::ShapeDesign(p) => Problem::<2>::default_scalar_product(p),
-        ProblemKind::StressedFilm(p) => Problem::<2>::default_scalar_product(p),
-    };
+    let default_product = problem.curve_problem().default_scalar_product();
     let scalar_product = f.scalar_product.unwrap_or(default_product);
     if let ProblemKind::StressedFilm(p) = problem {
         if p.bending > 0.0 && scalar_product != ScalarProduct::HMinus1 {

@@ -2,7 +2,7 @@
 //! needs, validated.
 
 use super::SegmentationSetup;
-use crate::flow::{CurveManager, FlowSettings, Problem, SurfaceManager};
+use crate::flow::{CurveManager, FlowError, FlowSettings, Problem, SurfaceManager};
 use crate::geometry::AnyMesh;
 use crate::imaging::{EdgeField, Grid};
 use crate::jobs::spec::JobSpec;
@@ -32,16 +32,32 @@ impl PreparedJob {
 }
 
 impl ProblemKind {
-    pub fn as_dyn<const D: usize>(&self) -> &dyn Problem<D> {
+    /// The problem as a flow on curves runs it: a run with its own state.
+    pub fn curve_problem(&self) -> Box<dyn Problem<2>> {
         match self {
-            ProblemKind::CurvatureFlow(p) => p,
-            ProblemKind::SurfaceDiffusion(p) => p,
-            ProblemKind::Segmentation(p) => p,
-            ProblemKind::ChanVese(p) => p,
-            ProblemKind::ShapeDesign(p) => p,
-            ProblemKind::StressedFilm(p) => p,
+            ProblemKind::CurvatureFlow(p) => Box::new(p.clone()),
+            ProblemKind::SurfaceDiffusion(p) => Box::new(p.clone()),
+            ProblemKind::Segmentation(p) => Box::new(p.clone()),
+            ProblemKind::ChanVese(p) => Box::new(p.clone()),
+            ProblemKind::ShapeDesign(p) => Box::new(p.start()),
+            ProblemKind::StressedFilm(p) => Box::new(p.start()),
         }
     }
+
+    /// The problem as a flow on surfaces runs it; shape design and the stressed
+    /// film are problems on curves only (the job builder never pairs them with a
+    /// surface).
+    pub fn surface_problem(&self) -> Result<Box<dyn Problem<3>>, FlowError> {
+        match self {
+            ProblemKind::CurvatureFlow(p) => Ok(Box::new(p.clone())),
+            ProblemKind::SurfaceDiffusion(p) => Ok(Box::new(p.clone())),
+            ProblemKind::Segmentation(p) => Ok(Box::new(p.clone())),
+            ProblemKind::ChanVese(p) => Ok(Box::new(p.clone())),
+            ProblemKind::ShapeDesign(_) => Err(FlowError::Problem("shape design needs a curve (2D)".into())),
+            ProblemKind::StressedFilm(_) => Err(FlowError::Problem("the stressed film needs a curve (2D)".into())),
+        }
+    }
+
     /// A physical evolution (surface diffusion, the stressed film): no
     /// backtracking, a tolerance per unit time.
     pub(super) fn physical(&self) -> bool {

@@ -21,7 +21,10 @@ pub use segment::{default_min_size, default_mu, SegmentationSetup};
 
 use crate::flow::{CurveManager, ScalarProduct};
 use crate::geometry::AnyMesh;
-use crate::jobs::spec::{ColorBy, InitialSpec, JobSpec, ProblemSpec, SpecError};
+use crate::jobs::spec::{
+    ColorBy, CurvatureFlowSpec, FilmPolylineShape, FilmShape, InitialSpec, InscribedShape, JobSpec, ProblemSpec,
+    SeedsShape, SpecError, SurfaceDiffusionSpec, ThresholdShape,
+};
 use crate::problems::{CurvatureFlow, StressedFilm, SurfaceDiffusion};
 use checks::{finite, positive};
 use flow_settings::flow_settings;
@@ -40,13 +43,13 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     let mut segmentation = None;
     // the problems that need the initial curve are built once it is there
     let early = match &spec.problem {
-        ProblemSpec::CurvatureFlow { gamma, lambda } => {
+        ProblemSpec::CurvatureFlow(CurvatureFlowSpec { gamma, lambda }) => {
             positive("problem.gamma", *gamma)?;
             finite("problem.lambda", &[*lambda])
                 .map_err(|_| SpecError::new("problem.lambda", "must be a finite number"))?;
             Some(ProblemKind::CurvatureFlow(CurvatureFlow { gamma: *gamma, lambda: *lambda }))
         }
-        ProblemSpec::SurfaceDiffusion { gamma } => {
+        ProblemSpec::SurfaceDiffusion(SurfaceDiffusionSpec { gamma }) => {
             positive("problem.gamma", *gamma)?;
             Some(ProblemKind::SurfaceDiffusion(SurfaceDiffusion { gamma: *gamma }))
         }
@@ -65,14 +68,22 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     };
     let mesh = match (&spec.initial, &image, &film_cell) {
         _ if image_mesh.is_some() => image_mesh.take().expect("an image's initial shape"),
-        (Some(InitialSpec::Threshold {} | InitialSpec::Seeds { .. } | InitialSpec::Inscribed {}), _, _) => {
+        (
+            Some(
+                InitialSpec::Threshold(ThresholdShape {})
+                | InitialSpec::Seeds(SeedsShape { .. })
+                | InitialSpec::Inscribed(InscribedShape {}),
+            ),
+            _,
+            _,
+        ) => {
             return Err(SpecError::new(
                 "initial.shape",
                 "this shape comes from an image: it needs problem.type `segmentation`",
             ));
         }
         (initial, _, Some(cell)) => AnyMesh::Curve(film::initial_film(cell, initial.as_ref())?),
-        (Some(InitialSpec::Film { .. } | InitialSpec::FilmPolyline { .. }), _, None) => {
+        (Some(InitialSpec::Film(FilmShape { .. }) | InitialSpec::FilmPolyline(FilmPolylineShape { .. })), _, None) => {
             return Err(SpecError::new("initial.shape", "film shapes are for problem.type `stressed_film`"));
         }
         (Some(initial), _, None) => build_initial("initial", initial, inputs)?,

@@ -16,7 +16,8 @@ use crate::imaging::{
 };
 use crate::jobs::spec::bounds::{LEVEL, MIN_SIZE, PERCENTILE, SIGMA, WEIGHT};
 use crate::jobs::spec::{
-    BackgroundModel, ImageSource, InitialSpec, MeansKind, Polarity, SegmentationModel, SegmentationSpec, SpecError,
+    BackgroundModel, ImageSource, InitialSpec, InscribedShape, MeansKind, Polarity, SeedsShape, SegmentationModel,
+    SegmentationSpec, SpecError, ThresholdShape,
 };
 use crate::problems::{ChanVese, Segmentation};
 use serde::Serialize;
@@ -263,12 +264,12 @@ fn image_initial(
 ) -> Result<ImageInitial, SpecError> {
     let none = ImageInitial { mesh: None, objects: 0, cut: Vec::new(), background: None };
     Ok(match initial {
-        None | Some(InitialSpec::Threshold {}) => {
+        None | Some(InitialSpec::Threshold(ThresholdShape {})) => {
             let objects = threshold_objects(&pre.smoothed, &pre.levels, min_size, spec.split_touching.unwrap_or(true));
             let (m, count) = threshold_mesh(&pre.smoothed, &objects)?;
             ImageInitial { mesh: Some(m), objects: count, cut: objects.cleared, background: Some(objects.background) }
         }
-        Some(InitialSpec::Seeds { spacing, radius }) => {
+        Some(InitialSpec::Seeds(SeedsShape { spacing, radius })) => {
             let m = seeds(grid, *spacing, *radius)?;
             let objects = match &m {
                 AnyMesh::Curve(c) => c.num_components(),
@@ -276,7 +277,9 @@ fn image_initial(
             };
             ImageInitial { mesh: Some(m), objects, ..none }
         }
-        Some(InitialSpec::Inscribed {}) => ImageInitial { mesh: Some(inscribed(grid)?), objects: 1, ..none },
+        Some(InitialSpec::Inscribed(InscribedShape {})) => {
+            ImageInitial { mesh: Some(inscribed(grid)?), objects: 1, ..none }
+        }
         Some(_) => none,
     })
 }

@@ -6,7 +6,11 @@ use super::inputs::input;
 use crate::formats::read_mesh_file;
 use crate::geometry::{self, AnyMesh, Point};
 use crate::jobs::spec::bounds::{CURVE_RESOLUTION, SPHERE_LEVEL, TORUS_RESOLUTION};
-use crate::jobs::spec::{InitialSpec, SpecError};
+use crate::jobs::spec::{
+    BoxShape, CircleShape, EllipseShape, EllipsoidShape, FilmPolylineShape, FilmShape, InitialSpec, InscribedShape,
+    MeshShape, PolygonShape, RectangleShape, SeedsShape, SpecError, SphereShape, ThresholdShape, TorusShape,
+    UnionShape,
+};
 use crate::limits::MAX_VERTICES;
 use std::collections::HashMap;
 
@@ -18,25 +22,25 @@ pub(super) fn build_initial(
     let at = |name: &str| format!("{field}.{name}");
     let curve_res = |r: usize| CURVE_RESOLUTION.check(&at("resolution"), r);
     match s {
-        InitialSpec::Circle { center, radius, resolution } => {
+        InitialSpec::Circle(CircleShape { center, radius, resolution }) => {
             finite(&at("center"), center)?;
             let r = positive(&at("radius"), *radius)?;
             curve(field, geometry::circle(*center, r, curve_res(*resolution)?))
         }
-        InitialSpec::Ellipse { center, semi_axes, rotation, resolution } => {
+        InitialSpec::Ellipse(EllipseShape { center, semi_axes, rotation, resolution }) => {
             finite(&at("center"), center)?;
             positive(&at("semi_axes[0]"), semi_axes[0])?;
             positive(&at("semi_axes[1]"), semi_axes[1])?;
             finite(&at("rotation"), &[*rotation])?;
             curve(field, geometry::ellipse(*center, *semi_axes, *rotation, curve_res(*resolution)?))
         }
-        InitialSpec::Rectangle { center, size, resolution } => {
+        InitialSpec::Rectangle(RectangleShape { center, size, resolution }) => {
             finite(&at("center"), center)?;
             positive(&at("size[0]"), size[0])?;
             positive(&at("size[1]"), size[1])?;
             curve(field, geometry::rectangle(*center, *size, curve_res(*resolution)?.max(4)))
         }
-        InitialSpec::Polygon { points, resolution } => {
+        InitialSpec::Polygon(PolygonShape { points, resolution }) => {
             if points.len() < 3 {
                 return Err(SpecError::new(at("points"), format!("needs at least 3 points, got {}", points.len())));
             }
@@ -47,7 +51,7 @@ pub(super) fn build_initial(
             let pts: Vec<Point<2>> = points.iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
             curve(field, geometry::polygon(&pts, res))
         }
-        InitialSpec::Union { parts } => {
+        InitialSpec::Union(UnionShape { parts }) => {
             if parts.is_empty() {
                 return Err(SpecError::new(at("parts"), "needs at least one part"));
             }
@@ -82,12 +86,12 @@ pub(super) fn build_initial(
             }
             curve(field, geometry::union(&curves))
         }
-        InitialSpec::Sphere { center, radius, resolution } => {
+        InitialSpec::Sphere(SphereShape { center, radius, resolution }) => {
             finite(&at("center"), center)?;
             let r = positive(&at("radius"), *radius)?;
             surface(field, geometry::icosphere(*center, r, SPHERE_LEVEL.check(&at("resolution"), *resolution)?))
         }
-        InitialSpec::Ellipsoid { center, semi_axes, resolution } => {
+        InitialSpec::Ellipsoid(EllipsoidShape { center, semi_axes, resolution }) => {
             finite(&at("center"), center)?;
             for (i, a) in semi_axes.iter().enumerate() {
                 positive(&format!("{field}.semi_axes[{i}]"), *a)?;
@@ -97,7 +101,7 @@ pub(super) fn build_initial(
                 geometry::ellipsoid(*center, *semi_axes, SPHERE_LEVEL.check(&at("resolution"), *resolution)?),
             )
         }
-        InitialSpec::Box { center, size, resolution } => {
+        InitialSpec::Box(BoxShape { center, size, resolution }) => {
             finite(&at("center"), center)?;
             for (i, a) in size.iter().enumerate() {
                 positive(&format!("{field}.size[{i}]"), *a)?;
@@ -115,7 +119,7 @@ pub(super) fn build_initial(
             }
             surface(field, geometry::box_surface(*center, *size, div))
         }
-        InitialSpec::Torus { center, major_radius, minor_radius, resolution } => {
+        InitialSpec::Torus(TorusShape { center, major_radius, minor_radius, resolution }) => {
             finite(&at("center"), center)?;
             let big = positive(&at("major_radius"), *major_radius)?;
             let small = positive(&at("minor_radius"), *minor_radius)?;
@@ -135,13 +139,15 @@ pub(super) fn build_initial(
             }
             surface(field, geometry::torus(*center, big, small, n, n_minor))
         }
-        InitialSpec::Film { .. } | InitialSpec::FilmPolyline { .. } => {
+        InitialSpec::Film(FilmShape { .. }) | InitialSpec::FilmPolyline(FilmPolylineShape { .. }) => {
             Err(SpecError::new(at("shape"), "film shapes are for problem.type `stressed_film`"))
         }
-        InitialSpec::Threshold {} | InitialSpec::Seeds { .. } | InitialSpec::Inscribed {} => {
+        InitialSpec::Threshold(ThresholdShape {})
+        | InitialSpec::Seeds(SeedsShape { .. })
+        | InitialSpec::Inscribed(InscribedShape {}) => {
             Err(SpecError::new(at("shape"), "this shape comes from an image: it needs problem.type `segmentation`"))
         }
-        InitialSpec::Mesh { file } => {
+        InitialSpec::Mesh(MeshShape { file }) => {
             let (name, bytes) = input(&at("file"), file, inputs)?;
             read_mesh_file(name, bytes).map_err(|e| SpecError::new(at("file"), e.to_string()))
         }

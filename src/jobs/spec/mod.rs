@@ -16,10 +16,15 @@ mod segmentation;
 mod unique_keys;
 
 pub use error::SpecError;
-pub use initial::InitialSpec;
+pub use initial::{
+    BoxShape, CircleShape, EllipseShape, EllipsoidShape, FilmPolylineShape, FilmShape, InitialSpec, InscribedShape,
+    MeshShape, PolygonShape, RectangleShape, SeedsShape, SphereShape, ThresholdShape, TorusShape, UnionShape,
+};
 pub use parse::parse_spec;
 pub use problem::{
-    BoundarySpec, ControlSpec, FilmBoundarySpec, ProblemSpec, ShapeDesignSpec, StressedFilmSpec, TargetSpec,
+    BoundarySpec, CircleBoundary, ConstantBoundary, ConstantTarget, ControlSpec, CurvatureFlowSpec, FilmBoundarySpec,
+    LinearBoundary, LogRadialTarget, PolarTarget, PolygonBoundary, ProblemSpec, ShapeDesignSpec, SquareBoundary,
+    StressedFilmSpec, SurfaceDiffusionSpec, TargetSpec, XBoundary,
 };
 pub use segmentation::{
     default_beta_epsilon, default_lambda, default_lambda_final, default_sigma, BackgroundModel, ImageSource, MeansKind,

@@ -11,19 +11,9 @@ use serde::{Deserialize, Serialize};
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ProblemSpec {
     /// `J = γ|Γ| + λ|Ω|`.
-    CurvatureFlow {
-        #[serde(default = "one")]
-        #[schemars(extend("exclusiveMinimum" = 0))]
-        gamma: f64,
-        #[serde(default)]
-        lambda: f64,
-    },
+    CurvatureFlow(CurvatureFlowSpec),
     /// `J = γ|Γ|` under the `H^{-1}` product.
-    SurfaceDiffusion {
-        #[serde(default = "one")]
-        #[schemars(extend("exclusiveMinimum" = 0))]
-        gamma: f64,
-    },
+    SurfaceDiffusion(SurfaceDiffusionSpec),
     /// Geodesic active contours `J = ∫_Γ H + λ∫_Ω H` on an image.
     Segmentation(SegmentationSpec),
     /// Optimal shape design for the Laplace equation (2D): `J = ½∫_D (y − z_g)² + γ|Γ|`.
@@ -31,6 +21,29 @@ pub enum ProblemSpec {
     /// The epitaxially stressed film (2D, periodic in `x`): `J = ∫_Ω |∇y|² + γ|Γ|`
     /// under the `H^{-1}` product; `initial` is a `film` or `film_polyline`.
     StressedFilm(StressedFilmSpec),
+}
+
+// The fields of each variant of `ProblemSpec`, as a struct of its own: a bad field is
+// then located by deserializing its variant alone (see `spec::path`).
+
+// `ProblemSpec::CurvatureFlow`
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CurvatureFlowSpec {
+    #[serde(default = "one")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
+    pub gamma: f64,
+    #[serde(default)]
+    pub lambda: f64,
+}
+
+// `ProblemSpec::SurfaceDiffusion`
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceDiffusionSpec {
+    #[serde(default = "one")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
+    pub gamma: f64,
 }
 
 /// `problem` of `stressed_film` (paper §1.3, §4.4.2).
@@ -67,25 +80,45 @@ pub struct StressedFilmSpec {
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum FilmBoundarySpec {
     /// `g = x` (the paper's misfit).
-    // a struct variant, so that unknown fields are rejected (serde ignores them on
-    // unit variants)
-    X {},
+    // an empty struct, not a unit variant, so that unknown fields are rejected
+    // (serde ignores them on unit variants)
+    X(XBoundary),
     /// `g ≡ value`: no stress, plain surface diffusion.
-    Constant { value: f64 },
+    Constant(ConstantBoundary),
     /// `g = a + b x + c y`.
-    Linear {
-        #[serde(default)]
-        a: f64,
-        #[serde(default)]
-        b: f64,
-        #[serde(default)]
-        c: f64,
-    },
+    Linear(LinearBoundary),
+}
+
+// The fields of each variant of `FilmBoundarySpec`, as a struct of its own: a bad field is
+// then located by deserializing its variant alone (see `spec::path`).
+
+// `FilmBoundarySpec::X`
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct XBoundary {}
+
+// `FilmBoundarySpec::Constant`
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ConstantBoundary {
+    pub value: f64,
+}
+
+// `FilmBoundarySpec::Linear`
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LinearBoundary {
+    #[serde(default)]
+    pub a: f64,
+    #[serde(default)]
+    pub b: f64,
+    #[serde(default)]
+    pub c: f64,
 }
 
 impl Default for FilmBoundarySpec {
     fn default() -> Self {
-        FilmBoundarySpec::X {}
+        FilmBoundarySpec::X(XBoundary {})
     }
 }
 
@@ -126,43 +159,81 @@ pub struct ControlSpec {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "shape", rename_all = "snake_case", deny_unknown_fields)]
 pub enum BoundarySpec {
-    Circle {
-        #[serde(default = "origin2")]
-        center: [f64; 2],
-        #[schemars(extend("exclusiveMinimum" = 0))]
-        radius: f64,
-    },
+    Circle(CircleBoundary),
     /// Axis-aligned square `|x − c|_∞ ≤ size/2`.
-    Square {
-        #[serde(default = "origin2")]
-        center: [f64; 2],
-        #[schemars(extend("exclusiveMinimum" = 0))]
-        size: f64,
-    },
+    Square(SquareBoundary),
     /// A simple polygon through the points (either orientation).
-    Polygon { points: Vec<[f64; 2]> },
+    Polygon(PolygonBoundary),
+}
+
+// The fields of each variant of `BoundarySpec`, as a struct of its own: a bad field is
+// then located by deserializing its variant alone (see `spec::path`).
+
+// `BoundarySpec::Circle`
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CircleBoundary {
+    #[serde(default = "origin2")]
+    pub center: [f64; 2],
+    #[schemars(extend("exclusiveMinimum" = 0))]
+    pub radius: f64,
+}
+
+// `BoundarySpec::Square`
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SquareBoundary {
+    #[serde(default = "origin2")]
+    pub center: [f64; 2],
+    #[schemars(extend("exclusiveMinimum" = 0))]
+    pub size: f64,
+}
+
+// `BoundarySpec::Polygon`
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PolygonBoundary {
+    pub points: Vec<[f64; 2]>,
 }
 
 /// `problem.target`: `z_g`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum TargetSpec {
-    Constant {
-        value: f64,
-    },
+    Constant(ConstantTarget),
     /// `log(radius / |x − center|)` (paper §4.3.2).
-    LogRadial {
-        #[serde(default = "origin2")]
-        center: [f64; 2],
-        #[schemars(extend("exclusiveMinimum" = 0))]
-        radius: f64,
-    },
+    LogRadial(LogRadialTarget),
     /// `a + b cos(k θ)`, θ the polar angle around `center` (paper §4.3.3).
-    Polar {
-        #[serde(default = "origin2")]
-        center: [f64; 2],
-        a: f64,
-        b: f64,
-        k: f64,
-    },
+    Polar(PolarTarget),
+}
+
+// The fields of each variant of `TargetSpec`, as a struct of its own: a bad field is
+// then located by deserializing its variant alone (see `spec::path`).
+
+// `TargetSpec::Constant`
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ConstantTarget {
+    pub value: f64,
+}
+
+// `TargetSpec::LogRadial`
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LogRadialTarget {
+    #[serde(default = "origin2")]
+    pub center: [f64; 2],
+    #[schemars(extend("exclusiveMinimum" = 0))]
+    pub radius: f64,
+}
+
+// `TargetSpec::Polar`
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PolarTarget {
+    #[serde(default = "origin2")]
+    pub center: [f64; 2],
+    pub a: f64,
+    pub b: f64,
+    pub k: f64,
 }

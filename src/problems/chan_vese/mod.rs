@@ -169,7 +169,7 @@ impl<const D: usize> Problem<D> for ChanVese {
         "segmentation"
     }
 
-    fn energy(&self, mesh: &Mesh<D>) -> Result<f64, ProblemError> {
+    fn energy(&mut self, mesh: &Mesh<D>) -> Result<f64, ProblemError> {
         self.check_dimension::<D>()?;
         if self.separate && D == 2 && objects_cross(mesh) {
             // objects that touch stay the objects they are
@@ -178,13 +178,13 @@ impl<const D: usize> Problem<D> for ChanVese {
         let (_, _, moments) = self.objects(mesh);
         let (_, _, region) = self.means(&moments);
         let mut j = self.mu * mesh.boundary_measure() + region;
-        if let Some(g) = &self.geodesic {
+        if let Some(g) = &mut self.geodesic {
             j += Problem::<D>::energy(g, mesh)?;
         }
         Ok(j)
     }
 
-    fn shape_gradient(&self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
+    fn shape_gradient(&mut self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
         self.check_dimension::<D>()?;
         let mesh = state.mesh;
         let (vertex_component, object_of, moments) = self.objects(mesh);
@@ -202,7 +202,7 @@ impl<const D: usize> Problem<D> for ChanVese {
             let dn = slope.dot(&state.normals[v]);
             aux.push(dn);
         }
-        if let Some(geo) = &self.geodesic {
+        if let Some(geo) = &mut self.geodesic {
             let extra = Problem::<D>::shape_gradient(geo, state)?;
             for v in 0..n {
                 g[v] += extra.g[v];
@@ -306,30 +306,30 @@ mod tests {
 
     #[test]
     fn means_of_a_disc() {
-        let p = disc_problem();
+        let mut p = disc_problem();
         let m = circle([0.5, 0.5], 11.0 / 64.0, 200).unwrap();
         let (c, c_out) = p.component_means(&m);
         assert!((c[0] - 1.0).abs() < 0.01, "{c:?}");
         assert!((c_out - 0.2).abs() < 0.02, "{c_out}");
         // the energy is least near the true radius
-        let j = |r: f64| Problem::<2>::energy(&p, &circle([0.5, 0.5], r / 64.0, 200).unwrap()).unwrap();
+        let mut j = |r: f64| Problem::<2>::energy(&mut p, &circle([0.5, 0.5], r / 64.0, 200).unwrap()).unwrap();
         assert!(j(12.0) < j(10.0) && j(12.0) < j(14.0), "{} {} {}", j(10.0), j(12.0), j(14.0));
     }
 
     /// The shape gradient against finite differences of `J`, with two objects.
     #[test]
     fn shape_gradient_matches_finite_differences() {
-        let p = disc_problem();
+        let mut p = disc_problem();
         let a = circle([0.45, 0.5], 9.0 / 64.0, 120).unwrap();
         let b = circle([0.8, 0.2], 5.0 / 64.0, 60).unwrap();
         let m = union(&[a, b]).unwrap();
         let field: Vec<Point<2>> =
             m.positions().iter().map(|x| Point::<2>::new((x[1] * 9.0).sin(), x[0] - 0.3)).collect();
-        let d = shape_derivative(&p, &m, &field).unwrap();
+        let d = shape_derivative(&mut p, &m, &field).unwrap();
         let h = 1e-6;
         let moved = |s: f64| m.with_positions(m.positions().iter().zip(&field).map(|(x, v)| x + v * s).collect());
-        let fd =
-            (Problem::<2>::energy(&p, &moved(h)).unwrap() - Problem::<2>::energy(&p, &moved(-h)).unwrap()) / (2.0 * h);
+        let fd = (Problem::<2>::energy(&mut p, &moved(h)).unwrap() - Problem::<2>::energy(&mut p, &moved(-h)).unwrap())
+            / (2.0 * h);
         assert!((d - fd).abs() < 0.02 * fd.abs(), "{d} {fd}");
     }
 }

@@ -1,4 +1,6 @@
+use super::run::seeds_away_from;
 use super::*;
+use crate::bulk::BulkMesh;
 
 #[test]
 fn alpha_of_eq_84() {
@@ -22,14 +24,16 @@ fn seeded_triangulation_keeps_the_far_field() {
     let domain = DesignDomain::new(ring("outer", 3.0, 96), ring("inner", 2.0, 64), ring("outer", 2.5, 80)).unwrap();
     let opts = MeshingOptions::for_domain(&domain, 0.1);
     let first = BulkMesh::build(&domain, &circle([0.0, 0.0], 0.5, 32).unwrap(), &opts).unwrap();
-    let background: Vec<Point<2>> = first.points.iter().zip(&first.free).filter(|(_, &f)| f).map(|(p, _)| *p).collect();
+    let background: Vec<Point<2>> =
+        first.mesh.points.iter().zip(&first.free).filter(|(_, &f)| f).map(|(p, _)| *p).collect();
     let over_d = |m: &BulkMesh| -> BTreeSet<[[u64; 2]; 3]> {
-        m.triangles
+        m.mesh
+            .triangles
             .iter()
             .zip(&m.in_control)
             .filter(|(_, &c)| c)
             .map(|(t, _)| {
-                let mut v = t.map(|i| [m.points[i].x.to_bits(), m.points[i].y.to_bits()]);
+                let mut v = t.map(|i| [m.mesh.points[i].x.to_bits(), m.mesh.points[i].y.to_bits()]);
                 v.sort();
                 v
             })

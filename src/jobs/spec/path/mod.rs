@@ -1,20 +1,22 @@
 //! Naming the failing field of a spec whose error serde reports at a tagged object.
 //!
-//! `problem`, `initial` (and its `parts`), `problem.control.inner`, `problem.target`
-//! … are internally tagged enums. serde buffers such an object before it picks the
-//! variant, so [`serde_path_to_error`] sees the error at the object (`initial`), not
-//! at the field inside it (`initial.parts[1].center`). This module finds that field:
-//! removing the culprit from the document makes the error go away or change (a
-//! required culprit turns into `missing field`), while removing any other entry
-//! leaves the very same error, since serde reports the first failure it meets.
-//! The search descends one level at a time, into objects (trying each key) and
-//! into arrays of objects or arrays (bisecting on the length of a truncated copy:
-//! the error stays the same exactly when the first failing element is kept). Each
-//! trial deserializes the whole document, so the trials are capped
-//! ([`MAX_TRIALS`]): a long polygon costs a few dozen, not one per point.
+//! `problem`, `initial` (and its `parts`), `problem.outer`, `problem.control.inner`,
+//! `problem.target` and `problem.boundary` are internally tagged enums. serde
+//! buffers such an object before it picks the variant, so [`serde_path_to_error`]
+//! sees the error at the object (`initial`), not at the field inside it
+//! (`initial.parts[1].center`). Every variant's fields are a struct of their own
+//! (`CircleShape`, `PolarTarget`, …): deserializing the object, without its tag, as
+//! that struct gives the path inside it, and so on down while the path ends at
+//! another tagged object. The job spec's JSON schema says which enum is at a path
+//! (its `$ref`) and which field an object lacks (its `required`, in the order serde
+//! checks them). The message is always that of the whole spec's deserialization.
+
+mod variants;
 
 use super::{JobSpec, SpecError};
-use serde_json::Value;
+use serde::de::DeserializeOwned;
+use serde_json::{Map, Value};
+use std::sync::OnceLock;
 
 /// One step of a path into the document.
 #[derive(Debug, Clone, PartialEq)]
@@ -22,51 +24,6 @@ pub(super) enum Step {
     Key(String),
     Index(usize),
 }
-
-/// The keys that carry an enum's tag: removing them always changes the error.
-const TAG_KEYS: [&str; 2] = ["type", "shape"];
-
-/// Most nodes a breadth-first search visits.
-const MAX_VISITS: usize = 10_000;
-
-/// The paths of the objects at or below `path`, breadth first (containers only,
-/// at most [`MAX_VISITS`] of them visited).
-fn objects_below(value: &Value, path: &[Step]) -> Vec<Vec<Step>> {
-    let mut queue = std::collections::VecDeque::from([path.to_vec()]);
-    let mut objects = Vec::new();
-    let mut visits = 0;
-    while let Some(at) = queue.pop_front() {
-        visits += 1;
-        if visits > MAX_VISITS {
-            break;
-        }
-        let child = |step: Step| [at.as_slice(), &[step]].concat();
-        match node(value, &at) {
-            Some(Value::Object(o)) => {
-                queue.extend(
-                    o.iter().filter(|(_, v)| v.is_object() || v.is_array()).map(|(k, _)| child(Step::Key(k.clone()))),
-                );
-                objects.push(at);
-            }
-            Some(Value::Array(a)) => {
-                queue.extend(
-                    (0..a.len()).filter(|&i| a[i].is_object() || a[i].is_array()).map(|i| child(Step::Index(i))),
-                );
-            }
-            _ => {}
-        }
-    }
-    objects
-}
-
-/// The first object at or below `path`, breadth first, that has the key `name`.
-fn holder(value: &Value, path: &[Step], name: &str) -> Option<Vec<Step>> {
-    objects_below(value, path).into_iter().find(|at| node(value, at).is_some_and(|o| o.get(name).is_some()))
-}
-
-/// Most trial deserializations per error (spec objects have at most about a dozen
-/// keys; an array of a million entries bisects in 20).
-const MAX_TRIALS: usize = 96;
 
 /// serde_path_to_error's path as steps into the document.
 pub(super) fn steps(path: &serde_path_to_error::Path) -> Vec<Step> {
@@ -79,11 +36,10 @@ pub(super) fn steps(path: &serde_path_to_error::Path) -> Vec<Step> {
         .collect()
 }
 
-/// The error of deserializing `value` as a [`JobSpec`]: its path and message.
-fn first_error(value: &Value) -> Option<(Vec<Step>, String)> {
-    let e = serde_path_to_error::deserialize::<_, JobSpec>(value).err()?;
-    let path = steps(e.path());
-    Some((path, readable(&e.into_inner().to_string())))
+/// The path and message of the error of deserializing `value` as `T`, if any.
+fn error_of<T: DeserializeOwned>(value: &Value) -> Option<(Vec<Step>, String)> {
+    let e = serde_path_to_error::deserialize::<_, T>(value).err()?;
+    Some((steps(e.path()), e.into_inner().to_string()))
 }
 
 /// serde's message with the Rust type names replaced by what the user writes.
@@ -107,68 +63,6 @@ fn node<'a>(value: &'a Value, path: &[Step]) -> Option<&'a Value> {
     })
 }
 
-fn node_mut<'a>(value: &'a mut Value, path: &[Step]) -> Option<&'a mut Value> {
-    path.iter().try_fold(value, |v, s| match s {
-        Step::Key(k) => v.get_mut(k),
-        Step::Index(i) => v.get_mut(i),
-    })
-}
-
-/// The document with the array at `path` cut to its first `len` entries.
-fn truncated(value: &Value, path: &[Step], len: usize) -> Value {
-    let mut copy = value.clone();
-    if let Some(Value::Array(a)) = node_mut(&mut copy, path) {
-        a.truncate(len);
-    }
-    copy
-}
-
-/// The document without the entry at `path` (which must exist).
-fn without(value: &Value, path: &[Step]) -> Value {
-    let mut copy = value.clone();
-    let (last, parent) = path.split_last().expect("a non-empty path");
-    match (node_mut(&mut copy, parent), last) {
-        (Some(Value::Object(o)), Step::Key(k)) => {
-            o.remove(k);
-        }
-        (Some(Value::Array(a)), Step::Index(i)) => {
-            a.remove(*i);
-        }
-        _ => {}
-    }
-    copy
-}
-
-/// The name in backticks of serde's `unknown field `x``/`missing field `x`` messages.
-fn named_field<'m>(message: &'m str, prefix: &str) -> Option<&'m str> {
-    message.strip_prefix(prefix)?.split('`').next()
-}
-
-/// The object that lacks the required key `name`: removing entries cannot find it
-/// (removing any present required key also gives a `missing field` error), but
-/// adding `name: null` to it changes the error into one about that value, while
-/// adding it where it does not belong gives `unknown field`, and adding it where it
-/// is not the missing one leaves the error as it is. Objects are tried breadth first
-/// from `path` (serde's path, the buffered object that holds the culprit).
-fn missing_at(value: &Value, path: Vec<Step>, name: &str, message: &str) -> Vec<Step> {
-    let unknown = format!("unknown field `{name}`");
-    let lacking = objects_below(value, &path)
-        .into_iter()
-        .filter(|at| node(value, at).is_some_and(|o| o.get(name).is_none()))
-        .take(MAX_TRIALS);
-    for at in lacking {
-        let mut doc = value.clone();
-        if let Some(Value::Object(m)) = node_mut(&mut doc, &at) {
-            m.insert(name.to_string(), Value::Null);
-        }
-        match first_error(&doc) {
-            Some((_, m)) if m == message || m.starts_with(&unknown) => {}
-            _ => return at,
-        }
-    }
-    path
-}
-
 pub(super) fn render(path: &[Step]) -> String {
     let mut s = String::new();
     for step in path {
@@ -188,6 +82,88 @@ pub(super) fn render(path: &[Step]) -> String {
     }
 }
 
+/// The JSON schema of [`JobSpec`], made once.
+fn schema() -> &'static Value {
+    static SCHEMA: OnceLock<Value> = OnceLock::new();
+    SCHEMA.get_or_init(|| serde_json::to_value(schemars::schema_for!(JobSpec)).expect("the schema is JSON"))
+}
+
+/// A subschema of [`schema`] with its `$ref`s followed (and an `Option`'s `null`
+/// alternative dropped), with the name of the last definition followed.
+struct Resolved<'s> {
+    schema: &'s Value,
+    definition: Option<&'s str>,
+}
+
+fn resolve<'s>(root: &'s Value, mut schema: &'s Value) -> Resolved<'s> {
+    let mut definition = None;
+    loop {
+        if let Some(name) = schema.get("$ref").and_then(Value::as_str).and_then(|r| r.strip_prefix("#/$defs/")) {
+            match root.get("$defs").and_then(|d| d.get(name)) {
+                Some(s) => {
+                    (schema, definition) = (s, Some(name));
+                    continue;
+                }
+                None => break,
+            }
+        }
+        let some: Option<Vec<&Value>> = schema
+            .get("anyOf")
+            .and_then(Value::as_array)
+            .map(|alternatives| alternatives.iter().filter(|a| a.get("type") != Some(&Value::from("null"))).collect());
+        match some.as_deref() {
+            Some([one]) => schema = one,
+            _ => break,
+        }
+    }
+    Resolved { schema, definition }
+}
+
+/// The tag key and the variants of a tagged enum's schema (`oneOf` of objects each
+/// with one `const` property).
+fn tagged(schema: &Value) -> Option<(&str, &[Value])> {
+    let variants = schema.get("oneOf")?.as_array()?;
+    let first = variants.first()?.get("properties")?.as_object()?;
+    let key = first.iter().find(|(_, p)| p.get("const").is_some())?.0;
+    Some((key.as_str(), variants))
+}
+
+/// The variant of `variants` whose tag `key` is `tag`.
+fn variant<'s>(variants: &'s [Value], key: &str, tag: &str) -> Option<&'s Value> {
+    variants.iter().find(|v| v.pointer(&format!("/properties/{key}/const")).and_then(Value::as_str) == Some(tag))
+}
+
+/// The schema at `path` of `doc`, resolved; a tagged enum on the way is read as the
+/// variant the document's tag names.
+fn schema_at<'s>(doc: &Value, path: &[Step]) -> Option<Resolved<'s>> {
+    let root = schema();
+    let mut here = resolve(root, root);
+    for (k, step) in path.iter().enumerate() {
+        let mut schema = here.schema;
+        if let Some((key, variants)) = tagged(schema) {
+            let tag = node(doc, &path[..k])?.get(key)?.as_str()?;
+            schema = variant(variants, key, tag)?;
+        }
+        let next = match step {
+            Step::Key(name) => schema.get("properties")?.get(name)?,
+            Step::Index(_) => schema.get("items")?,
+        };
+        here = resolve(root, next);
+    }
+    Some(here)
+}
+
+/// The first key of `schema`'s `required` (declaration order, as serde checks
+/// them) that `object` lacks; in a tagged enum, of the variant its tag names.
+fn first_missing(schema: &Value, object: &Map<String, Value>) -> Option<String> {
+    let schema = match tagged(schema) {
+        Some((key, variants)) => variant(variants, key, object.get(key)?.as_str()?)?,
+        None => schema,
+    };
+    let required = schema.get("required")?.as_array()?;
+    required.iter().filter_map(Value::as_str).find(|k| !object.contains_key(*k)).map(str::to_string)
+}
+
 /// The spec error of `value`, if any, with its field named as precisely as the
 /// document allows.
 pub(super) fn locate(value: &Value) -> Option<SpecError> {
@@ -202,74 +178,31 @@ pub(super) fn locate(value: &Value) -> Option<SpecError> {
         };
         return Some(SpecError::new("(document)", format!("a job spec must be a JSON object, got {kind}")));
     }
-    let (mut path, message) = first_error(value)?;
-    if let Some(name) = named_field(&message, "missing field `") {
-        let mut path = missing_at(value, path, name, &message);
-        path.push(Step::Key(name.to_string()));
-        return Some(SpecError::new(render(&path), message));
-    }
-    // descend while one entry of the current node carries the error
-    let trials = std::cell::Cell::new(0);
-    let same = |doc: Value| {
-        trials.set(trials.get() + 1);
-        first_error(&doc).is_some_and(|(_, m)| m == message)
-    };
-    'descend: loop {
-        match node(value, &path) {
-            Some(Value::Object(o)) => {
-                let keys: Vec<String> = o.keys().filter(|k| !TAG_KEYS.contains(&k.as_str())).cloned().collect();
-                for key in keys {
-                    if trials.get() >= MAX_TRIALS {
-                        break 'descend;
-                    }
-                    let mut trial = path.clone();
-                    trial.push(Step::Key(key));
-                    if !same(without(value, &trial)) {
-                        path = trial;
-                        continue 'descend;
-                    }
-                }
-                break;
-            }
-            Some(Value::Array(a)) if !a.is_empty() && a.iter().all(|v| v.is_object() || v.is_array()) => {
-                // the smallest kept length with the same error: `lo` entries lose it, `hi` keep it
-                let (mut lo, mut hi) = (0, a.len());
-                if same(truncated(value, &path, lo)) {
-                    break;
-                }
-                while hi - lo > 1 {
-                    if trials.get() >= MAX_TRIALS {
-                        break 'descend;
-                    }
-                    let mid = (lo + hi) / 2;
-                    if same(truncated(value, &path, mid)) {
-                        hi = mid;
-                    } else {
-                        lo = mid;
-                    }
-                }
-                path.push(Step::Index(hi - 1));
-            }
+    let (mut path, message) = error_of::<JobSpec>(value)?;
+    // down through the tagged objects, each deserialized as its variant's struct
+    while let Some(Value::Object(object)) = node(value, &path) {
+        let Some(at) = schema_at(value, &path) else { break };
+        let (Some(definition), Some((key, variants))) = (at.definition, tagged(at.schema)) else { break };
+        let tag = object.get(key).and_then(Value::as_str);
+        if tag.is_none_or(|t| variant(variants, key, t).is_none()) {
+            // no tag, or one that names no variant
+            path.push(Step::Key(key.to_string()));
+            return Some(SpecError::new(render(&path), readable(&message)));
+        }
+        let mut fields = object.clone();
+        fields.remove(key);
+        match variants::error(definition, tag.unwrap_or_default(), &Value::Object(fields)) {
+            Some(Some((inner, _))) if !inner.is_empty() => path.extend(inner),
             _ => break,
         }
     }
-    if let Some(name) = named_field(&message, "unknown field `") {
-        // an unknown key is where the search ends; if the same key is wrong in two
-        // places the search stops above both: name the first
-        if path.last() != Some(&Step::Key(name.to_string())) {
-            if let Some(at) = holder(value, &path, name) {
-                path = at;
-            }
-            path.push(Step::Key(name.to_string()));
-        }
-    } else if message.starts_with("unknown variant") {
-        if let Some(Value::Object(o)) = node(value, &path) {
-            if let Some(tag) = TAG_KEYS.iter().find(|t| o.contains_key(**t)) {
-                path.push(Step::Key(tag.to_string()));
-            }
+    // an object that lacks a required key: serde names the key only in its message
+    if let Some(Value::Object(object)) = node(value, &path) {
+        if let Some(missing) = schema_at(value, &path).and_then(|at| first_missing(at.schema, object)) {
+            path.push(Step::Key(missing));
         }
     }
-    Some(SpecError::new(render(&path), message))
+    Some(SpecError::new(render(&path), readable(&message)))
 }
 
 #[cfg(test)]
