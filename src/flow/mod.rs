@@ -23,7 +23,9 @@ pub use error::FlowError;
 pub use linearize::VertexFields;
 pub use mesh_management::{CurveManager, Managed, MeshManager, SurfaceManager, WatchedCurveManager};
 pub(crate) use problem::curvature_and_normals;
-pub use problem::{shape_derivative, H1Weights, OwnField, Problem, ProblemError, ShapeGradient, SurfaceState};
+pub use problem::{
+    shape_derivative, FlowDefaults, H1Weights, OwnField, Problem, ProblemError, ShapeGradient, SurfaceState,
+};
 pub use report::{Progress, Rejection, StepReport, StopReason};
 pub use schur::{ConsistentSolver, LumpedSolver};
 pub use settings::FlowSettings;

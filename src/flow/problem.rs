@@ -39,6 +39,19 @@ pub struct SurfaceState<'a, const D: usize> {
     pub normals: &'a [Point<D>],
 }
 
+/// A problem's own defaults of the flow settings; `None` takes the flow's
+/// ([`super::FlowSettings::default`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FlowDefaults {
+    /// `flow.tau`, the step (or the cap of the adaptive step).
+    pub tau: Option<f64>,
+    /// `flow.tau_min`.
+    pub tau_min: Option<f64>,
+    /// `flow.conservation`: the enclosed measure kept to this relative change per
+    /// step.
+    pub conservation: Option<f64>,
+}
+
 /// An error raised by a problem (bad data met during a run).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{0}")]
@@ -73,7 +86,13 @@ pub trait Problem<const D: usize>: Send {
     fn default_scalar_product(&self) -> ScalarProduct {
         ScalarProduct::L2
     }
-    /// Physical flows (surface diffusion) follow time accurately: no backtracking by default.
+    /// The problem's defaults of `flow.tau`, `flow.tau_min` and `flow.conservation`
+    /// for a run with the scalar product `product`.
+    fn flow_defaults(&self, _product: ScalarProduct) -> FlowDefaults {
+        FlowDefaults::default()
+    }
+    /// Physical flows (surface diffusion, the film) follow time accurately: a job's
+    /// defaults then have no backtracking and a tolerance per unit time.
     fn is_physical(&self) -> bool {
         false
     }

@@ -13,7 +13,9 @@
 //! in `x₁`.
 
 use crate::fem::Weight;
-use crate::flow::{H1Weights, OwnField, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
+use crate::flow::{
+    FlowDefaults, H1Weights, OwnField, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState,
+};
 use crate::geometry::{Mesh, Point};
 use crate::imaging::{EdgeField, EdgeSample};
 use std::sync::Arc;
@@ -27,6 +29,11 @@ pub struct Segmentation {
     /// Lower threshold `ε > 0` of the Newton weight β.
     pub epsilon: f64,
 }
+
+/// Default `flow.tau` with the Newton-type H1 product.
+pub const NEWTON_TAU: f64 = 10.0;
+/// Default `flow.tau` with the L2 (and plain H1) product.
+pub const L2_TAU: f64 = 1e-3;
 
 /// Two-point Gauss rule on `[0, 1]`.
 const GAUSS2: [f64; 2] = [0.211_324_865_405_187_1, 0.788_675_134_594_812_9];
@@ -224,6 +231,14 @@ impl<const D: usize> Problem<D> for Segmentation {
 
     fn default_scalar_product(&self) -> ScalarProduct {
         ScalarProduct::H1Newton
+    }
+
+    /// The Newton-type product scales `V` like a Newton step (`τ = 1`); far from
+    /// edges β is clipped at ε and `V = −G/ε`, so a larger cap lets the step control
+    /// decide.
+    fn flow_defaults(&self, product: ScalarProduct) -> FlowDefaults {
+        let tau = if product == ScalarProduct::H1Newton { NEWTON_TAU } else { L2_TAU };
+        FlowDefaults { tau: Some(tau), ..FlowDefaults::default() }
     }
 
     /// The edge indicator `H` (`g` of the gradient).

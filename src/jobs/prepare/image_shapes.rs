@@ -101,9 +101,8 @@ pub(super) fn threshold_objects(s: &Grid, levels: &Levels, min_size: f64, split:
 /// One closed curve (surface) per object and hole (cavity) of `objects`, on its
 /// threshold level of the smoothed image (sub-sample) within each object's samples:
 /// marching squares in 2D, marching tetrahedra in 3D. Returns the mesh and the
-/// number of objects.
-pub(super) fn threshold_mesh(s: &Grid, objects: &ThresholdObjects) -> Result<(AnyMesh, usize), SpecError> {
-    let none = || SpecError::new("initial", "the threshold finds no object in the image: give `initial` a shape");
+/// number of objects, `None` if there is no object.
+pub(super) fn threshold_mesh(s: &Grid, objects: &ThresholdObjects) -> Result<Option<(AnyMesh, usize)>, SpecError> {
     let [nx, ny, nz] = s.dims;
     let mut bbox = vec![[usize::MAX, 0, usize::MAX, 0, usize::MAX, 0]; objects.count + 1];
     for (p, &lab) in objects.labels.iter().enumerate() {
@@ -161,18 +160,18 @@ pub(super) fn threshold_mesh(s: &Grid, objects: &ThresholdObjects) -> Result<(An
     }
     if s.dimension == 2 {
         if loops.is_empty() {
-            return Err(none());
+            return Ok(None);
         }
         let m =
             geometry::curves_from_loops(loops).map_err(|e| SpecError::new("initial", format!("invalid shape: {e}")))?;
-        Ok((AnyMesh::Curve(m), count))
+        Ok(Some((AnyMesh::Curve(m), count)))
     } else {
         if triangles.is_empty() {
-            return Err(none());
+            return Ok(None);
         }
         let m =
             Mesh::new(positions, triangles).map_err(|e| SpecError::new("initial", format!("invalid shape: {e}")))?;
-        Ok((AnyMesh::Surface(m), count))
+        Ok(Some((AnyMesh::Surface(m), count)))
     }
 }
 

@@ -57,12 +57,6 @@ impl ProblemKind {
             ProblemKind::StressedFilm(_) => Err(FlowError::Problem("the stressed film needs a curve (2D)".into())),
         }
     }
-
-    /// A physical evolution (surface diffusion, the stressed film): no
-    /// backtracking, a tolerance per unit time.
-    pub(super) fn physical(&self) -> bool {
-        matches!(self, ProblemKind::SurfaceDiffusion(_) | ProblemKind::StressedFilm(_))
-    }
 }
 
 /// A validated job, ready to run.

@@ -266,8 +266,18 @@ fn image_initial(
     Ok(match initial {
         None | Some(InitialSpec::Threshold(ThresholdShape {})) => {
             let objects = threshold_objects(&pre.smoothed, &pre.levels, min_size, spec.split_touching.unwrap_or(true));
-            let (m, count) = threshold_mesh(&pre.smoothed, &objects)?;
-            ImageInitial { mesh: Some(m), objects: count, cut: objects.cleared, background: Some(objects.background) }
+            match threshold_mesh(&pre.smoothed, &objects)? {
+                Some((m, count)) => ImageInitial {
+                    mesh: Some(m),
+                    objects: count,
+                    cut: objects.cleared,
+                    background: Some(objects.background),
+                },
+                // nothing above the threshold (a constant or near-constant image): the
+                // flow starts from the inscribed shape and decides; with no object it
+                // shrinks away and the run ends `vanished` with an empty result
+                None => ImageInitial { mesh: Some(inscribed(grid)?), objects: 0, ..none },
+            }
         }
         Some(InitialSpec::Seeds(SeedsShape { spacing, radius })) => {
             let m = seeds(grid, *spacing, *radius)?;

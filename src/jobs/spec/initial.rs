@@ -32,7 +32,8 @@ pub enum InitialSpec {
     /// `initial` is omitted: a threshold of the smoothed image (Otsu's unless
     /// `problem.threshold`, and `problem.dim_threshold` for dim objects), specks
     /// dropped, touching objects split, one closed curve (surface) per object and
-    /// per hole (marching squares, marching tetrahedra).
+    /// per hole (marching squares, marching tetrahedra); the inscribed circle
+    /// (sphere) if it finds no object.
     Threshold(ThresholdShape),
     /// (Addition, segmentation) a grid of small circles, `spacing` pixels apart
     /// (default 1/8 of the image's shorter side), of radius `radius` pixels

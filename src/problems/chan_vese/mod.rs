@@ -21,13 +21,21 @@
 
 use super::Segmentation;
 use crate::fem::Weight;
-use crate::flow::{H1Weights, OwnField, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
+use crate::flow::{
+    FlowDefaults, H1Weights, OwnField, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState,
+};
 use crate::geometry::{Mesh, Point};
 use crate::imaging::EdgeField;
 use moments::{accumulate_moments, Moments};
 use std::sync::Arc;
 
 mod moments;
+
+/// Default `flow.tau`, in pixels: the data term's speed is at most
+/// `max(λ_in, λ_out)` (normalized intensities), so a step moves the contour at most
+/// about this many pixels; the step control and backtracking shorten it where
+/// needed.
+pub const TAU_PIXELS: f64 = 8.0;
 
 /// The Chan–Vese functional of one image.
 #[derive(Debug, Clone, PartialEq)]
@@ -240,6 +248,11 @@ impl<const D: usize> Problem<D> for ChanVese {
 
     fn default_scalar_product(&self) -> ScalarProduct {
         ScalarProduct::L2
+    }
+
+    /// `τ` of [`TAU_PIXELS`] pixels (in the unit square's length).
+    fn flow_defaults(&self, _product: ScalarProduct) -> FlowDefaults {
+        FlowDefaults { tau: Some(TAU_PIXELS / self.intensity.scale()), ..FlowDefaults::default() }
     }
 
     /// With `separate`: where two objects would cross, the vertices of the

@@ -33,6 +33,9 @@ mod target;
 pub use run::DesignRun;
 pub use target::Target;
 
+/// Default `flow.tau`: the cap of the adaptive step.
+pub const DEFAULT_TAU: f64 = 10.0;
+
 /// How the shape gradient `G` is computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]

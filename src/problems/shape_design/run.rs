@@ -5,7 +5,7 @@
 use super::{DesignSolution, GradientKind, ShapeDesign};
 use crate::bulk::{curve_sensitivity, solve_design_fields, BulkError, BulkMesh};
 use crate::fem::{tangential_derivative, Weight};
-use crate::flow::{H1Weights, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
+use crate::flow::{FlowDefaults, H1Weights, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
 use crate::geometry::{resolve_intersections, winding_number, CurveMesh, Point};
 use std::sync::Arc;
 
@@ -218,5 +218,10 @@ impl Problem<2> for DesignRun {
 
     fn default_scalar_product(&self) -> ScalarProduct {
         ScalarProduct::H1Newton
+    }
+
+    /// The step control and backtracking pick the step; `τ` only caps it.
+    fn flow_defaults(&self, _product: ScalarProduct) -> FlowDefaults {
+        FlowDefaults { tau: Some(super::DEFAULT_TAU), ..FlowDefaults::default() }
     }
 }

@@ -47,6 +47,15 @@ pub use field::{solve_stress, StressField};
 pub use mesh::film_mesh;
 pub use run::FilmRun;
 
+/// Default `flow.tau` (the film's rates are `γk⁴` for wavenumbers `k`).
+pub const DEFAULT_TAU: f64 = 1e-5;
+/// Default `flow.tau_min`: just after a void closes off, the corners where the
+/// walls met move at up to `~10⁷` and need steps near `h⁴/γ` (measured down to
+/// 2e-12 at 128 vertices) until surface diffusion has rounded them.
+pub const DEFAULT_TAU_MIN: f64 = 1e-15;
+/// Default `flow.conservation`: the film's area kept per step.
+pub const DEFAULT_CONSERVATION: f64 = 1e-6;
+
 /// The stressed film in its cell: the description of the problem. A run of it
 /// ([`StressedFilm::start`]) keeps the last film mesh and field.
 #[derive(Debug, Clone, PartialEq)]

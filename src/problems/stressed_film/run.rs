@@ -4,7 +4,9 @@
 use super::{film_mesh, solve_stress, StressField, StressedFilm};
 use crate::bulk::{BulkError, DomainMesh};
 use crate::fem::{tangential_derivative, Matrices, Pattern};
-use crate::flow::{curvature_and_normals, OwnField, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState};
+use crate::flow::{
+    curvature_and_normals, FlowDefaults, OwnField, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState,
+};
 use crate::geometry::{resolve_intersections, CurveMesh, Point};
 use std::sync::Arc;
 
@@ -138,6 +140,14 @@ impl Problem<2> for FilmRun {
 
     fn default_scalar_product(&self) -> ScalarProduct {
         ScalarProduct::HMinus1
+    }
+
+    fn flow_defaults(&self, _product: ScalarProduct) -> FlowDefaults {
+        FlowDefaults {
+            tau: Some(super::DEFAULT_TAU),
+            tau_min: Some(super::DEFAULT_TAU_MIN),
+            conservation: Some(super::DEFAULT_CONSERVATION),
+        }
     }
 
     /// The elastic energy density `|∇y|²` on `Γ` (`f` without the bending term).
