@@ -294,7 +294,7 @@ async fn claims(database: &str, dir: &std::path::Path) {
         let t = Instant::now();
         let c = st.claim_next("bench", &policy).await.unwrap().expect("an accepted job");
         lat.push(t.elapsed().as_secs_f64() * 1e3);
-        st.finish(&c.job.id, Some(&c.lease), JobStatus::Successful, None, None).await.unwrap();
+        st.finish(&c.job.id, Some(&c.lease), JobStatus::Successful, None, None, None).await.unwrap();
     }
     println!();
     println!("| claim with 100,000 finished jobs in the table | count | p50 | p99 |");

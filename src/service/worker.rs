@@ -4,10 +4,12 @@
 //! its last checkpoint, if any), and records history rows, checkpoints, the
 //! result files and the outcome, every write fenced by the lease. A worker that
 //! loses its lease stops the run and writes nothing more. The result files are
-//! computed once, when the run ends ([`result_files`]), from the frames stored.
+//! computed once, when the run ends ([`result_files`]), from the frames stored;
+//! their blobs are written first, and the row points to them in the transaction
+//! that records the outcome.
 
 use super::recorder::{retrying, Recorder};
-use super::store::{ClaimPolicy, Claimed, JobStatus, Lease, Store, StoreError, Which};
+use super::store::{ClaimPolicy, Claimed, JobStatus, Lease, Store, StoreError, StoredResults, Which};
 use crate::flow::StopReason;
 use crate::jobs::{parse_spec, prepare, result_files, run_prepared, GlbContext};
 use std::collections::HashMap;
@@ -112,11 +114,32 @@ impl Worker {
 
     fn run(&self, claimed: &Claimed) -> Result<JobStatus, StoreError> {
         let (job, lease) = (&claimed.job, &claimed.lease);
-        let finish = |status: JobStatus, stop: Option<&str>, msg: Option<&str>| -> Result<JobStatus, StoreError> {
-            self.rt.block_on(retrying(|| self.store.finish(&job.id, Some(lease), status, stop, msg)))?;
+        // the outcome, with the row pointed to the result files in the same transaction
+        let finish_with = |status: JobStatus,
+                           stop: Option<&str>,
+                           msg: Option<&str>,
+                           stored: Option<&StoredResults>|
+         -> Result<JobStatus, StoreError> {
+            let index = stored.map(|s| s.index.as_str());
+            let ended =
+                self.rt.block_on(retrying(|| self.store.finish(&job.id, Some(lease), status, stop, msg, index)));
+            // the folder no longer pointed to: the old one, or ours if the lease was lost
+            // (after another error the row may point to either: both are kept)
+            let pointed = match &ended {
+                Ok(()) => Some(true),
+                Err(StoreError::LeaseLost(_)) => Some(false),
+                Err(_) => None,
+            };
+            if let (Some(s), Some(pointed)) = (stored, pointed) {
+                if let Err(e) = self.rt.block_on(self.store.drop_results(&job.id, s, pointed)) {
+                    tracing::warn!(job = %job.id, "cannot drop old result files: {e}");
+                }
+            }
+            ended?;
             let _ = self.events.send(Arc::from(job.id.as_str()));
             Ok(status)
         };
+        let finish = |status: JobStatus, stop: Option<&str>, msg: Option<&str>| finish_with(status, stop, msg, None);
         if claimed.takeover {
             tracing::info!(job = %job.id, "taking over a job whose lease expired");
         }
@@ -156,18 +179,19 @@ impl Worker {
         let stopping = matches!(&result, Ok(o) if o.stop == StopReason::Cancelled)
             && self.shutdown.load(Ordering::Relaxed)
             && !self.rt.block_on(self.store.cancel_requested(&job.id))?;
+        let mut stored = None;
         if !stopping {
             // a resumed run's first frame repeats the last one stored before
             let resumed_at = frames.last().map(|f| f.state.iteration);
             frames.extend(written.frames.drain(..).filter(|f| Some(f.state.iteration) != resumed_at));
             let files = result_files(&prepared, &frames);
-            match self.rt.block_on(retrying(|| self.store.put_results(&job.id, Some(lease), &files))) {
-                Ok(_) => {}
-                Err(StoreError::LeaseLost(id)) => return Err(StoreError::LeaseLost(id)),
+            match self.rt.block_on(retrying(|| self.store.store_results(&job.id, Some(lease), &files))) {
+                Ok(s) => stored = Some(s),
                 // written on the first request instead
                 Err(e) => tracing::warn!(job = %job.id, "cannot store the result files: {e}"),
             }
         }
+        let stored = stored.as_ref();
         match result {
             Ok(o) if o.stop == StopReason::Cancelled => {
                 if stopping {
@@ -176,10 +200,10 @@ impl Worker {
                     self.rt.block_on(self.store.release(&job.id, lease))?;
                     return Ok(JobStatus::Running);
                 }
-                finish(JobStatus::Dismissed, Some("cancelled"), Some("cancelled by request"))
+                finish_with(JobStatus::Dismissed, Some("cancelled"), Some("cancelled by request"), stored)
             }
-            Ok(o) => finish(JobStatus::Successful, Some(o.stop.as_str()), o.note),
-            Err(f) => finish(JobStatus::Failed, None, Some(&f.error.to_string())),
+            Ok(o) => finish_with(JobStatus::Successful, Some(o.stop.as_str()), o.note, stored),
+            Err(f) => finish_with(JobStatus::Failed, None, Some(&f.error.to_string()), stored),
         }
     }
 }

@@ -28,7 +28,7 @@ pub use sqlite::SqliteStore;
 pub(crate) use types::status_of;
 pub use types::{
     CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus, Lease, ResultEntry, ResultIndex,
-    StoreError, StoreResult, Which,
+    StoreError, StoreResult, StoredResults, Which,
 };
 
 /// What every backend stores and how (see the module documentation). The
@@ -88,7 +88,9 @@ pub trait JobStore: Send + Sync + 'static {
     /// written on first request). Returns whether the row was changed.
     async fn set_results(&self, id: &str, lease: Option<&Lease>, index: &str) -> StoreResult<bool>;
     /// End a job: fenced by `lease` if given (a worker), unconditional otherwise
-    /// (cancelling an accepted job).
+    /// (cancelling an accepted job). `results`, the index of result files stored
+    /// with [`JobStore::store_results`], points the row to them in the same
+    /// transaction.
     async fn finish(
         &self,
         id: &str,
@@ -96,6 +98,7 @@ pub trait JobStore: Send + Sync + 'static {
         status: JobStatus,
         stop_reason: Option<&str>,
         message: Option<&str>,
+        results: Option<&str>,
     ) -> StoreResult<()>;
     /// Whether cancellation was requested (true for a job that no longer exists).
     async fn cancel_requested(&self, id: &str) -> StoreResult<bool>;
@@ -166,10 +169,10 @@ pub trait JobStore: Send + Sync + 'static {
         self.record_rows(id, lease, rows, &keys).await
     }
 
-    /// Store the result files of a job (see [`JobStore::set_results`] for `lease`)
-    /// in a new blob folder, point the row to it and drop the folder it pointed to
-    /// before. Returns whether the files were stored.
-    async fn put_results(&self, id: &str, lease: Option<&Lease>, files: &[ResultFile]) -> StoreResult<bool> {
+    /// Store the result files of a job in a new blob folder (named after `lease`'s
+    /// epoch for a worker), beside a read of the folder the row points to now; the
+    /// row is not changed (see [`JobStore::finish`] and [`JobStore::put_results`]).
+    async fn store_results(&self, id: &str, lease: Option<&Lease>, files: &[ResultFile]) -> StoreResult<StoredResults> {
         let set = match lease {
             Some(l) => format!("e{}", l.epoch),
             None => format!("r{}", uuid::Uuid::new_v4().simple()),
@@ -184,15 +187,30 @@ pub trait JobStore: Send + Sync + 'static {
             self.job(id),
         )
         .await?;
-        let before = job.and_then(|j| j.results);
+        let before = job.and_then(|j| j.results).map(|b| b.set).filter(|b| *b != set);
         let entries =
             files.iter().map(|f| ResultEntry { name: f.name.into(), media_type: f.media_type.into() }).collect();
         let index = serde_json::to_string(&ResultIndex { set: set.clone(), files: entries }).expect("serializes");
-        let changed = self.set_results(id, lease, &index).await?;
-        let old = if changed { before.filter(|b| b.set != set).map(|b| b.set) } else { Some(set) };
+        Ok(StoredResults { index, set, before })
+    }
+
+    /// After the row was (or was not) pointed to `stored`: drop the folder that is
+    /// no longer pointed to.
+    async fn drop_results(&self, id: &str, stored: &StoredResults, pointed: bool) -> StoreResult<()> {
+        let old = if pointed { stored.before.as_deref() } else { Some(stored.set.as_str()) };
         if let Some(old) = old {
-            self.blobs().delete_all(&["jobs", id, "results", &old]).await?;
+            self.blobs().delete_all(&["jobs", id, "results", old]).await?;
         }
+        Ok(())
+    }
+
+    /// Store the result files of a job (see [`JobStore::set_results`] for `lease`)
+    /// in a new blob folder, point the row to it and drop the folder it pointed to
+    /// before. Returns whether the files were stored.
+    async fn put_results(&self, id: &str, lease: Option<&Lease>, files: &[ResultFile]) -> StoreResult<bool> {
+        let stored = self.store_results(id, lease, files).await?;
+        let changed = self.set_results(id, lease, &stored.index).await?;
+        self.drop_results(id, &stored, changed).await?;
         Ok(changed)
     }
 

@@ -162,6 +162,18 @@ pub struct ResultIndex {
     pub files: Vec<ResultEntry>,
 }
 
+/// Result files written to a new blob folder ([`super::JobStore::store_results`])
+/// and not yet pointed to by the row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StoredResults {
+    /// The [`ResultIndex`] as stored in the row.
+    pub index: String,
+    /// The new folder.
+    pub set: String,
+    /// The folder the row pointed to before, if another.
+    pub before: Option<String>,
+}
+
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ResultEntry {
     pub name: String,

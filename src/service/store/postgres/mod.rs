@@ -295,20 +295,22 @@ impl JobStore for PgStore {
         status: JobStatus,
         stop_reason: Option<&str>,
         message: Option<&str>,
+        results: Option<&str>,
     ) -> StoreResult<()> {
         let mut tx = self.pool.begin().await?;
         if let Some(lease) = lease {
             fence(&mut tx, id, lease).await?;
         }
         sqlx::query(
-            "UPDATE jobs SET status = $2, stop_reason = $3, message = $4, finished_at = $5, lease_expires = NULL \
-             WHERE id = $1",
+            "UPDATE jobs SET status = $2, stop_reason = $3, message = $4, finished_at = $5, lease_expires = NULL, \
+             results = COALESCE($6, results) WHERE id = $1",
         )
         .bind(id)
         .bind(status.as_str())
         .bind(stop_reason)
         .bind(message)
         .bind(now())
+        .bind(results)
         .execute(&mut *tx)
         .await?;
         sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind(id).execute(&mut *tx).await?;

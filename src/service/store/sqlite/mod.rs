@@ -299,20 +299,22 @@ impl JobStore for SqliteStore {
         status: JobStatus,
         stop_reason: Option<&str>,
         message: Option<&str>,
+        results: Option<&str>,
     ) -> StoreResult<()> {
         let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
         if let Some(lease) = lease {
             fence(&mut tx, id, lease).await?;
         }
         sqlx::query(
-            "UPDATE jobs SET status = ?2, stop_reason = ?3, message = ?4, finished_at = ?5, lease_expires = NULL \
-             WHERE id = ?1",
+            "UPDATE jobs SET status = ?2, stop_reason = ?3, message = ?4, finished_at = ?5, lease_expires = NULL, \
+             results = COALESCE(?6, results) WHERE id = ?1",
         )
         .bind(id)
         .bind(status.as_str())
         .bind(stop_reason)
         .bind(message)
         .bind(now())
+        .bind(results)
         .execute(&mut *tx)
         .await?;
         Ok(tx.commit().await?)
@@ -329,7 +331,8 @@ impl JobStore for SqliteStore {
     async fn request_cancel(&self, id: &str) -> StoreResult<Option<JobStatus>> {
         let Some(job) = self.job(id).await? else { return Ok(None) };
         if job.status == JobStatus::Accepted {
-            self.finish(id, None, JobStatus::Dismissed, Some("cancelled"), Some("cancelled before it started")).await?;
+            self.finish(id, None, JobStatus::Dismissed, Some("cancelled"), Some("cancelled before it started"), None)
+                .await?;
         }
         sqlx::query("UPDATE jobs SET cancel_requested = 1 WHERE id = ?1").bind(id).execute(&self.pool).await?;
         Ok(Some(job.status))
