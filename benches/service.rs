@@ -269,7 +269,8 @@ async fn claims(database: &str, dir: &std::path::Path) {
     let st = store::open(database, blobs).await.unwrap();
     let bulk = if st.backend() == "postgres" {
         "INSERT INTO jobs (id, status, spec, created_at) \
-         SELECT 'done-' || x, 'successful', '{}', '2026-01-01T00:00:00Z' FROM generate_series(1, 100000) x"
+         SELECT 'done-' || x, 'successful', '{}', '2026-01-01T00:00:00Z' FROM generate_series(1, 100000) x \
+         ON CONFLICT DO NOTHING"
     } else {
         "INSERT INTO jobs (id, seq, status, spec, created_at) \
          WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c WHERE x < 100000) \
@@ -284,7 +285,7 @@ async fn claims(database: &str, dir: &std::path::Path) {
     }
     let mut ids = Vec::new();
     for k in 0..50 {
-        let id = format!("claim-{k}");
+        let id = format!("claim-{}-{k}", std::process::id());
         st.insert_job(&id, SHORT, &Default::default()).await.unwrap();
         ids.push(id);
     }
