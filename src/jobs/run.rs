@@ -59,10 +59,13 @@ pub fn run_prepared(
     }
 }
 
+/// A run of a stage's problem in dimension `D`.
+type MakeProblem<const D: usize> = dyn Fn(&ProblemKind) -> Result<Box<dyn Problem<D>>, FlowError>;
+
 /// What a run needs in its dimension: the run of a stage's problem and a fresh
 /// mesh manager.
 struct Dimension<'a, const D: usize> {
-    problem: &'a dyn Fn(&ProblemKind) -> Result<Box<dyn Problem<D>>, FlowError>,
+    problem: &'a MakeProblem<D>,
     manager: &'a dyn Fn() -> Option<Box<dyn MeshManager<D>>>,
 }
 

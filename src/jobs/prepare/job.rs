@@ -35,8 +35,8 @@ impl ProblemKind {
     /// The problem as a flow on curves runs it: a run with its own state.
     pub fn curve_problem(&self) -> Box<dyn Problem<2>> {
         match self {
-            ProblemKind::CurvatureFlow(p) => Box::new(p.clone()),
-            ProblemKind::SurfaceDiffusion(p) => Box::new(p.clone()),
+            ProblemKind::CurvatureFlow(p) => Box::new(*p),
+            ProblemKind::SurfaceDiffusion(p) => Box::new(*p),
             ProblemKind::Segmentation(p) => Box::new(p.clone()),
             ProblemKind::ChanVese(p) => Box::new(p.clone()),
             ProblemKind::ShapeDesign(p) => Box::new(p.start()),
@@ -49,8 +49,8 @@ impl ProblemKind {
     /// surface).
     pub fn surface_problem(&self) -> Result<Box<dyn Problem<3>>, FlowError> {
         match self {
-            ProblemKind::CurvatureFlow(p) => Ok(Box::new(p.clone())),
-            ProblemKind::SurfaceDiffusion(p) => Ok(Box::new(p.clone())),
+            ProblemKind::CurvatureFlow(p) => Ok(Box::new(*p)),
+            ProblemKind::SurfaceDiffusion(p) => Ok(Box::new(*p)),
             ProblemKind::Segmentation(p) => Ok(Box::new(p.clone())),
             ProblemKind::ChanVese(p) => Ok(Box::new(p.clone())),
             ProblemKind::ShapeDesign(_) => Err(FlowError::Problem("shape design needs a curve (2D)".into())),
