@@ -88,3 +88,50 @@ impl DirichletLaplace {
         u.iter().zip(&ku).map(|(a, b)| a * b).sum()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Point;
+
+    /// The unit square on an `n × n` grid of squares, each cut into two
+    /// counter-clockwise triangles; the boundary vertices are the Dirichlet ones.
+    fn square(n: usize) -> DomainMesh {
+        let id = |i: usize, j: usize| i + (n + 1) * j;
+        let points = (0..=n)
+            .flat_map(|j| (0..=n).map(move |i| Point::<2>::new(i as f64 / n as f64, j as f64 / n as f64)))
+            .collect();
+        let triangles = (0..n)
+            .flat_map(|j| {
+                (0..n).flat_map(move |i| {
+                    [[id(i, j), id(i + 1, j), id(i + 1, j + 1)], [id(i, j), id(i + 1, j + 1), id(i, j + 1)]]
+                })
+            })
+            .collect();
+        let dirichlet = (0..=n).flat_map(|j| (0..=n).map(move |i| i == 0 || j == 0 || i == n || j == n)).collect();
+        DomainMesh { points, triangles, dirichlet, curve_vertices: 0 }
+    }
+
+    /// P1 elements reproduce a linear harmonic function from its boundary values,
+    /// and `uᵀ K u` is its Dirichlet energy `(b² + c²)·|Ω|`.
+    #[test]
+    fn linear_data_are_reproduced_with_their_energy() {
+        let mesh = square(6);
+        let laplace = DirichletLaplace::new(&mesh, "test").unwrap();
+        let (a, b, c) = (0.3, -1.2, 0.7);
+        let g: Vec<f64> = mesh.points.iter().map(|p| a + b * p.x + c * p.y).collect();
+        let u = laplace.solve(vec![0.0; g.len()], Some(&g));
+        let err = u.iter().zip(&g).map(|(u, g)| (u - g).abs()).fold(0.0, f64::max);
+        assert!(err < 1e-12, "{err:e}");
+        assert!((laplace.energy(&u) - (b * b + c * c)).abs() < 1e-12);
+    }
+
+    /// A degenerate triangle is an error naming the mesh and the triangle.
+    #[test]
+    fn a_degenerate_triangle_is_named() {
+        let mut mesh = square(2);
+        mesh.triangles[3] = [mesh.triangles[3][0], mesh.triangles[3][0], mesh.triangles[3][2]];
+        let e = DirichletLaplace::new(&mesh, "film").err().unwrap();
+        assert!(e.to_string().contains("film triangle 3 is degenerate"), "{e}");
+    }
+}
