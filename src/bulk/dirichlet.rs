@@ -34,12 +34,7 @@ impl DirichletLaplace {
                 return Err(BulkError::Meshing(format!("{what} triangle {e} is degenerate (area {area:e})")));
             }
             let local = cotangent_stiffness(&t.map(|i| points[i]), area);
-            let slots = &pattern.slots()[e];
-            for a in 0..3 {
-                for b in 0..3 {
-                    k[slots[a][b]] += local[(a, b)];
-                }
-            }
+            pattern.add_local(&mut k, e, |a, b| local[(a, b)]);
         }
         let stiffness = k.clone();
         let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());

@@ -146,12 +146,7 @@ impl<const D: usize> Matrices<D> {
         let mut v = vec![0.0; pattern.nnz()];
         for (e, el) in mesh.elements().iter().enumerate() {
             let w = alpha.on_element(e, el);
-            let slots = &pattern.slots()[e];
-            for a in 0..D {
-                for b in 0..D {
-                    v[slots[a][b]] += w * self.local_stiffness[e][(a, b)];
-                }
-            }
+            pattern.add_local(&mut v, e, |a, b| w * self.local_stiffness[e][(a, b)]);
         }
         v
     }
@@ -161,12 +156,7 @@ impl<const D: usize> Matrices<D> {
         let mut v = vec![0.0; pattern.nnz()];
         for (e, el) in mesh.elements().iter().enumerate() {
             let we = w.on_element(e, el) * self.measure[e];
-            let slots = &pattern.slots()[e];
-            for a in 0..D {
-                for b in 0..D {
-                    v[slots[a][b]] += mass_entry::<D>(we, a, b);
-                }
-            }
+            pattern.add_local(&mut v, e, |a, b| mass_entry::<D>(we, a, b));
         }
         v
     }

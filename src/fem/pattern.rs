@@ -98,6 +98,19 @@ impl<const D: usize> Pattern<D> {
         &self.symbolic
     }
 
+    /// Adds element `e`'s local matrix, `local(a, b)` for its vertices `a, b`, to the
+    /// values `a` of the global matrix on this pattern (the scatter of every global
+    /// assembly).
+    #[inline]
+    pub fn add_local(&self, a: &mut [f64], e: usize, local: impl Fn(usize, usize) -> f64) {
+        let slots = &self.slots[e];
+        for (i, row) in slots.iter().enumerate() {
+            for (j, &s) in row.iter().enumerate() {
+                a[s] += local(i, j);
+            }
+        }
+    }
+
     /// `y = A x` for values `a` on this pattern.
     pub fn mul(&self, a: &[f64], x: &[f64], y: &mut [f64]) {
         csc_mul(&self.col_ptr, &self.row_idx, a, x, y);
