@@ -34,8 +34,8 @@ pub use nrrd::{encode_nrrd_labels, encode_nrrd_mask, parse_nrrd};
 pub use raster::{draw_overlay, rasterize_curve, rasterize_curve_window, rasterize_surface, rasterize_surface_window};
 pub use smooth::gaussian_smooth;
 pub use threshold::{
-    histogram_mode, noise_level, otsu, percentile, percentiles, smoothed_noise, smoothing_for_noise, Normalization,
-    PERCENTILES,
+    background_spread, histogram_mode, noise_level, otsu, percentile, percentiles, smoothed_noise, smoothing_for_noise,
+    Normalization, PERCENTILES,
 };
 pub use volumes::{decode_nifti, decode_tiff_stack, is_nifti, is_tiff, isotropic, tiff_pages};
 

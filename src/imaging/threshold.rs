@@ -116,6 +116,22 @@ pub fn histogram_mode(values: &[f64]) -> f64 {
     (best as f64 + 0.5) / BINS as f64
 }
 
+/// The spread of the background around its level `mode`, measured on the side
+/// away from the objects (`sign` +1 for bright objects: the samples at or below
+/// `mode`; −1: at or above): `1.4826 · median |v − mode|` over those samples, the
+/// standard deviation for Gaussian fluctuations. On a smoothed image it is the
+/// background's variation at the smoothing scale, texture and uneven background
+/// included, which a white-noise estimate ([`noise_level`]) does not see; the
+/// objects do not enter it. 0 with no such sample.
+pub fn background_spread(values: &[f64], mode: f64, sign: f64) -> f64 {
+    let mut far: Vec<f64> = values.iter().map(|v| sign * (mode - v)).filter(|d| *d >= 0.0).collect();
+    if far.is_empty() {
+        return 0.0;
+    }
+    let mid = far.len() / 2;
+    1.4826 * *far.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
 /// Otsu's threshold of values in `[0, 1]` (256 bins): the level that maximizes the
 /// between-class variance. `None` if all values fall in one bin.
 pub fn otsu(values: &[f64]) -> Option<f64> {
@@ -193,6 +209,20 @@ mod tests {
         let s = smoothed_noise(0.1, 2.0, 2);
         assert!((s - 0.1 / (4.0 * std::f64::consts::PI.sqrt())).abs() < 1e-15);
         assert_eq!(smoothed_noise(0.1, 0.0, 3), 0.1);
+    }
+
+    #[test]
+    fn background_spread_of_gaussian_noise_ignores_the_objects() {
+        // background 0.3 with noise 0.05, and a quarter of the samples bright objects
+        let z = noise(40_000, 3);
+        let values: Vec<f64> =
+            z.iter().enumerate().map(|(i, n)| if i % 4 == 0 { 0.8 + 0.05 * n } else { 0.3 + 0.05 * n }).collect();
+        let s = background_spread(&values, 0.3, 1.0);
+        assert!((s - 0.05).abs() < 0.003, "{s}");
+        // dark objects: the side above the background
+        let flipped: Vec<f64> = values.iter().map(|v| 1.0 - v).collect();
+        assert!((background_spread(&flipped, 0.7, -1.0) - s).abs() < 1e-12);
+        assert_eq!(background_spread(&[0.5, 0.6], 0.4, 1.0), 0.0);
     }
 
     #[test]

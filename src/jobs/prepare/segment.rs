@@ -11,8 +11,8 @@ use super::inputs::load_image;
 use super::ProblemKind;
 use crate::geometry::AnyMesh;
 use crate::imaging::{
-    gaussian_smooth, histogram_mode, noise_level, otsu, smoothed_noise, smoothing_for_noise, EdgeField, Grid,
-    Normalization, PERCENTILES,
+    background_spread, gaussian_smooth, histogram_mode, noise_level, otsu, smoothed_noise, smoothing_for_noise,
+    EdgeField, Grid, Normalization, PERCENTILES,
 };
 use crate::jobs::spec::bounds::{LEVEL, MIN_SIZE, PERCENTILE, SIGMA, WEIGHT};
 use crate::jobs::spec::{
@@ -31,9 +31,10 @@ use std::sync::Arc;
 pub fn default_mu(noise: f64) -> f64 {
     (0.5 * noise).max(0.05)
 }
-/// Dim objects are detected this many standard deviations of the smoothed noise
-/// away from the background level.
-const DIM_OBJECT_SNR: f64 = 8.0;
+/// Dim objects are detected this many times the background's fluctuation at the
+/// smoothing scale away from the background level (for Gaussian fluctuations a
+/// false detection per independent sample has a probability of about 1e-9).
+const DIM_OBJECT_SNR: f64 = 6.0;
 
 /// The settings a segmentation ran with, automatic or given (shape.json and the
 /// job's results report them).
@@ -218,14 +219,17 @@ fn preprocess(spec: &SegmentationSpec, grid: &Grid, model: SegmentationModel) ->
         Some(t) => LEVEL.check("problem.threshold", t)?,
         None => otsu(&smoothed.values).ok_or_else(constant)?,
     };
-    // dim objects: above the background level by DIM_OBJECT_SNR times the smoothed
-    // noise (a threshold only where it is more permissive than the main one)
+    // dim objects: above the background level by DIM_OBJECT_SNR times the
+    // background's fluctuation at the smoothing scale, the larger of the smoothed
+    // white noise and the spread measured on the background (its texture) (a
+    // threshold only where it is more permissive than the main one)
     let sign = if polarity == Polarity::Bright { 1.0 } else { -1.0 };
     let dim = match spec.dim_threshold {
         Some(t) => LEVEL.check("problem.dim_threshold", t)?,
         None => {
             let level = histogram_mode(&smoothed.values);
-            (level + sign * DIM_OBJECT_SNR * smoothed_noise(noise, sigma, d)).clamp(0.0, 1.0)
+            let spread = background_spread(&smoothed.values, level, sign).max(smoothed_noise(noise, sigma, d));
+            (level + sign * DIM_OBJECT_SNR * spread).clamp(0.0, 1.0)
         }
     };
     let dim = (sign * (threshold - dim) > 0.0).then_some(dim);

@@ -102,7 +102,9 @@ pub struct SegmentationSpec {
     pub threshold: Option<f64>,
     /// (Addition) the threshold (normalized scale) at which dim objects that the
     /// main threshold misses entirely are found; default: the background level
-    /// (the histogram's mode) plus 8 standard deviations of the smoothed noise.
+    /// (the histogram's mode) plus 6 times its fluctuation at the smoothing scale
+    /// (the larger of the smoothed noise and the spread of the background's samples
+    /// on the side away from the objects, which includes its texture).
     #[serde(default)]
     #[schemars(range(min = LEVEL.min, max = LEVEL.max))]
     pub dim_threshold: Option<f64>,
