@@ -9,9 +9,16 @@ build (`cargo build --release`). Usage:
     python3 scripts/compare_segmentation.py [--quick]
 
 Images: tests/data/nuclei.png with its manual annotation (Dice and object count),
-tests/data/coins.png (count only: 24 coins, no annotation), and two synthetic
-pictures with known masks generated here (the twelve discs of different contrast
-on an illumination gradient, and the five-armed star at SNR 2).
+tests/data/coins.png (count only: 24 coins, no annotation), tests/data/cell.png (a
+quantitative phase image; its truth is the disc through the cell's half-maximum
+edge, as in tests/real_images.rs), two synthetic pictures with known masks
+generated here (the twelve discs of different contrast on an illumination
+gradient, and the five-armed star at SNR 2), and a 3D brain MR: the ICBM152 2009a
+T1 template (skull-stripped) that ships in the nilearn wheel, averaged over 4×4×4
+voxels (47×58×49 at 4 mm), against its grey plus white matter (probability sum
+> 0.5, from the same wheel). The wheel is downloaded with pip into
+target/compare-data (its data's licence is not stated there, so it is not kept in
+tests/data); without network the volume is left out.
 
 Peers, each tuned over a small grid on each image (the best Dice is reported, with
 the time of that run; the count of 4-connected components of its mask):
@@ -28,6 +35,9 @@ import subprocess
 import sys
 import tempfile
 import time
+
+import gzip
+import zipfile
 
 import numpy as np
 import SimpleITK as sitk
@@ -84,6 +94,40 @@ def star_snr2():
     return img, truth
 
 
+def cell():
+    img = np.array(Image.open(ROOT / "tests/data/cell.png"))
+    yy, xx = np.mgrid[0:img.shape[0], 0:img.shape[1]] + 0.5
+    return img, np.hypot(xx - 427.5, yy - 373.75) < 63.0
+
+
+def brain():
+    """The ICBM152 2009a T1 template at 4 mm and its grey + white matter, or None."""
+    data = ROOT / "target" / "compare-data"
+    data.mkdir(parents=True, exist_ok=True)
+    wheels = sorted(data.glob("nilearn-*.whl"))
+    if not wheels:
+        r = subprocess.run([sys.executable, "-m", "pip", "download", "--no-deps", "nilearn==0.14.1", "-d", str(data)],
+                           capture_output=True)
+        wheels = sorted(data.glob("nilearn-*.whl"))
+        if r.returncode != 0 or not wheels:
+            print("(the brain MR is left out: the nilearn wheel could not be downloaded)", file=sys.stderr)
+            return None
+    arrays = {}
+    with zipfile.ZipFile(wheels[-1]) as z:
+        for kind in ["t1", "gm", "wm"]:
+            raw = z.read(f"nilearn/datasets/data/mni_icbm152_{kind}_tal_nlin_sym_09a_converted.nii.gz")
+            path = data / f"{kind}.nii.gz"
+            path.write_bytes(raw)
+            arrays[kind] = sitk.GetArrayFromImage(sitk.ReadImage(str(path))).astype(float)
+
+    def block(a, f=4):
+        z, y, x = (n // f * f for n in a.shape)
+        return a[:z, :y, :x].reshape(z // f, f, y // f, f, x // f, f).mean((1, 3, 5))
+
+    t1 = np.round(block(arrays["t1"])).astype(np.uint8)
+    return t1, block((arrays["gm"] + arrays["wm"]) / 255.0) > 0.5
+
+
 def images():
     nuclei = np.array(Image.open(ROOT / "tests/data/nuclei.png"))
     labels = np.array(Image.open(ROOT / "tests/data/nuclei_labels.png"))
@@ -94,18 +138,34 @@ def images():
     yield "12 discs, contrast 40–140, gradient", img, truth, 12
     img, truth = star_snr2()
     yield "star at SNR 2 (128²)", img, truth, 1
+    img, truth = cell()
+    yield "cell, phase image (550×660)", img, truth, 1
+    b = brain()
+    if b is not None:
+        yield "brain MR, T1 (47×58×49, 4 mm)", b[0], b[1], 1
 
 
 def shapeflow(img):
     with tempfile.TemporaryDirectory() as d:
         d = pathlib.Path(d)
-        Image.fromarray(img).save(d / "image.png")
+        if img.ndim == 2:
+            path = d / "image.png"
+            Image.fromarray(img).save(path)
+        else:
+            # NIfTI keeps the array's axis order (x fastest); the mask comes back
+            # as NRRD in the same order
+            path = d / "image.nii.gz"
+            sitk.WriteImage(sitk.GetImageFromArray(img), str(path))
         (d / "spec.json").write_text('{"problem": {"type": "segmentation", "image": "input:image"}}')
         t = time.perf_counter()
-        subprocess.run([str(BIN), "run", str(d / "spec.json"), "--input", f"image={d / 'image.png'}", "--out", str(d / "out")],
+        subprocess.run([str(BIN), "run", str(d / "spec.json"), "--input", f"image={path}", "--out", str(d / "out")],
                        check=True, capture_output=True)
         elapsed = time.perf_counter() - t
-        mask = np.array(Image.open(d / "out/mask.png")) > 0
+        if img.ndim == 2:
+            mask = np.array(Image.open(d / "out/mask.png")) > 0
+        else:
+            raw = (d / "out/mask.nrrd").read_bytes().partition(b"\n\n")[2]
+            mask = np.frombuffer(gzip.decompress(raw), np.uint8).reshape(img.shape) > 0
         objects = len(json.loads((d / "out/shape.json").read_text())["objects"])
     return mask, elapsed, objects
 
@@ -118,7 +178,7 @@ def normalized(img):
 def polarity_fix(mask):
     """Level-set peers do not know which phase is the object: take the phase that
     covers less of the border."""
-    border = np.concatenate([mask[0], mask[-1], mask[:, 0], mask[:, -1]])
+    border = np.concatenate([np.moveaxis(mask, a, 0)[i].ravel() for a in range(mask.ndim) for i in (0, -1)])
     return ~mask if border.mean() > 0.5 else mask
 
 
@@ -129,7 +189,7 @@ def peers(img):
         gimage = segmentation.inverse_gaussian_gradient(u, alpha=alpha, sigma=sigma)
         init = np.zeros(u.shape, np.int8)
         if balloon < 0:
-            init[2:-2, 2:-2] = 1
+            init[(slice(2, -2),) * u.ndim] = 1
         else:
             init = segmentation.checkerboard_level_set(u.shape, 6).astype(np.int8)
         t = time.perf_counter()
@@ -139,7 +199,7 @@ def peers(img):
         t = time.perf_counter()
         m = segmentation.morphological_chan_vese(u, it, init_level_set="checkerboard", smoothing=smoothing, lambda1=1, lambda2=lam) > 0
         yield "skimage MCV", dict(smoothing=smoothing, lambda2=lam, iterations=it), polarity_fix(m), time.perf_counter() - t
-    for mu in ([0.1] if QUICK else [0.05, 0.1, 0.25]):
+    for mu in ([] if u.ndim == 3 else [0.1] if QUICK else [0.05, 0.1, 0.25]):
         t = time.perf_counter()
         m = segmentation.chan_vese(u, mu=mu, max_num_iter=200, tol=1e-3)
         yield "skimage Chan-Vese", dict(mu=mu), polarity_fix(np.asarray(m, bool)), time.perf_counter() - t
@@ -148,7 +208,7 @@ def peers(img):
                                              useImageSpacing=True)
     for sigma, k, prop, curv in itertools.product([1.0, 2.0], [0.02, 0.05, 0.1], [-1.0, 1.0], [0.5, 2.0]):
         t = time.perf_counter()
-        grad = np.hypot(*np.gradient(filters.gaussian(u, sigma)))
+        grad = np.sqrt(sum(g * g for g in np.gradient(filters.gaussian(u, sigma))))
         speed = sitk.GetImageFromArray((1.0 / (1.0 + (grad / k) ** 2)).astype(np.float32))
         gac = sitk.GeodesicActiveContourLevelSetImageFilter()
         gac.SetPropagationScaling(prop)
