@@ -192,12 +192,16 @@ fn png_gray8(pixels: &[u8], w: usize, h: usize) -> Vec<u8> {
 
 /// Two overlapping balls (examples/data/balls.nrrd: radius 8.5, centres 15 apart,
 /// 48³) at defaults: the threshold's surface is split at the neck, and the two
-/// objects keep the union's volume.
+/// objects keep the union's volume. The surface's edges are kept between a
+/// quarter of a voxel and one voxel.
 #[test]
 fn two_overlapping_balls_are_two_objects() {
     let inputs: HashMap<String, Vec<u8>> =
         [("image".to_string(), include_bytes!("../examples/data/balls.nrrd").to_vec())].into();
     let job = prepare(parse_spec(DEFAULTS).unwrap(), &inputs).unwrap();
+    let sizes = job.surface_manager.unwrap().params;
+    let voxel = 1.0 / 48.0;
+    assert!(sizes.h_max <= voxel && sizes.h_min >= 0.25 * voxel, "{sizes:?}");
     let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
     let img = job.image.as_deref().unwrap();
     let (_, rows) = objects(img, &result_state(&job, &out.last).mesh);

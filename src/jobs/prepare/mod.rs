@@ -101,7 +101,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             ));
         }
     }
-    let (mut curve_manager, surface_manager) = match &mesh {
+    let (mut curve_manager, mut surface_manager) = match &mesh {
         AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
         AnyMesh::Surface(m) => {
             let pinch_off = spec.mesh.pinch_off.unwrap_or(!matches!(spec.problem, ProblemSpec::Segmentation(_)));
@@ -115,6 +115,20 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         // start is gone
         let l = grid.scale();
         m.params.min_area = m.params.min_area.max(0.25 * setup.min_size / (l * l));
+    }
+    if let (Some(m), Some(grid)) = (surface_manager.as_mut(), &image) {
+        // a segmented surface keeps its edges between a quarter of a voxel and one
+        // voxel unless the spec sets them: coarser triangles no longer follow the
+        // image, and the marching-tetrahedra slivers below a quarter voxel stall
+        // the steps (on a brain MR, either made the energy rise at every
+        // management pass until τ collapsed)
+        let voxel = 1.0 / grid.scale();
+        if spec.mesh.h_max.is_none() {
+            m.params.h_max = m.params.h_max.min(voxel);
+        }
+        if spec.mesh.h_min.is_none() {
+            m.params.h_min = m.params.h_min.max(0.25 * voxel).min(0.5 * m.params.h_max);
+        }
     }
     let problem = match (&spec.problem, &mesh) {
         (ProblemSpec::ShapeDesign(sd), AnyMesh::Curve(c)) => {
