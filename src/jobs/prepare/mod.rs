@@ -116,12 +116,14 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         let l = grid.scale();
         m.params.min_area = m.params.min_area.max(0.25 * setup.min_size / (l * l));
     }
-    if let (Some(m), Some(grid)) = (surface_manager.as_mut(), &image) {
-        // a segmented surface keeps its edges between a quarter of a voxel and one
-        // voxel unless the spec sets them: coarser triangles no longer follow the
-        // image, and the marching-tetrahedra slivers below a quarter voxel stall
-        // the steps (on a brain MR, either made the energy rise at every
-        // management pass until τ collapsed)
+    let traced = matches!(spec.initial, None | Some(InitialSpec::Threshold(ThresholdShape {})));
+    if let (Some(m), Some(grid), true) = (surface_manager.as_mut(), &image, traced) {
+        // a surface traced from the image keeps its edges between a quarter of a
+        // voxel and one voxel unless the spec sets them: coarser triangles no
+        // longer follow the detail it was traced with, and the marching-tetrahedra
+        // slivers below a quarter voxel stall the steps (on a brain MR, either made
+        // the energy rise at every management pass until τ collapsed). A shape the
+        // spec gives (a sphere) keeps the sizes of its own mesh.
         let voxel = 1.0 / grid.scale();
         if spec.mesh.h_max.is_none() {
             m.params.h_max = m.params.h_max.min(voxel);

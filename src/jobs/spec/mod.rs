@@ -133,11 +133,11 @@ pub struct MeshSpec {
     pub sweeps: Option<usize>,
     /// Refinement threshold for `h_S β_S`; default 1.5 × the initial mesh's largest.
     pub epsilon: Option<f64>,
-    /// Smallest edge length; default ¼ of the initial mean edge (a segmented
-    /// surface: at least ¼ of a voxel).
+    /// Smallest edge length; default ¼ of the initial mean edge (a surface traced
+    /// from the image: at least ¼ of a voxel).
     pub h_min: Option<f64>,
-    /// Largest edge length; default 3 × the initial mean edge (a segmented surface:
-    /// at most one voxel).
+    /// Largest edge length; default 3 × the initial mean edge (a surface traced from
+    /// the image: at most one voxel).
     pub h_max: Option<f64>,
     /// Components with a smaller enclosed area are dropped after a topological change.
     pub min_area: Option<f64>,
