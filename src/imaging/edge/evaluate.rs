@@ -172,10 +172,20 @@ impl EdgeField {
     /// coordinates and the B-spline weights computed lane by lane (as vectors).
     #[inline(always)]
     pub(crate) fn values_and_antiderivatives_3d(&self, p: [[f64; 4]; 3]) -> ([f64; 4], [f64; 4]) {
+        let [(h, phi)] = Self::lanes_3d([self], p);
+        (h, phi)
+    }
+
+    /// [`Self::values_and_antiderivatives_3d`] of several fields on one grid, as
+    /// [`Self::lanes_2d`].
+    #[inline(always)]
+    pub(crate) fn lanes_3d<const K: usize>(fields: [&EdgeField; K], p: [[f64; 4]; 3]) -> [([f64; 4], [f64; 4]); K] {
+        let grid = fields[0];
+        debug_assert!(fields.iter().all(|f| f.dims == grid.dims && f.scale == grid.scale));
         let mut axes: [[(f64, f64, f64); 4]; 3] = [[(0.0, 0.0, 0.0); 4]; 3];
         for a in 0..3 {
             for j in 0..4 {
-                axes[a][j] = self.grid_coordinate(p[a][j], a);
+                axes[a][j] = grid.grid_coordinate(p[a][j], a);
             }
         }
         let mut w = [[[0.0; 4]; 4]; 3];
@@ -186,12 +196,14 @@ impl EdgeField {
             }
             iwx[j] = bspline::iw(axes[0][j].1);
         }
-        let (mut h, mut phi) = ([0.0; 4], [0.0; 4]);
-        for j in 0..4 {
-            let axis = |a: usize| Axis { i0: axes[a][j].0 as isize, t: axes[a][j].1, excess: axes[a][j].2 };
-            (h[j], phi[j]) = self.sum_3d(&axis(0), &axis(1), &axis(2), &w[0][j], &iwx[j], &w[1][j], &w[2][j]);
+        let mut out = [([0.0; 4], [0.0; 4]); K];
+        for (field, (h, phi)) in fields.iter().zip(out.iter_mut()) {
+            for j in 0..4 {
+                let axis = |a: usize| Axis { i0: axes[a][j].0 as isize, t: axes[a][j].1, excess: axes[a][j].2 };
+                (h[j], phi[j]) = field.sum_3d(&axis(0), &axis(1), &axis(2), &w[0][j], &iwx[j], &w[1][j], &w[2][j]);
+            }
         }
-        (h, phi)
+        out
     }
 
     /// Sums over the x taps of one row (from `base`) of `v w`, `v w'`, `v w''`.
@@ -291,10 +303,25 @@ impl EdgeField {
     /// coordinates and the B-spline weights computed lane by lane (as vectors).
     #[inline(always)]
     pub(crate) fn values_and_antiderivatives_2d(&self, xs: [f64; 4], ys: [f64; 4]) -> ([f64; 4], [f64; 4]) {
+        let [(h, phi)] = Self::lanes_2d([self], xs, ys);
+        (h, phi)
+    }
+
+    /// [`Self::values_and_antiderivatives_2d`] of several fields on one grid (the
+    /// same dimensions and scale): the coordinates and weights are computed once
+    /// and serve every field, with the same sums for each as alone.
+    #[inline(always)]
+    pub(crate) fn lanes_2d<const K: usize>(
+        fields: [&EdgeField; K],
+        xs: [f64; 4],
+        ys: [f64; 4],
+    ) -> [([f64; 4], [f64; 4]); K] {
+        let grid = fields[0];
+        debug_assert!(fields.iter().all(|f| f.dims == grid.dims && f.scale == grid.scale));
         let lanes = |v: [f64; 4], a: usize| {
             let (mut i0, mut t, mut excess) = ([0.0; 4], [0.0; 4], [0.0; 4]);
             for j in 0..4 {
-                (i0[j], t[j], excess[j]) = self.grid_coordinate(v[j], a);
+                (i0[j], t[j], excess[j]) = grid.grid_coordinate(v[j], a);
             }
             (i0, t, excess)
         };
@@ -304,13 +331,17 @@ impl EdgeField {
         for j in 0..4 {
             (wx[j], iwx[j], wy[j]) = (bspline::w(tx[j]), bspline::iw(tx[j]), bspline::w(ty[j]));
         }
-        let (mut h, mut phi) = ([0.0; 4], [0.0; 4]);
-        for j in 0..4 {
-            let ax = Axis { i0: ix0[j] as isize, t: tx[j], excess: ex[j] };
-            let ay = Axis { i0: iy0[j] as isize, t: ty[j], excess: 0.0 };
-            (h[j], phi[j]) = self.sum_2d(&ax, &ay, &wx[j], &iwx[j], &wy[j]);
+        // a plain loop: `array::from_fn` is not inlined into the AVX2 copies of
+        // the callers
+        let mut out = [([0.0; 4], [0.0; 4]); K];
+        for (field, (h, phi)) in fields.iter().zip(out.iter_mut()) {
+            for j in 0..4 {
+                let ax = Axis { i0: ix0[j] as isize, t: tx[j], excess: ex[j] };
+                let ay = Axis { i0: iy0[j] as isize, t: ty[j], excess: 0.0 };
+                (h[j], phi[j]) = field.sum_2d(&ax, &ay, &wx[j], &iwx[j], &wy[j]);
+            }
         }
-        (h, phi)
+        out
     }
 
     /// `H(p)` only.

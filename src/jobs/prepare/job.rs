@@ -38,7 +38,7 @@ impl ProblemKind {
             ProblemKind::CurvatureFlow(p) => Box::new(*p),
             ProblemKind::SurfaceDiffusion(p) => Box::new(*p),
             ProblemKind::Segmentation(p) => Box::new(p.clone()),
-            ProblemKind::ChanVese(p) => Box::new(p.clone()),
+            ProblemKind::ChanVese(p) => Box::new(p.start()),
             ProblemKind::ShapeDesign(p) => Box::new(p.start()),
             ProblemKind::StressedFilm(p) => Box::new(p.start()),
         }
@@ -52,7 +52,7 @@ impl ProblemKind {
             ProblemKind::CurvatureFlow(p) => Ok(Box::new(*p)),
             ProblemKind::SurfaceDiffusion(p) => Ok(Box::new(*p)),
             ProblemKind::Segmentation(p) => Ok(Box::new(p.clone())),
-            ProblemKind::ChanVese(p) => Ok(Box::new(p.clone())),
+            ProblemKind::ChanVese(p) => Ok(Box::new(p.start())),
             ProblemKind::ShapeDesign(_) => Err(FlowError::Problem("shape design needs a curve (2D)".into())),
             ProblemKind::StressedFilm(_) => Err(FlowError::Problem("the stressed film needs a curve (2D)".into())),
         }

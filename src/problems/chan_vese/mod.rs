@@ -27,9 +27,12 @@ use crate::flow::{
 use crate::geometry::{Mesh, Point};
 use crate::imaging::EdgeField;
 use moments::{accumulate_moments, Moments};
+pub use run::ChanVeseRun;
+use run::Objects;
 use std::sync::Arc;
 
 mod moments;
+mod run;
 
 /// Default `flow.tau`, in pixels: the data term's speed is at most
 /// `max(λ_in, λ_out)` (normalized intensities), so a step moves the contour at most
@@ -89,8 +92,8 @@ impl ChanVese {
     /// The object of every component of `mesh` (holes and cavities belong to the
     /// component around them, [`Mesh::objects`]) and the moments of every object;
     /// `per_object = false` puts everything in object 0. Returns the component of
-    /// every vertex, the object of every component and the moments.
-    fn objects<const D: usize>(&self, mesh: &Mesh<D>) -> (Vec<usize>, Vec<usize>, Vec<Moments>) {
+    /// every vertex, the object of every component and the moments ([`Objects`]).
+    fn objects<const D: usize>(&self, mesh: &Mesh<D>) -> Objects {
         let objects = mesh.objects();
         let nc = objects.owner.len();
         let mut moments = vec![[0.0; 3]; if self.per_object { nc.max(1) } else { 1 }];
@@ -98,7 +101,7 @@ impl ChanVese {
         let element_object: Vec<usize> =
             mesh.elements().iter().map(|el| object_of[objects.vertex_component[el[0]]]).collect();
         accumulate_moments(self, mesh, &element_object, &mut moments);
-        (objects.vertex_component, object_of, moments)
+        Objects { vertex_component: objects.vertex_component, object_of, moments }
     }
 
     /// The fitted means `c_k` of the objects and `c_out`, and the region part of `J`.
@@ -130,9 +133,9 @@ impl ChanVese {
 
     /// The fitted mean of every component of `mesh` and the mean outside.
     pub fn component_means<const D: usize>(&self, mesh: &Mesh<D>) -> (Vec<f64>, f64) {
-        let (_, object_of, moments) = self.objects(mesh);
-        let (c, c_out, _) = self.means(&moments);
-        (object_of.iter().map(|&o| c[o]).collect(), c_out)
+        let objects = self.objects(mesh);
+        let (c, c_out, _) = self.means(&objects.moments);
+        (objects.object_of.iter().map(|&o| c[o]).collect(), c_out)
     }
 }
 
@@ -172,45 +175,46 @@ fn crossing_vertices<const D: usize>(mesh: &Mesh<D>) -> Vec<usize> {
     out
 }
 
-impl<const D: usize> Problem<D> for ChanVese {
+impl<const D: usize> Problem<D> for ChanVeseRun {
     fn name(&self) -> &'static str {
         "segmentation"
     }
 
     fn energy(&mut self, mesh: &Mesh<D>) -> Result<f64, ProblemError> {
-        self.check_dimension::<D>()?;
-        if self.separate && D == 2 && objects_cross(mesh) {
+        self.cv.check_dimension::<D>()?;
+        if self.cv.separate && D == 2 && objects_cross(mesh) {
             // objects that touch stay the objects they are
             return Ok(f64::INFINITY);
         }
-        let (_, _, moments) = self.objects(mesh);
-        let (_, _, region) = self.means(&moments);
-        let mut j = self.mu * mesh.boundary_measure() + region;
-        if let Some(g) = &mut self.geodesic {
+        let objects = self.objects(mesh);
+        let (_, _, region) = self.cv.means(&objects.moments);
+        let mut j = self.cv.mu * mesh.boundary_measure() + region;
+        if let Some(g) = &mut self.cv.geodesic {
             j += Problem::<D>::energy(g, mesh)?;
         }
         Ok(j)
     }
 
     fn shape_gradient(&mut self, state: &SurfaceState<'_, D>) -> Result<ShapeGradient, ProblemError> {
-        self.check_dimension::<D>()?;
+        self.cv.check_dimension::<D>()?;
         let mesh = state.mesh;
-        let (vertex_component, object_of, moments) = self.objects(mesh);
-        let (c, c_out, _) = self.means(&moments);
+        let objects = self.objects(mesh);
+        let (vertex_component, object_of) = (&objects.vertex_component, &objects.object_of);
+        let (c, c_out, _) = self.cv.means(&objects.moments);
         let n = mesh.num_vertices();
-        let (mut g, mut f, mut aux) = (vec![self.mu; n], Vec::with_capacity(n), Vec::with_capacity(n));
+        let (mut g, mut f, mut aux) = (vec![self.cv.mu; n], Vec::with_capacity(n), Vec::with_capacity(n));
         for (v, x) in mesh.positions().iter().enumerate() {
             let ck = c[object_of[vertex_component[v]]];
-            let (si, sq) = (self.intensity.sample(x), self.squares.sample(x));
+            let (si, sq) = (self.cv.intensity.sample(x), self.cv.squares.sample(x));
             let fit = |c: f64| sq.h - 2.0 * c * si.h + c * c;
-            f.push(self.lambda_in * fit(ck) - self.lambda_out * fit(c_out));
+            f.push(self.cv.lambda_in * fit(ck) - self.cv.lambda_out * fit(c_out));
             // ∂_ν f for the Newton-type weight
-            let slope = sq.grad * (self.lambda_in - self.lambda_out)
-                - si.grad * (2.0 * (self.lambda_in * ck - self.lambda_out * c_out));
+            let slope = sq.grad * (self.cv.lambda_in - self.cv.lambda_out)
+                - si.grad * (2.0 * (self.cv.lambda_in * ck - self.cv.lambda_out * c_out));
             let dn = slope.dot(&state.normals[v]);
             aux.push(dn);
         }
-        if let Some(geo) = &mut self.geodesic {
+        if let Some(geo) = &mut self.cv.geodesic {
             let extra = Problem::<D>::shape_gradient(geo, state)?;
             for v in 0..n {
                 g[v] += extra.g[v];
@@ -225,23 +229,23 @@ impl<const D: usize> Problem<D> for ChanVese {
     /// nonlocal change of the means).
     fn h1_weights(&self, state: &SurfaceState<'_, D>, grad: &ShapeGradient) -> Option<H1Weights> {
         let n = state.mesh.num_vertices();
-        if self.geodesic.is_some() || grad.aux.len() != n {
+        if self.cv.geodesic.is_some() || grad.aux.len() != n {
             return None;
         }
-        let l = self.intensity.scale();
-        let floor = 0.01 * (self.lambda_in + self.lambda_out) * l;
+        let l = self.cv.intensity.scale();
+        let floor = 0.01 * (self.cv.lambda_in + self.cv.lambda_out) * l;
         let beta = grad.aux.iter().map(|&b| b.max(floor)).collect();
-        Some(H1Weights { alpha: Weight::Constant(self.mu.max(1e-12)), beta: Weight::Vertex(beta) })
+        Some(H1Weights { alpha: Weight::Constant(self.cv.mu.max(1e-12)), beta: Weight::Vertex(beta) })
     }
 
     /// With the geodesic term (model `both`) its edge indicator `H = g − μ`; otherwise
     /// the normalized image `I` the means are taken of.
     fn own_field(&self, state: &SurfaceState<'_, D>, grad: &ShapeGradient) -> Option<OwnField> {
-        Some(match &self.geodesic {
-            Some(_) => OwnField { name: "_EDGE_INDICATOR", values: grad.g.iter().map(|g| g - self.mu).collect() },
+        Some(match &self.cv.geodesic {
+            Some(_) => OwnField { name: "_EDGE_INDICATOR", values: grad.g.iter().map(|g| g - self.cv.mu).collect() },
             None => OwnField {
                 name: "_INTENSITY",
-                values: state.mesh.positions().iter().map(|x| self.intensity.sample(x).h).collect(),
+                values: state.mesh.positions().iter().map(|x| self.cv.intensity.sample(x).h).collect(),
             },
         })
     }
@@ -252,7 +256,7 @@ impl<const D: usize> Problem<D> for ChanVese {
 
     /// `τ` of [`TAU_PIXELS`] pixels (in the unit square's length).
     fn flow_defaults(&self, _product: ScalarProduct) -> FlowDefaults {
-        FlowDefaults { tau: Some(TAU_PIXELS / self.intensity.scale()), ..FlowDefaults::default() }
+        FlowDefaults { tau: Some(TAU_PIXELS / self.cv.intensity.scale()), ..FlowDefaults::default() }
     }
 
     /// With `separate`: where two objects would cross, the vertices of the
@@ -261,7 +265,7 @@ impl<const D: usize> Problem<D> for ChanVese {
     /// new crossings appear (at most 8 rounds; what is left is inadmissible).
     fn constrain_step(&self, current: &Mesh<D>, candidate: Mesh<D>) -> Mesh<D> {
         let mut candidate = Problem::<D>::constrain(self, candidate);
-        if !(self.separate && D == 2) || current.num_vertices() != candidate.num_vertices() {
+        if !(self.cv.separate && D == 2) || current.num_vertices() != candidate.num_vertices() {
             return candidate;
         }
         for _ in 0..8 {
@@ -282,8 +286,8 @@ impl<const D: usize> Problem<D> for ChanVese {
     /// spline is continued by the border samples, and an object cut by the border
     /// would grow out of it).
     fn constrain(&self, mut candidate: Mesh<D>) -> Mesh<D> {
-        let l = self.intensity.scale();
-        let dims = self.intensity.dims();
+        let l = self.cv.intensity.scale();
+        let dims = self.cv.intensity.dims();
         let extent: [f64; 3] = std::array::from_fn(|a| dims[a] as f64 / l);
         let outside = candidate.positions().iter().any(|x| (0..D).any(|a| x[a] < 0.0 || x[a] > extent[a]));
         if outside {
@@ -319,9 +323,9 @@ mod tests {
 
     #[test]
     fn means_of_a_disc() {
-        let mut p = disc_problem();
+        let mut p = disc_problem().start();
         let m = circle([0.5, 0.5], 11.0 / 64.0, 200).unwrap();
-        let (c, c_out) = p.component_means(&m);
+        let (c, c_out) = p.problem().component_means(&m);
         assert!((c[0] - 1.0).abs() < 0.01, "{c:?}");
         assert!((c_out - 0.2).abs() < 0.02, "{c_out}");
         // the energy is least near the true radius
@@ -332,7 +336,7 @@ mod tests {
     /// The shape gradient against finite differences of `J`, with two objects.
     #[test]
     fn shape_gradient_matches_finite_differences() {
-        let mut p = disc_problem();
+        let mut p = disc_problem().start();
         let a = circle([0.45, 0.5], 9.0 / 64.0, 120).unwrap();
         let b = circle([0.8, 0.2], 5.0 / 64.0, 60).unwrap();
         let m = union(&[a, b]).unwrap();

@@ -4,6 +4,7 @@
 
 use super::ChanVese;
 use crate::geometry::{Mesh, Point};
+use crate::imaging::EdgeField;
 
 /// `(∫ I, ∫ Q, |Ω|)` of one object.
 pub(super) type Moments = [f64; 3];
@@ -82,7 +83,7 @@ pub(super) fn accumulate_moments<const D: usize>(
 }
 
 /// Quadrature points evaluated four at a time on both splines (the lanes of
-/// [`EdgeField`]'s vector evaluation), summed in order: `(Σ Φ_I, Σ Φ_Q, Σ x₁)`.
+/// [`EdgeField::lanes_2d`], one set of weights for both), summed in order: `(Σ Φ_I, Σ Φ_Q, Σ x₁)`.
 struct Lanes<'a> {
     cv: &'a ChanVese,
     lanes: [[f64; 4]; 3],
@@ -103,14 +104,12 @@ impl<'a> Lanes<'a> {
         }
         self.filled += 1;
         if self.filled == 4 {
-            let (fi, fq) = (&*self.cv.intensity, &*self.cv.squares);
-            let (pi, pq) = if fi.dimension() == 2 {
-                (
-                    fi.values_and_antiderivatives_2d(self.lanes[0], self.lanes[1]).1,
-                    fq.values_and_antiderivatives_2d(self.lanes[0], self.lanes[1]).1,
-                )
+            // both splines are on the image's grid: one set of weights serves both
+            let fields = [&*self.cv.intensity, &*self.cv.squares];
+            let [(_, pi), (_, pq)] = if fields[0].dimension() == 2 {
+                EdgeField::lanes_2d(fields, self.lanes[0], self.lanes[1])
             } else {
-                (fi.values_and_antiderivatives_3d(self.lanes).1, fq.values_and_antiderivatives_3d(self.lanes).1)
+                EdgeField::lanes_3d(fields, self.lanes)
             };
             for j in 0..4 {
                 self.sums[0] += pi[j];
