@@ -202,6 +202,10 @@ fn two_overlapping_balls_are_two_objects() {
     let sizes = job.surface_manager.unwrap().params;
     let voxel = 1.0 / 48.0;
     assert!(sizes.h_max <= voxel && sizes.h_min >= 0.25 * voxel, "{sizes:?}");
+    // an h_min the spec gives stays, and h_max keeps at least twice it
+    let given = r#"{"problem": {"type": "segmentation", "image": "input:image"}, "mesh": {"h_min": 0.012}}"#;
+    let other = prepare(parse_spec(given).unwrap(), &inputs).unwrap().surface_manager.unwrap().params;
+    assert!(other.h_min == 0.012 && other.h_max >= 0.024, "{other:?}");
     let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
     let img = job.image.as_deref().unwrap();
     let (_, rows) = objects(img, &result_state(&job, &out.last).mesh);

@@ -125,11 +125,16 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         // the energy rise at every management pass until τ collapsed). A shape the
         // spec gives (a sphere) keeps the sizes of its own mesh.
         let voxel = 1.0 / grid.scale();
-        if spec.mesh.h_max.is_none() {
-            m.params.h_max = m.params.h_max.min(voxel);
-        }
-        if spec.mesh.h_min.is_none() {
-            m.params.h_min = m.params.h_min.max(0.25 * voxel).min(0.5 * m.params.h_max);
+        let p = &mut m.params;
+        match (spec.mesh.h_min, spec.mesh.h_max) {
+            (None, None) => {
+                p.h_min = p.h_min.max(0.25 * voxel);
+                p.h_max = p.h_max.min(voxel).max(2.0 * p.h_min);
+            }
+            // the one given stays, the other keeps `h_max ≥ 2 h_min` (as the spec's check)
+            (Some(_), None) => p.h_max = p.h_max.min(voxel).max(2.0 * p.h_min),
+            (None, Some(_)) => p.h_min = p.h_min.max(0.25 * voxel).min(0.5 * p.h_max),
+            (Some(_), Some(_)) => {}
         }
     }
     let problem = match (&spec.problem, &mesh) {
