@@ -18,16 +18,40 @@ fn sizes(m: &MeshSpec, defaults: (f64, f64, f64)) -> Result<(f64, f64, f64), Spe
     Ok((epsilon, h_min, h_max))
 }
 
+/// `(h_min, h_max)` of a surface traced from an image with voxels of length
+/// `voxel`: edges kept between a quarter of a voxel and one voxel unless the spec
+/// sets them. Coarser triangles no longer follow the detail the surface was traced
+/// with, and the marching-tetrahedra slivers below a quarter voxel stall the steps
+/// (on a brain MR, either made the energy rise at every management pass until `τ`
+/// collapsed). The one the spec gives stays; the other keeps `h_max ≥ 2 h_min`.
+fn traced_sizes(m: &MeshSpec, (h_min, h_max): (f64, f64), voxel: f64) -> (f64, f64) {
+    match (m.h_min, m.h_max) {
+        (None, None) => {
+            let h_min = h_min.max(0.25 * voxel);
+            (h_min, h_max.min(voxel).max(2.0 * h_min))
+        }
+        (Some(_), None) => (h_min, h_max.min(voxel).max(2.0 * h_min)),
+        (None, Some(_)) => (h_min.max(0.25 * voxel).min(0.5 * h_max), h_max),
+        (Some(_), Some(_)) => (h_min, h_max),
+    }
+}
+
+/// The surface's management; `traced_voxel`, the voxel length of the image a
+/// surface was traced from ([`traced_sizes`]).
 pub(super) fn surface_manager(
     m: &MeshSpec,
     initial: &SurfaceMesh,
     pinch_off: bool,
+    traced_voxel: Option<f64>,
 ) -> Result<Option<SurfaceManager>, SpecError> {
     if !(m.regularize || m.adapt || pinch_off) {
         return Ok(None);
     }
     let (mut params, _) = SurfaceManager::defaults_for(initial);
     (params.epsilon, params.h_min, params.h_max) = sizes(m, (params.epsilon, params.h_min, params.h_max))?;
+    if let Some(voxel) = traced_voxel {
+        (params.h_min, params.h_max) = traced_sizes(m, (params.h_min, params.h_max), voxel);
+    }
     params.max_angle_deg = MAX_ANGLE.check("mesh.max_angle", m.max_angle)?;
     let sweeps = SWEEPS.check("mesh.sweeps", m.sweeps.unwrap_or(3))?;
     let pinch_curvature = pinch_off.then_some(2.0 / params.h_min);

@@ -101,11 +101,15 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             ));
         }
     }
-    let (mut curve_manager, mut surface_manager) = match &mesh {
+    let (mut curve_manager, surface_manager) = match &mesh {
         AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
         AnyMesh::Surface(m) => {
             let pinch_off = spec.mesh.pinch_off.unwrap_or(!matches!(spec.problem, ProblemSpec::Segmentation(_)));
-            (None, surface_manager(&spec.mesh, m, pinch_off)?)
+            // a surface traced from the image (not a shape the spec gives) keeps
+            // its edges near the voxel size
+            let traced = matches!(spec.initial, None | Some(InitialSpec::Threshold(ThresholdShape {})));
+            let voxel = image.as_ref().filter(|_| traced).map(|g| 1.0 / g.scale());
+            (None, surface_manager(&spec.mesh, m, pinch_off, voxel)?)
         }
     };
     if let (Some(m), Some(setup), Some(grid), None) =
@@ -115,27 +119,6 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         // start is gone
         let l = grid.scale();
         m.params.min_area = m.params.min_area.max(0.25 * setup.min_size / (l * l));
-    }
-    let traced = matches!(spec.initial, None | Some(InitialSpec::Threshold(ThresholdShape {})));
-    if let (Some(m), Some(grid), true) = (surface_manager.as_mut(), &image, traced) {
-        // a surface traced from the image keeps its edges between a quarter of a
-        // voxel and one voxel unless the spec sets them: coarser triangles no
-        // longer follow the detail it was traced with, and the marching-tetrahedra
-        // slivers below a quarter voxel stall the steps (on a brain MR, either made
-        // the energy rise at every management pass until τ collapsed). A shape the
-        // spec gives (a sphere) keeps the sizes of its own mesh.
-        let voxel = 1.0 / grid.scale();
-        let p = &mut m.params;
-        match (spec.mesh.h_min, spec.mesh.h_max) {
-            (None, None) => {
-                p.h_min = p.h_min.max(0.25 * voxel);
-                p.h_max = p.h_max.min(voxel).max(2.0 * p.h_min);
-            }
-            // the one given stays, the other keeps `h_max ≥ 2 h_min` (as the spec's check)
-            (Some(_), None) => p.h_max = p.h_max.min(voxel).max(2.0 * p.h_min),
-            (None, Some(_)) => p.h_min = p.h_min.max(0.25 * voxel).min(0.5 * p.h_max),
-            (Some(_), Some(_)) => {}
-        }
     }
     let problem = match (&spec.problem, &mesh) {
         (ProblemSpec::ShapeDesign(sd), AnyMesh::Curve(c)) => {
