@@ -12,7 +12,8 @@ pub(super) const RIBBON_WIDTH: f64 = 0.004;
 
 /// What shows a 2D state in renderers that draw no lines: the region its curves
 /// enclose, triangulated, and a ribbon along each curve.
-pub(super) struct Filled {
+#[derive(Debug, Clone, PartialEq)]
+pub struct Filled {
     /// The region's points and triangles (none if the curves enclose nothing).
     pub points: Vec<[f64; 2]>,
     pub region: Vec<[usize; 3]>,
@@ -30,7 +31,7 @@ impl Filled {
     /// state, or curves that cross (no region to fill). Periodic curves (the
     /// stressed film) are drawn over one period, lifted: the region is the film
     /// between its surface and the substrate `y = 0`, voids left open.
-    pub(super) fn of(m: &MeshData) -> Option<Filled> {
+    pub fn of(m: &MeshData) -> Option<Filled> {
         if m.dimension != 2 || m.elements.is_empty() {
             return None;
         }

@@ -7,10 +7,11 @@ use super::run::vertex_fields;
 use super::spec::ColorBy;
 use super::{PreparedJob, ProblemKind};
 use crate::bulk::Polygon;
-use crate::export::{evolution_glb, shape_glb, ColorField, DomainOutline, GltfFrame};
+use crate::export::{evolution_glb, shape_glb, ColorField, DomainOutline, Filled, GltfFrame};
 use crate::flow::{Checkpoint, VertexFields};
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
+use std::sync::Arc;
 
 pub use crate::limits::MAX_FRAMES;
 
@@ -43,6 +44,10 @@ pub struct Frame {
     pub state: Checkpoint,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fields: Option<FrameFields>,
+    /// What draws the state's curves in renderers that draw no lines, if it was
+    /// computed ahead ([`Frame::with_fill`]); not stored.
+    #[serde(skip)]
+    pub fill: Option<Arc<Option<Filled>>>,
 }
 
 impl Frame {
@@ -55,7 +60,16 @@ impl Frame {
             Ok(f) if f.curvature.len() == n && f.normal_velocity.len() == n => f,
             _ => VertexFields { curvature: vec![0.0; n], normal_velocity: vec![0.0; n], own: None },
         };
-        Frame { state: state.clone(), fields: Some(fields.into()) }
+        Frame { state: state.clone(), fields: Some(fields.into()), fill: None }
+    }
+
+    /// The frame with its drawing computed now (a constrained Delaunay
+    /// triangulation of a 2D state's region), so that the glb files made of it
+    /// later need not: a worker computes it for each checkpoint while the run
+    /// goes on, and not all of them at the end.
+    pub fn with_fill(mut self) -> Frame {
+        self.fill = Some(Arc::new(Filled::of(&self.state.mesh)));
+        self
     }
 
     /// What the glTF encoder draws: the state with its fields (zeros if unknown).
@@ -79,6 +93,7 @@ impl Frame {
                 ColorBy::NormalVelocity => ColorField::NormalVelocity,
                 ColorBy::ProblemField => ColorField::ProblemField,
             },
+            fill: self.fill.as_deref(),
         }
     }
 }
@@ -152,4 +167,35 @@ pub fn state_glb(job: &PreparedJob, state: &Checkpoint) -> Vec<u8> {
 pub fn states_glb(job: &PreparedJob, states: &[Checkpoint]) -> Option<Vec<u8>> {
     let frames: Vec<Frame> = states.iter().map(|s| Frame::of(job, s)).collect();
     GlbContext::of(job).evolution_glb(&frames)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::jobs::{parse_spec, prepare, run_prepared, RunEvents};
+    use std::sync::atomic::AtomicBool;
+
+    struct Kept(Vec<Checkpoint>);
+    impl RunEvents for Kept {
+        fn checkpoint(&mut self, c: &Checkpoint) {
+            self.0.push(c.clone());
+        }
+    }
+
+    /// The glb files of frames whose drawing was computed ahead (as a worker does)
+    /// are those computed from the frames alone, byte for byte.
+    #[test]
+    fn a_fill_computed_ahead_draws_the_same() {
+        let spec = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 48},
+          "flow": {"tau": 1e-3, "end_time": 0.02, "tolerance": 0}, "output": {"checkpoint_every": 5}}"#;
+        let job = prepare(parse_spec(spec).unwrap(), &Default::default()).unwrap();
+        let mut kept = Kept(Vec::new());
+        run_prepared(&job, None, &AtomicBool::new(false), &mut kept).unwrap();
+        let now: Vec<Frame> = kept.0.iter().map(|c| Frame::of(&job, c)).collect();
+        let ahead: Vec<Frame> = now.iter().cloned().map(Frame::with_fill).collect();
+        assert!(now.len() > 2 && ahead.iter().all(|f| matches!(f.fill.as_deref(), Some(Some(_)))));
+        let context = GlbContext::of(&job);
+        assert_eq!(context.evolution_glb(&ahead), context.evolution_glb(&now));
+        assert_eq!(context.frame_glb(&ahead[1]), context.frame_glb(&now[1]));
+    }
 }

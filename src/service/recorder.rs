@@ -4,7 +4,9 @@
 //! database commits (at most [`QUEUE`] batches wait; beyond that the engine waits).
 //! The batches that wait are written together, in one transaction.
 //! A checkpoint is stored as a [`Frame`]: its per-vertex fields are computed once,
-//! by the writer, on the blocking pool.
+//! by the writer, on the blocking pool, with its drawing for the glb files
+//! ([`Frame::with_fill`]), so that the result files need little work when the
+//! run ends.
 //! A lost lease or a storage error stops the run (through its cancel flag) and is
 //! reported when the recorder is closed.
 
@@ -98,7 +100,8 @@ impl Recorder {
                     Vec::new()
                 } else {
                     let job = job.clone();
-                    let fields = move || checkpoints.iter().map(|cp| Frame::of(&job, cp)).collect::<Vec<_>>();
+                    let fields =
+                        move || checkpoints.iter().map(|cp| Frame::of(&job, cp).with_fill()).collect::<Vec<_>>();
                     match tokio::task::spawn_blocking(fields).await {
                         Ok(frames) => frames,
                         Err(e) => {

@@ -28,6 +28,7 @@ use super::fill::Filled;
 use crate::flow::MeshData;
 use builder::Builder;
 use serde_json::{json, Value};
+use std::borrow::Cow;
 
 /// The per-vertex field that `COLOR_0` shows.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -57,9 +58,20 @@ pub struct GltfFrame<'a> {
     pub own: Option<(&'a str, &'a [f64])>,
     /// The field `COLOR_0` shows.
     pub color_by: ColorField,
+    /// [`Filled::of`] `mesh`, if it was computed ahead (a service's writer does it
+    /// for each checkpoint while the run goes on); computed here otherwise.
+    pub fill: Option<&'a Option<Filled>>,
 }
 
 impl<'a> GltfFrame<'a> {
+    /// The region and ribbons of the frame's curves, as computed ahead or now.
+    fn filled(&self) -> Cow<'a, Option<Filled>> {
+        match self.fill {
+            Some(f) => Cow::Borrowed(f),
+            None => Cow::Owned(Filled::of(self.mesh)),
+        }
+    }
+
     /// The values of the coloured field and its attribute's name.
     fn colored(&self) -> (&'a [f64], &'a str) {
         match (self.color_by, self.own) {
@@ -73,15 +85,15 @@ impl<'a> GltfFrame<'a> {
 /// Seconds per checkpoint in evolution.glb.
 pub const FRAME_SECONDS: f32 = 0.2;
 
-/// [`Filled::of`] of every frame, on as many threads as there are cores (each is a
+/// [`GltfFrame::filled`] of every frame, on as many threads as there are cores (each is a
 /// constrained Delaunay triangulation).
-fn filled_all(frames: &[GltfFrame<'_>]) -> Vec<Option<Filled>> {
+fn filled_all<'a>(frames: &[GltfFrame<'a>]) -> Vec<Cow<'a, Option<Filled>>> {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).clamp(1, frames.len().max(1));
     let chunk = frames.len().div_ceil(threads).max(1);
     std::thread::scope(|s| {
         let parts: Vec<_> = frames
             .chunks(chunk)
-            .map(|c| s.spawn(move || c.iter().map(|f| Filled::of(f.mesh)).collect::<Vec<_>>()))
+            .map(|c| s.spawn(move || c.iter().map(GltfFrame::filled).collect::<Vec<_>>()))
             .collect();
         parts.into_iter().flat_map(|p| p.join().expect("a triangulation thread panicked")).collect()
     })
@@ -96,7 +108,7 @@ fn frame_extras(f: &GltfFrame<'_>) -> Value {
 /// shape-design job if given.
 pub fn shape_glb(frame: &GltfFrame<'_>, domain: Option<&DomainOutline>, extras: Value) -> Vec<u8> {
     let mut b = Builder::default();
-    b.frame_node(frame, Filled::of(frame.mesh).as_ref());
+    b.frame_node(frame, frame.filled().as_ref().as_ref());
     if let Some(d) = domain {
         b.domain_node(d);
     }
@@ -108,7 +120,7 @@ pub fn shape_glb(frame: &GltfFrame<'_>, domain: Option<&DomainOutline>, extras: 
 pub fn evolution_glb(frames: &[GltfFrame<'_>], domain: Option<&DomainOutline>, extras: Value) -> Vec<u8> {
     let mut b = Builder::default();
     for (k, (f, filled)) in frames.iter().zip(filled_all(frames)).enumerate() {
-        let node = b.frame_node(f, filled.as_ref());
+        let node = b.frame_node(f, filled.as_ref().as_ref());
         if k > 0 {
             b.nodes[node]["scale"] = json!([0.0, 0.0, 0.0]);
         }
@@ -159,6 +171,7 @@ mod tests {
                 energy: 2.0,
                 own: None,
                 color_by: ColorField::Curvature,
+                fill: None,
             },
             None,
             json!({}),
@@ -180,6 +193,7 @@ mod tests {
             energy: 1.0,
             own: None,
             color_by: ColorField::Curvature,
+            fill: None,
         };
         let g = evolution_glb(&[f, f, f], None, json!({"problem": "x"}));
         let jl = u32::from_le_bytes(g[12..16].try_into().unwrap()) as usize;
