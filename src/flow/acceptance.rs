@@ -86,6 +86,24 @@ pub(super) fn stop_below_tau_min(
     }
 }
 
+/// Whether an accepted step of length `tau` is judged for convergence (the
+/// relative-change test of non-physical flows), and the settled `τ` after it.
+/// A step is *natural* when the flow's own limits set its `τ`: it was not cut
+/// short by a tangled trial, and it was either not `growing` (doubling back
+/// towards `τ_spec` after a short step) or `limited` by the step control or
+/// backtracking. A natural step is judged and its `τ` becomes the settled one; a
+/// growing step is judged once it is at least half the settled `τ`; a tangled
+/// one never: it changes `J` little because it is short.
+pub(super) fn judged_step(tau: f64, settled: f64, tangled: bool, growing: bool, limited: bool) -> (bool, f64) {
+    if tangled {
+        return (false, settled);
+    }
+    if !growing || limited {
+        return (true, tau);
+    }
+    (tau >= 0.5 * settled, settled)
+}
+
 /// `max_T max_{a,b ∈ T} |V⃗(z_a) − V⃗(z_b)| / h_T`: relative motion per unit time.
 fn relative_motion<const D: usize>(mesh: &Mesh<D>, v: &[Point<D>]) -> f64 {
     let mut worst: f64 = 0.0;
@@ -170,6 +188,20 @@ mod tests {
         assert_eq!(energy(1.0, 1.1, false, 1.0), Verdict::Accept);
         assert_eq!(retried(energy(1.0, f64::INFINITY, false, 1.0)), Some((0.5, Rejection::Inadmissible)));
         assert!(Rejection::Inadmissible.is_backtrack() && !Rejection::Tangled.is_backtrack());
+    }
+
+    /// The 3D nuclei volume's run: a step cut short by tangling (τ 1e-6 → 2e-9) and
+    /// the steps doubling back from it are not taken for convergence until τ is
+    /// back to half the settled one; a step that step control or backtracking
+    /// limited, or a full one, is judged and settles τ.
+    #[test]
+    fn short_steps_after_tangling_are_not_judged() {
+        assert_eq!(judged_step(1e-3, 0.0, false, false, false), (true, 1e-3));
+        assert_eq!(judged_step(2e-9, 1e-3, true, true, true), (false, 1e-3));
+        assert_eq!(judged_step(4e-9, 1e-3, false, true, false), (false, 1e-3));
+        assert_eq!(judged_step(6e-4, 1e-3, false, true, false), (true, 1e-3));
+        assert_eq!(judged_step(1e-5, 1e-3, false, true, true), (true, 1e-5));
+        assert_eq!(judged_step(0.1, 1e-3, true, false, true), (false, 1e-3));
     }
 
     /// Below τ_min: stationary to the tolerance only after energy rises no larger

@@ -87,8 +87,17 @@ pub struct Checkpoint {
     /// `lambda_final`); 0 for the first, and left out of the JSON then.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub stage: usize,
+    /// The `τ` of the last step that the flow's own limits set, which decides
+    /// whether a step doubling back after a short one is judged for convergence
+    /// ([`Flow`](super::Flow)); 0 (none yet) is left out of the JSON.
+    #[serde(default, skip_serializing_if = "is_zero_f64")]
+    pub settled_tau: f64,
 }
 
 fn is_zero(s: &usize) -> bool {
     *s == 0
+}
+
+fn is_zero_f64(x: &f64) -> bool {
+    *x == 0.0
 }

@@ -32,6 +32,14 @@
 //! Below `τ_min` the run stops with [`StopReason::TauMin`] on the last good state,
 //! or with [`StopReason::Converged`] when the trials were rejected for raising `J`
 //! by no more than `tolerance·|J|` (the state is stationary to the tolerance).
+//! After an accepted step it stops with [`StopReason::Converged`] when
+//! `|J_{n+1} − J_n| ≤ tolerance·|J_n|·s`, with `s = τ/τ_spec` for physical
+//! evolutions (a rate). For the others `s = 1`, and only steps whose `τ` the flow's
+//! own limits set are judged: `τ_spec`, the end time, step control or
+//! backtracking; not a step that tangling cut short (a sliver flipping however
+//! short the step), nor one whose `τ` is still doubling back after a short step
+//! and below half the last such `τ`. Those change `J` little because they are
+//! short, not because the state is stationary.
 
 use super::acceptance::{self as rules, Verdict};
 use super::contact::{advanced, first_contact};
@@ -82,6 +90,10 @@ pub struct Flow<'p, const D: usize> {
     /// The iteration at which [`Problem::rediscretize`] was last called (once per
     /// iteration).
     pub(super) rediscretized_at: Option<usize>,
+    /// The `τ` of the last step that the flow's own limits set (`τ_spec`, the end
+    /// time, step control, backtracking): a step growing back to it after a short
+    /// one is judged for convergence once it is at least half as long.
+    pub(super) settled_tau: f64,
 }
 
 impl<'p, const D: usize> Flow<'p, D> {
@@ -138,7 +150,7 @@ impl<'p, const D: usize> Flow<'p, D> {
     ) -> Result<Self, FlowError> {
         check_settings(&settings)?;
         check_bending(&*problem, &settings)?;
-        Ok(Self::assemble_state(
+        let mut flow = Self::assemble_state(
             problem,
             mesh?,
             settings,
@@ -146,7 +158,9 @@ impl<'p, const D: usize> Flow<'p, D> {
             checkpoint.time,
             checkpoint.tau,
             checkpoint.energy,
-        ))
+        );
+        flow.settled_tau = checkpoint.settled_tau;
+        Ok(flow)
     }
 
     fn assemble_state(
@@ -175,6 +189,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             manager: None,
             stop_cause: None,
             rediscretized_at: None,
+            settled_tau: 0.0,
         }
     }
 
@@ -213,6 +228,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             energy: self.energy,
             mesh: MeshData::from(&self.mesh),
             stage: 0,
+            settled_tau: self.settled_tau,
         }
     }
 
@@ -250,6 +266,8 @@ impl<'p, const D: usize> Flow<'p, D> {
             return Ok(report);
         }
         let mut tau = s.tau.min(2.0 * self.tau);
+        // still growing back after a step that was cut short
+        let growing = 2.0 * self.tau < s.tau;
         if let Some(end) = s.end_time {
             let left = end - self.time;
             if left <= 1e-12 * end.abs().max(1.0) {
@@ -267,6 +285,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             None => (0.0, Vec::new()),
         };
         let mut smallest_rise = f64::INFINITY;
+        let mut tangled = false;
         loop {
             if tau < s.tau_min {
                 if report.rejected == Some(Rejection::EnergyIncrease) && self.rediscretized_at != Some(self.iteration) {
@@ -280,6 +299,7 @@ impl<'p, const D: usize> Flow<'p, D> {
                     }
                 }
                 report.stop = Some(rules::stop_below_tau_min(report.rejected, smallest_rise, s.tolerance, self.energy));
+                tracing::debug!(iteration = self.iteration, smallest_rise, last = ?report.rejected, "no step above tau_min");
                 return Ok(report);
             }
             let sys = LinearSystem {
@@ -302,6 +322,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             // a tangled step is retried with half the step; below tau_min the run
             // stops with `tau_min` on the last good state
             if let Some(shorter) = report.retry(rules::tangling(&self.mesh, &candidate, tau)) {
+                tangled = true;
                 tau = shorter;
                 continue;
             }
@@ -353,8 +374,15 @@ impl<'p, const D: usize> Flow<'p, D> {
             self.energy = energy;
             self.iteration += 1;
             report.accepted = true;
+            // a step whose τ the flow's own limits did not set (tangling cut it
+            // short, or τ is still growing back after such a step) changes `J` little
+            // because it is short, not because the state is stationary
+            let limited = report.backtracks > 0 || report.reductions > 0;
+            let (judged, settled) = rules::judged_step(tau, self.settled_tau, tangled, growing, limited);
+            self.settled_tau = settled;
+            let judged = judged || s.tolerance_per_time;
             let scale = if s.tolerance_per_time { tau / s.tau } else { 1.0 };
-            if s.tolerance > 0.0 && (previous - energy).abs() <= s.tolerance * previous.abs() * scale {
+            if judged && s.tolerance > 0.0 && (previous - energy).abs() <= s.tolerance * previous.abs() * scale {
                 report.stop = Some(StopReason::Converged);
             }
             match self.manage_mesh()? {

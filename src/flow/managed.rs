@@ -1,5 +1,7 @@
 //! Mesh management after an accepted step (paper §4.1), as the driver applies it:
-//! the manager's pass, the energy re-evaluated on its result, the pattern and the
+//! the manager's pass, the problem's constraints enforced on its result
+//! ([`Problem::constrain`](super::problem::Problem::constrain)), the energy
+//! re-evaluated on it, the pattern and the
 //! symbolic factorizations rebuilt on a new connectivity.
 
 use super::driver::Flow;
@@ -21,6 +23,20 @@ impl<const D: usize> Flow<'_, D> {
             Managed::Moved(m) => (m, false),
             Managed::Remeshed(m) => (m, true),
         };
+        // the problem's constraints hold for every state the flow holds, as for
+        // every step's: a management pass may move or insert vertices past them (a
+        // regularized surface bulging out of a segmentation's image box), and a
+        // state that broke them would make every trial step from it differ by the
+        // constraint's change of energy, however short the step. As after a step,
+        // a conserving flow then gets back each component's measure (enforcing a
+        // constraint moves vertices, never connects them)
+        let mesh = match self.settings.conservation {
+            Some(_) => {
+                let measures = mesh.component_measures();
+                self.problem.constrain(mesh).with_component_measures(&measures)
+            }
+            None => self.problem.constrain(mesh),
+        };
         let energy = self.problem.energy(&mesh).map_err(|e| FlowError::Problem(e.0))?;
         if energy == f64::INFINITY {
             // management made the shape inadmissible (shape design: a regularized
@@ -37,5 +53,62 @@ impl<const D: usize> Flow<'_, D> {
         }
         self.energy = energy;
         Ok(None)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::flow::{Flow, FlowSettings, Managed, MeshManager, Problem, ProblemError, ShapeGradient, SurfaceState};
+    use crate::geometry::{circle, Mesh, Point};
+
+    /// Curve shortening above the line `y = 0`, an obstacle (as the film's wetting
+    /// layer, or a segmentation's image box).
+    struct AboveTheLine;
+
+    impl Problem<2> for AboveTheLine {
+        fn name(&self) -> &'static str {
+            "above the line"
+        }
+        fn energy(&mut self, mesh: &Mesh<2>) -> Result<f64, ProblemError> {
+            Ok(mesh.boundary_measure())
+        }
+        fn shape_gradient(&mut self, state: &SurfaceState<'_, 2>) -> Result<ShapeGradient, ProblemError> {
+            let n = state.mesh.num_vertices();
+            Ok(ShapeGradient { g: vec![1.0; n], f: vec![0.0; n], aux: Vec::new() })
+        }
+        fn constrain(&self, mut candidate: Mesh<2>) -> Mesh<2> {
+            let x = candidate.positions().iter().map(|p| Point::<2>::new(p[0], p[1].max(0.0))).collect();
+            candidate.set_positions(x);
+            candidate
+        }
+    }
+
+    /// A management pass that moves every vertex down by 0.1, past the obstacle
+    /// near the curve's bottom.
+    struct Sinking;
+
+    impl MeshManager<2> for Sinking {
+        fn manage(&mut self, mesh: &Mesh<2>) -> Result<Managed<2>, crate::flow::FlowError> {
+            let x = mesh.positions().iter().map(|p| Point::<2>::new(p[0], p[1] - 0.1)).collect();
+            Ok(Managed::Moved(mesh.with_positions(x)))
+        }
+    }
+
+    /// The state after a management pass keeps the problem's constraints, and its
+    /// recorded energy is the energy of that state: otherwise every trial step
+    /// from it would differ from it by the constraint's change of energy, however
+    /// short the step.
+    #[test]
+    fn a_managed_state_keeps_the_constraints() {
+        let mut problem = AboveTheLine;
+        let mesh = circle([0.0, 0.3], 0.25, 64).unwrap();
+        let settings = FlowSettings { tau: 1e-4, ..FlowSettings::default() };
+        let mut flow = Flow::new(&mut problem, mesh, settings).unwrap().with_mesh_manager(Box::new(Sinking));
+        for _ in 0..3 {
+            assert!(flow.step().unwrap().accepted);
+            assert!(flow.mesh().positions().iter().all(|p| p[1] >= 0.0));
+            assert_eq!(flow.energy(), flow.mesh().boundary_measure());
+        }
+        assert!(flow.mesh().positions().iter().filter(|p| p[1] == 0.0).count() > 4);
     }
 }

@@ -113,6 +113,7 @@ fn run_stage<const D: usize>(
             energy: f64::NAN,
             mesh: mesh.into(),
             stage,
+            settled_tau: 0.0,
         })
     };
     let mut problem = (dim.problem)(job.stage_problem(stage)).map_err(|e| fail(e, start_of(start)))?;

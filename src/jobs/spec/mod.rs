@@ -94,8 +94,10 @@ pub struct FlowSpec {
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub end_time: Option<f64>,
     /// Stop with `converged` when `|J_{n+1} − J_n| ≤ tolerance·|J_n|` (a rate for
-    /// physical evolutions); 0 disables; default 1e-6, but 0 when `end_time` is given
-    /// (the run then goes to its end time).
+    /// physical evolutions; for the others judged on steps of the flow's own
+    /// length, not on one cut short by a tangled trial or still growing back after
+    /// one); 0 disables; default 1e-6, but 0 when `end_time` is given (the run then
+    /// goes to its end time).
     #[schemars(range(min = 0))]
     pub tolerance: Option<f64>,
     /// Halve τ until J decreases; default on, off for physical flows.
