@@ -46,7 +46,7 @@ use super::contact::{advanced, first_contact};
 use super::mesh_management::MeshManager;
 use super::problem::Problem;
 use super::report::{Progress, Rejection, StepReport, StopReason};
-use super::settings::{check_bending, check_settings, FlowSettings};
+use super::settings::FlowSettings;
 use super::step::SemiImplicitStep;
 use super::system::LinearSystem;
 use super::FlowError;
@@ -97,102 +97,6 @@ pub struct Flow<'p, const D: usize> {
 }
 
 impl<'p, const D: usize> Flow<'p, D> {
-    /// Run mesh management (regularization, adaptivity, topology) after every step.
-    pub fn with_mesh_manager(mut self, manager: Box<dyn MeshManager<D> + 'p>) -> Self {
-        self.manager = Some(manager);
-        self
-    }
-
-    /// Start a flow at iteration 0, time 0.
-    pub fn new(problem: &'p mut dyn Problem<D>, mesh: Mesh<D>, settings: FlowSettings) -> Result<Self, FlowError> {
-        check_settings(&settings)?;
-        check_bending(&*problem, &settings)?;
-        let energy = problem.energy(&mesh).map_err(|e| FlowError::Problem(e.0))?;
-        if !energy.is_finite() {
-            return Err(FlowError::NonFiniteEnergy { value: energy, iteration: 0 });
-        }
-        let tau = settings.tau;
-        Ok(Self::assemble_state(problem, mesh, settings, 0, 0.0, tau, energy))
-    }
-
-    /// Continue from a checkpoint (its mesh validated: it may come from a file).
-    pub fn resume(
-        problem: &'p mut dyn Problem<D>,
-        checkpoint: &Checkpoint,
-        settings: FlowSettings,
-    ) -> Result<Self, FlowError> {
-        let mesh = checkpoint.mesh.to_mesh::<D>().map_err(|e| FlowError::Checkpoint(e.to_string()));
-        Self::from_checkpoint(problem, checkpoint, mesh, settings)
-    }
-
-    /// Continue a state this process's own flow produced (the next stage of a job)
-    /// with another problem: like [`Flow::resume`], without validating the mesh
-    /// again (the flow keeps its meshes valid up to the tolerances of its own
-    /// checks, which are not those of a file read from outside).
-    pub fn continue_from(
-        problem: &'p mut dyn Problem<D>,
-        checkpoint: &Checkpoint,
-        settings: FlowSettings,
-    ) -> Result<Self, FlowError> {
-        let mesh = checkpoint
-            .mesh
-            .to_mesh_unvalidated::<D>()
-            .ok_or_else(|| FlowError::Checkpoint(format!("not a mesh of dimension {D}")));
-        Self::from_checkpoint(problem, checkpoint, mesh, settings)
-    }
-
-    /// The flow at `checkpoint`'s iteration, time, τ and energy on `mesh`.
-    fn from_checkpoint(
-        problem: &'p mut dyn Problem<D>,
-        checkpoint: &Checkpoint,
-        mesh: Result<Mesh<D>, FlowError>,
-        settings: FlowSettings,
-    ) -> Result<Self, FlowError> {
-        check_settings(&settings)?;
-        check_bending(&*problem, &settings)?;
-        let mut flow = Self::assemble_state(
-            problem,
-            mesh?,
-            settings,
-            checkpoint.iteration,
-            checkpoint.time,
-            checkpoint.tau,
-            checkpoint.energy,
-        );
-        flow.settled_tau = checkpoint.settled_tau;
-        Ok(flow)
-    }
-
-    fn assemble_state(
-        problem: &'p mut dyn Problem<D>,
-        mesh: Mesh<D>,
-        settings: FlowSettings,
-        iteration: usize,
-        time: f64,
-        tau: f64,
-        energy: f64,
-    ) -> Self {
-        let pattern = Pattern::new(mesh.num_vertices(), mesh.elements());
-        let solver = SemiImplicitStep::new(settings.solver);
-        let matrices = Matrices::assemble(&mesh, &pattern);
-        Flow {
-            problem,
-            settings,
-            mesh,
-            pattern,
-            solver,
-            matrices,
-            iteration,
-            time,
-            tau,
-            energy,
-            manager: None,
-            stop_cause: None,
-            rediscretized_at: None,
-            settled_tau: 0.0,
-        }
-    }
-
     pub fn mesh(&self) -> &Mesh<D> {
         &self.mesh
     }

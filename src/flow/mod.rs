@@ -14,6 +14,7 @@ mod problem;
 mod report;
 mod schur;
 mod settings;
+mod start;
 mod step;
 mod system;
 
