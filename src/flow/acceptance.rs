@@ -38,7 +38,10 @@ pub(super) fn step_control<const D: usize>(
 /// Tangling: an element of `new` that degenerated or flipped against `old` halves `τ`.
 pub(super) fn tangling<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, tau: f64) -> Verdict {
     match tangled(old, new) {
-        Some(_) => Verdict::Retry { tau: 0.5 * tau, rejection: Rejection::Tangled },
+        Some(e) => {
+            trace_tangle(old, new, e, tau);
+            Verdict::Retry { tau: 0.5 * tau, rejection: Rejection::Tangled }
+        }
         None => Verdict::Accept,
     }
 }
@@ -129,19 +132,17 @@ pub(super) fn tangled<const D: usize>(old: &Mesh<D>, new: &Mesh<D>) -> Option<us
     })
 }
 
-/// At debug level, the first tangled element of a trial step: its measure before
+/// At debug level, the tangled element `e` of a trial step: its measure before
 /// and after, the cosine of its turn and its edge lengths (the diagnosis of a
 /// run that ends at `tau_min` on tangling).
-pub(super) fn trace_tangle<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, tau: f64) {
+fn trace_tangle<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, e: usize, tau: f64) {
     if !tracing::enabled!(tracing::Level::DEBUG) {
         return;
     }
-    if let Some(e) = tangled(old, new) {
-        let ((before, n0), (after, n1)) = (old.element_geometry(e), new.element_geometry(e));
-        let x = old.element_points(e);
-        let edges: Vec<f64> = (0..D).map(|k| (x[(k + 1) % D] - x[k]).norm()).collect();
-        tracing::debug!(element = e, tau, before, after, turn = n0.dot(&n1), ?edges, "tangled");
-    }
+    let ((before, n0), (after, n1)) = (old.element_geometry(e), new.element_geometry(e));
+    let x = old.element_points(e);
+    let edges: Vec<f64> = (0..D).map(|k| (x[(k + 1) % D] - x[k]).norm()).collect();
+    tracing::debug!(element = e, tau, before, after, turn = n0.dot(&n1), ?edges, "tangled");
 }
 
 #[cfg(test)]

@@ -226,7 +226,6 @@ impl<'p, const D: usize> Flow<'p, D> {
             // a tangled step is retried with half the step; below tau_min the run
             // stops with `tau_min` on the last good state
             if let Some(shorter) = report.retry(rules::tangling(&self.mesh, &candidate, tau)) {
-                rules::trace_tangle(&self.mesh, &candidate, tau);
                 tangled = true;
                 tau = shorter;
                 continue;

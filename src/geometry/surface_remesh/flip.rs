@@ -64,8 +64,8 @@ pub(super) fn flip_edges(
         // the normal of a sliver beside a proper triangle says nothing of the
         // surface (a cap, one angle near 180°, has a normal of rounding noise):
         // the proper one's normal stands for both
-        let (thin0, thin1) = if tris[ts[0]] == t0 { (thin[ts[0]], thin[ts[1]]) } else { (thin[ts[1]], thin[ts[0]]) };
-        let up = match (thin0, thin1) {
+        let (i0, i1) = if tris[ts[0]] == t0 { (ts[0], ts[1]) } else { (ts[1], ts[0]) };
+        let up = match (thin[i0], thin[i1]) {
             (true, false) => n1 / n1.norm(),
             (false, true) => n0 / n0.norm(),
             _ => {
@@ -96,7 +96,6 @@ pub(super) fn flip_edges(
                 continue;
             }
         }
-        let (i0, i1) = if tris[ts[0]] == t0 { (ts[0], ts[1]) } else { (ts[1], ts[0]) };
         tris[i0] = new0;
         tris[i1] = new1;
         touched[i0] = true;
