@@ -177,6 +177,32 @@ fn a_cell_in_a_phase_image() {
     assert!(d >= 0.96, "dice {d}");
 }
 
+/// scikit-image's checkerboard (tests/data, 200², 8×8 squares of 25 px, light
+/// squares 205–255): its 32 light squares touch at their corners, where the
+/// contact rule holds them apart. Each step and the mesh management after it then
+/// alternated between two energies, for 1,000 iterations before the convergence
+/// test over a window of steps. The run ends `converged` within 300 iterations,
+/// each light square one object.
+#[test]
+fn a_checkerboard_converges_with_its_32_squares() {
+    let board = image::load_from_memory(include_bytes!("data/checkerboard.png")).unwrap().to_luma8();
+    let (w, h) = (board.width() as usize, board.height() as usize);
+    let truth: Vec<bool> = board.pixels().map(|p| p.0[0] > 127).collect();
+    let inputs: HashMap<String, Vec<u8>> =
+        [("image".to_string(), include_bytes!("data/checkerboard.png").to_vec())].into();
+    let job = prepare(parse_spec(DEFAULTS).unwrap(), &inputs).unwrap();
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
+    let shown = result_state(&job, &out.last);
+    let img = job.image.as_deref().unwrap();
+    let d = dice(&mask(img, &shown.mesh), &truth, w, h);
+    let n = objects(img, &shown.mesh).1.len();
+    eprintln!("checkerboard: {:?} after {} iterations, dice {d:.4}, {n} objects", out.stop, out.last.iteration);
+    assert_eq!(out.stop, shapeflow::flow::StopReason::Converged);
+    assert!(out.last.iteration <= 300, "{} iterations", out.last.iteration);
+    assert_eq!(n, 32);
+    assert!(d >= 0.99, "dice {d}");
+}
+
 fn png_gray8(pixels: &[u8], w: usize, h: usize) -> Vec<u8> {
     let mut png = Vec::new();
     image::ImageEncoder::write_image(

@@ -107,6 +107,26 @@ pub(super) fn judged_step(tau: f64, settled: f64, tangled: bool, growing: bool, 
     (tau >= 0.5 * settled, settled)
 }
 
+/// The judged steps over which the recorded energy is compared
+/// ([`stationary_over_window`]): a multiple of 2 and 3, so that a state that
+/// alternates between two or three energies is compared with itself.
+pub(super) const WINDOW: usize = 6;
+
+/// Whether the recorded energies (after mesh management) at the ends of the last
+/// [`WINDOW`] + 1 judged steps (`recent`, oldest first) end within
+/// `tolerance·|J|` of where they began: each step may lower `J` by more than the
+/// tolerance while the mesh management after it (tangential regularization,
+/// splits and collapses, a contact's held vertices) raises it back by as much,
+/// the state staying where it is or cycling through a few.
+pub(super) fn stationary_over_window(recent: &[f64], tolerance: f64) -> bool {
+    match (recent.first(), recent.last()) {
+        (Some(first), Some(last)) if recent.len() == WINDOW + 1 && tolerance > 0.0 => {
+            (first - last).abs() <= tolerance * first.abs()
+        }
+        _ => false,
+    }
+}
+
 /// `max_T max_{a,b ∈ T} |V⃗(z_a) − V⃗(z_b)| / h_T`: relative motion per unit time.
 fn relative_motion<const D: usize>(mesh: &Mesh<D>, v: &[Point<D>]) -> f64 {
     let mut worst: f64 = 0.0;
@@ -155,6 +175,30 @@ mod tests {
             Verdict::Accept => None,
             Verdict::Retry { tau, rejection } => Some((tau, rejection)),
         }
+    }
+
+    /// Over a window: steady descent goes on, and so does a slow creep above the
+    /// tolerance; a state that stays put, alternates between two or three energies
+    /// or comes back to where it was is stationary.
+    #[test]
+    fn stationary_over_a_window_of_judged_steps() {
+        let tol = 1e-6;
+        let descent: Vec<f64> = (0..=WINDOW).map(|k| 1.0 - 1e-5 * k as f64).collect();
+        assert!(!stationary_over_window(&descent, tol));
+        assert!(!stationary_over_window(&descent[..WINDOW], tol), "a window not yet full");
+        let creeping: Vec<f64> = (0..=WINDOW).map(|k| 1.0 + 1e-5 * k as f64).collect();
+        assert!(!stationary_over_window(&creeping, tol));
+        let still: Vec<f64> = (0..=WINDOW).map(|k| 1.0 + 1e-8 * k as f64).collect();
+        assert!(stationary_over_window(&still, tol));
+        assert!(!stationary_over_window(&still, 0.0), "tolerance 0 disables");
+        for period in [2, 3] {
+            for phase in 0..period {
+                let cycle: Vec<f64> = (0..=WINDOW).map(|k| 1.0 + 1e-4 * ((k + phase) % period) as f64).collect();
+                assert!(stationary_over_window(&cycle, tol), "period {period}, phase {phase}");
+            }
+        }
+        let back = [1.0, 0.99, 0.98, 0.99, 0.995, 0.999, 1.0];
+        assert!(stationary_over_window(&back, tol));
     }
 
     /// The control compares `τ` times the largest relative motion with `ε`: a

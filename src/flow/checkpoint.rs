@@ -92,6 +92,11 @@ pub struct Checkpoint {
     /// ([`Flow`](super::Flow)); 0 (none yet) is left out of the JSON.
     #[serde(default, skip_serializing_if = "is_zero_f64")]
     pub settled_tau: f64,
+    /// The recorded energies at the ends of the last judged steps, oldest first
+    /// (the convergence test over several steps, [`Flow`](super::Flow)); left out
+    /// of the JSON when empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub recent_energies: Vec<f64>,
 }
 
 fn is_zero(s: &usize) -> bool {

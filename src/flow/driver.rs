@@ -94,6 +94,10 @@ pub struct Flow<'p, const D: usize> {
     /// time, step control, backtracking): a step growing back to it after a short
     /// one is judged for convergence once it is at least half as long.
     pub(super) settled_tau: f64,
+    /// The recorded energies (after mesh management) at the ends of the last judged
+    /// steps, oldest first, at most [`rules::WINDOW`] + 1 of them: the test over
+    /// several steps.
+    pub(super) recent: Vec<f64>,
 }
 
 impl<'p, const D: usize> Flow<'p, D> {
@@ -133,6 +137,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             mesh: MeshData::from(&self.mesh),
             stage: 0,
             settled_tau: self.settled_tau,
+            recent_energies: self.recent.clone(),
         }
     }
 
@@ -284,7 +289,8 @@ impl<'p, const D: usize> Flow<'p, D> {
             let limited = report.backtracks > 0 || report.reductions > 0;
             let (judged, settled) = rules::judged_step(tau, self.settled_tau, tangled, growing, limited);
             self.settled_tau = settled;
-            let judged = judged || s.tolerance_per_time;
+            let (per_time, tolerance) = (s.tolerance_per_time, s.tolerance);
+            let judged = judged || per_time;
             let scale = if s.tolerance_per_time { tau / s.tau } else { 1.0 };
             if judged && s.tolerance > 0.0 && (previous - energy).abs() <= s.tolerance * previous.abs() * scale {
                 report.stop = Some(StopReason::Converged);
@@ -300,6 +306,19 @@ impl<'p, const D: usize> Flow<'p, D> {
                 }
                 Some(stop) => report.stop = Some(stop),
                 None => {}
+            }
+            // the recorded energies of the judged steps of a non-physical flow; a
+            // step that is not judged starts the window again
+            if judged && !per_time && report.accepted {
+                self.recent.push(self.energy);
+                if self.recent.len() > rules::WINDOW + 1 {
+                    self.recent.remove(0);
+                }
+                if report.stop.is_none() && rules::stationary_over_window(&self.recent, tolerance) {
+                    report.stop = Some(StopReason::Converged);
+                }
+            } else {
+                self.recent.clear();
             }
             return Ok(report);
         }

@@ -74,6 +74,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             checkpoint.energy,
         );
         flow.settled_tau = checkpoint.settled_tau;
+        flow.recent = checkpoint.recent_energies.clone();
         Ok(flow)
     }
 
@@ -104,6 +105,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             stop_cause: None,
             rediscretized_at: None,
             settled_tau: 0.0,
+            recent: Vec::new(),
         }
     }
 }

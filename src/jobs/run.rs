@@ -84,7 +84,9 @@ fn run_stages<const D: usize>(
     loop {
         let out = run_stage::<D>(job, stage, mesh, dim, start.as_ref(), reported, cancel, events)?;
         if stage == 0 && job.second_stage.is_some() && out.stop == StopReason::Converged {
-            (start, stage, reported) = (Some(Checkpoint { stage: 1, ..out.last }), 1, true);
+            // the second stage is another problem: its convergence is judged afresh
+            let first = Checkpoint { stage: 1, recent_energies: Vec::new(), ..out.last };
+            (start, stage, reported) = (Some(first), 1, true);
             continue;
         }
         return Ok(out);
@@ -114,6 +116,7 @@ fn run_stage<const D: usize>(
             mesh: mesh.into(),
             stage,
             settled_tau: 0.0,
+            recent_energies: Vec::new(),
         })
     };
     let mut problem = (dim.problem)(job.stage_problem(stage)).map_err(|e| fail(e, start_of(start)))?;
