@@ -156,6 +156,11 @@ mod tests {
         assert!(e.to_string().contains("`stack`"), "{e}");
         let small = ImageLimits { max_voxels: 100, ..limits };
         assert!(decode_tiff_stack("stack", &b, &small).unwrap_err().to_string().contains("limit"));
+        // colour stored plane by plane (tests/data/planar_rgb_stack.tif: 2 pages of
+        // 5×6 RGB, written by tifffile with `planarconfig="separate"`): a clear error
+        let planar = include_bytes!("../../../tests/data/planar_rgb_stack.tif");
+        let e = decode_tiff_stack("stack", planar, &limits).unwrap_err().to_string();
+        assert!(e.contains("`stack`") && e.contains("plane by plane"), "{e}");
     }
 
     /// Slices 2 apart with pixels 1 apart: resampled to twice the slices, a linear

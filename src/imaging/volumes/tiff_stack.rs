@@ -64,6 +64,14 @@ pub fn decode_tiff_stack(input: &str, bytes: &[u8], limits: &ImageLimits) -> Res
             tiff::ColorType::RGBA(_) => 4,
             other => return Err(fail(format!("page {page}: unsupported colour type {other:?}"))),
         };
+        // the tiff crate reads the first plane only of colour stored plane by plane
+        let planar = matches!(d.get_tag_u32(tiff::tags::Tag::PlanarConfiguration), Ok(2));
+        if planar && channels > 1 {
+            return Err(fail(format!(
+                "page {page}: colour stored plane by plane (TIFF PlanarConfiguration 2) is not \
+                 supported; save the stack as grey or as interleaved (chunky) colour"
+            )));
+        }
         let (samples, k) = samples(d.read_image().map_err(|e| fail(format!("page {page}: {e}")))?)
             .ok_or_else(|| fail(format!("page {page}: unsupported sample type")))?;
         kind = k;
