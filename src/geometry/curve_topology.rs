@@ -1,101 +1,13 @@
 //! Topological changes of curves (paper §4.1): where segments cross, the curves are
 //! cut and reconnected, and the loops that bound the region of positive winding
-//! number are kept. Winding numbers of points for plain and periodic curve meshes.
+//! number are kept.
 
 use super::curve_loop::{loop_area, Loop};
 use super::curve_remesh::rebuild;
-use super::intersect::cross;
 use super::mesh::lift_near;
+use super::winding::WindingProbe;
 use super::MeshError;
 use super::{CurveMesh, Point};
-
-/// Winding number of the point `p` with respect to closed loops (each a list of
-/// vertices, the closing segment implied).
-pub fn winding_number<L: AsRef<[Point<2>]>>(loops: &[L], p: Point<2>) -> i32 {
-    let mut w = 0;
-    for l in loops {
-        let l = l.as_ref();
-        let n = l.len();
-        for k in 0..n {
-            let (a, b) = (l[k], l[(k + 1) % n]);
-            if a.y <= p.y {
-                if b.y > p.y && cross(b - a, p - a) > 0.0 {
-                    w += 1;
-                }
-            } else if b.y <= p.y && cross(b - a, p - a) < 0.0 {
-                w -= 1;
-            }
-        }
-    }
-    w
-}
-
-/// Winding numbers of many points for one curve mesh: its loops are lifted once,
-/// and a point is tested only against the loops whose bounding box holds it
-/// (a closed loop winds zero times around a point outside its box). The same
-/// numbers as [`mesh_winding_number`], without its cost per point of the whole
-/// mesh.
-struct WindingProbe<'a> {
-    mesh: &'a CurveMesh,
-    /// Each loop of a plane mesh with its bounding box (none on the cylinder).
-    loops: Vec<(Vec<Point<2>>, [Point<2>; 2])>,
-}
-
-impl<'a> WindingProbe<'a> {
-    fn of(mesh: &'a CurveMesh) -> Self {
-        let loops = match mesh.period() {
-            Some(_) => Vec::new(),
-            None => mesh
-                .lifted_cycles()
-                .into_iter()
-                .map(|(l, _)| {
-                    let bbox = l.iter().fold([l[0], l[0]], |[lo, hi], p| [lo.inf(p), hi.sup(p)]);
-                    (l, bbox)
-                })
-                .collect(),
-        };
-        WindingProbe { mesh, loops }
-    }
-
-    fn at(&self, p: Point<2>) -> i32 {
-        if self.mesh.period().is_some() {
-            return mesh_winding_number(self.mesh, p);
-        }
-        self.loops
-            .iter()
-            .filter(|(_, [lo, hi])| lo.x <= p.x && p.x <= hi.x && lo.y <= p.y && p.y <= hi.y)
-            .map(|(l, _)| winding_number(&[l], p))
-            .sum()
-    }
-}
-
-/// The winding number of `p` for a curve mesh, periodic or not. On the cylinder,
-/// where a component winding in `+x` has its interior above it, the vertical ray
-/// from `p` upwards is followed to `y = +∞` (interior of the winding components,
-/// exterior of the closed ones): the number is the count of winding components,
-/// plus one for each segment running in `−x` above `p`, minus one for each running
-/// in `+x` (half-open in `x`, every image of `p` considered).
-pub fn mesh_winding_number(mesh: &CurveMesh, p: Point<2>) -> i32 {
-    let Some(period) = mesh.period() else {
-        let loops: Vec<Vec<Point<2>>> = mesh.lifted_cycles().into_iter().map(|(l, _)| l).collect();
-        return winding_number(&loops, p);
-    };
-    let mut w: i32 = mesh.windings().iter().map(|&k| k as i32).sum();
-    for e in 0..mesh.num_elements() {
-        let [a, b] = mesh.element_points(e);
-        let (lo, hi) = (a.x.min(b.x), a.x.max(b.x));
-        // the image of p.x in [lo, lo + L)
-        let x = p.x + period * ((lo - p.x) / period).ceil();
-        if !(x >= lo && x < hi) {
-            continue;
-        }
-        let y = a.y + (b.y - a.y) * (x - a.x) / (b.x - a.x);
-        if y > p.y {
-            w += if b.x < a.x { 1 } else { -1 };
-        }
-    }
-    w
-}
 
 /// Topological changes: where segments of the same or of different components
 /// cross, the curves are cut and reconnected (each crossing swaps the successors of
@@ -242,44 +154,6 @@ mod tests {
         m.with_positions(pos)
     }
 
-    /// A ring (a circle with a reversed one inside), a disc beside it and a
-    /// figure eight: at points on a grid over all of them, inside and outside the
-    /// loops' boxes, the probe gives the mesh's winding numbers.
-    #[test]
-    fn the_probe_gives_the_winding_numbers_of_the_mesh() {
-        let ring = |c: [f64; 2], r: f64, n: usize, turn: f64| -> Vec<Point<2>> {
-            (0..n)
-                .map(|k| {
-                    let t = turn * std::f64::consts::TAU * k as f64 / n as f64;
-                    Point::<2>::new(c[0] + r * t.cos(), c[1] + r * t.sin())
-                })
-                .collect()
-        };
-        let eight = vec![
-            Point::<2>::new(4.0, 0.0),
-            Point::<2>::new(6.0, 2.0),
-            Point::<2>::new(6.0, 0.0),
-            Point::<2>::new(4.0, 2.0),
-        ];
-        let parts = vec![
-            ring([0.0, 0.0], 2.0, 64, 1.0),
-            ring([0.0, 0.0], 1.0, 32, -1.0),
-            ring([1.5, 0.0], 1.0, 40, 1.0),
-            eight,
-        ];
-        let m = crate::geometry::curves::from_polylines_trusted(parts).unwrap();
-        let probe = WindingProbe::of(&m);
-        let mut nonzero = 0;
-        for i in 0..90 {
-            for j in 0..50 {
-                let p = Point::<2>::new(-2.5 + 0.1 * i as f64 + 0.003, -2.5 + 0.1 * j as f64 + 0.007);
-                assert_eq!(probe.at(p), mesh_winding_number(&m, p), "at {p:?}");
-                nonzero += (probe.at(p) != 0) as usize;
-            }
-        }
-        assert!(nonzero > 500, "{nonzero}");
-    }
-
     #[test]
     fn overlapping_circles_merge_and_lens_is_dropped() {
         let m = overlapping(1.2);
@@ -358,7 +232,7 @@ mod tests {
 #[cfg(test)]
 mod periodic_tests {
     use super::*;
-    use crate::geometry::Mesh;
+    use crate::geometry::{mesh_winding_number, Mesh};
 
     /// A flat film (y = 0.5 on a period of 1) with a groove whose walls cross at its
     /// neck, enclosing a bulb below.

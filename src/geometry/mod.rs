@@ -19,11 +19,12 @@ mod surface_remesh;
 mod surfaces;
 mod unions;
 mod validate;
+mod winding;
 pub use validate::degenerate_measure;
 
 pub use crossing_watch::CrossingWatch;
 pub use curve_remesh::{adapt_curve, manage_curve, regularize_curve, CurveRemeshSettings};
-pub use curve_topology::{mesh_winding_number, resolve_crossings, resolve_intersections, winding_number};
+pub use curve_topology::{resolve_crossings, resolve_intersections};
 pub use curves::{all_loops_below, circle, curves_from_loops, drop_small_loops, ellipse, polygon, rectangle};
 pub use intersect::{find_periodic_intersections, find_segment_intersections, SegmentHit};
 pub use measures::{vertex_normals, MeshQuality};
@@ -34,6 +35,7 @@ pub use surface_remesh::{
 };
 pub use surfaces::{box_surface, ellipsoid, icosphere, torus};
 pub use unions::{surface_union, union};
+pub use winding::{mesh_winding_number, winding_number};
 
 /// A point of `R^D`.
 pub type Point<const D: usize> = nalgebra::SVector<f64, D>;
