@@ -27,6 +27,11 @@ Chan-Vese (MCV), scikit-image Chan-Vese, SimpleITK geodesic active contour
 (seeded by an Otsu mask, as its documentation does). shapeflow runs the CLI on the
 file with the spec `{"problem": {"type": "segmentation", "image": "input:image"}}`;
 its time is the whole process (decoding, preparation, run, writing all results).
+
+A second table repeats the star at SNR 2 over ten draws of its noise (seeds
+2–11; seed 2 is the image of the first table): at this noise a single draw moves
+Dice by ±0.002, more than the methods differ. Each peer is tuned on each draw
+(its best Dice over the grid on that draw).
 """
 import itertools
 import json
@@ -85,11 +90,11 @@ def discs():
     return img, truth
 
 
-def star_snr2():
+def star_snr2(seed=2):
     yy, xx = np.mgrid[0:128, 0:128] + 0.5
     dx, dy = xx - 64, yy - 64
     truth = np.hypot(dx, dy) < 34 * (1 + 0.3 * np.cos(5 * np.arctan2(dy, dx)))
-    rng = np.random.default_rng(2)
+    rng = np.random.default_rng(seed)
     img = np.clip(np.round(60 + 130 * truth + 65 * rng.standard_normal(truth.shape)), 0, 255).astype(np.uint8)
     return img, truth
 
@@ -239,6 +244,33 @@ def main():
             p = ", ".join(f"{k} {v}" for k, v in params.items())
             print(f"| {name} | {method}, tuned | {d} | {h} | {components(m)} ({count}) | {t:.2f} | {p} |")
         sys.stdout.flush()
+    star_draws(3 if QUICK else 10)
+
+
+def star_draws(n):
+    """The star at SNR 2 over `n` draws of its noise: mean, lowest and highest Dice
+    of shapeflow at defaults and of each peer tuned on each draw, and on how many
+    draws shapeflow's Dice is at least the peer's."""
+    scores = {}
+    for seed in range(2, 2 + n):
+        img, truth = star_snr2(seed)
+        mask, _, _ = shapeflow(img)
+        scores.setdefault("shapeflow, defaults", []).append(dice(mask, truth))
+        best = {}
+        for method, _, m, _ in peers(img):
+            best[method] = max(best.get(method, 0.0), dice(m, truth))
+        for method, d in best.items():
+            scores.setdefault(method + ", tuned per draw", []).append(d)
+    ours = np.array(scores["shapeflow, defaults"])
+    print()
+    print(f"Star at SNR 2 over {n} draws of the noise (seeds 2–{n + 1}):")
+    print()
+    print("| method | mean Dice | lowest | highest | draws where shapeflow's Dice ≥ this |")
+    print("|---|---|---|---|---|")
+    for method, v in scores.items():
+        v = np.array(v)
+        won = "—" if method.startswith("shapeflow") else f"{(ours >= v).sum()} of {n}"
+        print(f"| {method} | {v.mean():.4f} | {v.min():.4f} | {v.max():.4f} | {won} |")
 
 
 if __name__ == "__main__":
