@@ -243,7 +243,8 @@ async fn shutdown_signal() {
 struct Reporter {
     bar: ProgressBar,
     history: Vec<Progress>,
-    checkpoints: Vec<Checkpoint>,
+    /// To the thread that makes the checkpoints' frames.
+    checkpoints: std::sync::mpsc::Sender<Checkpoint>,
     end_time: Option<f64>,
 }
 
@@ -257,7 +258,8 @@ impl RunEvents for Reporter {
         self.bar.set_message(format!("J={:.6e} τ={:.2e} t={:.4e} n={}", p.energy, p.tau, p.time, p.vertices));
     }
     fn checkpoint(&mut self, c: &Checkpoint) {
-        self.checkpoints.push(c.clone());
+        // (the receiver lives until the run ends)
+        let _ = self.checkpoints.send(c.clone());
     }
 }
 
@@ -271,7 +273,9 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
         let bytes = std::fs::read(path).with_context(|| format!("--input {name}: cannot read {path}"))?;
         files.insert(name.to_string(), bytes);
     }
+    let started = std::time::Instant::now();
     let job = prepare(spec, &files).with_context(|| format!("invalid spec {}", spec_path.display()))?;
+    let prepared = started.elapsed();
     let checkpoint: Option<Checkpoint> = match resume {
         Some(p) => {
             let t = std::fs::read_to_string(p).with_context(|| format!("cannot read checkpoint {}", p.display()))?;
@@ -284,10 +288,23 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
     let len = if s.end_time.is_some() { 1000 } else { s.max_iterations as u64 };
     let bar = ProgressBar::new(len);
     bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} {msg} [{elapsed}]").expect("template"));
-    let mut rep = Reporter { bar, history: Vec::new(), checkpoints: Vec::new(), end_time: s.end_time };
     let cancel = AtomicBool::new(false);
-    let result = run_prepared(&job, checkpoint.as_ref(), &cancel, &mut rep);
-    rep.bar.finish_and_clear();
+    let ran = std::time::Instant::now();
+    // the frames of the checkpoints (their fields and drawing) are made on a second
+    // thread while the run goes on, as a service worker makes them
+    let (result, history, mut frames) = std::thread::scope(|scope| {
+        let (send, receive) = std::sync::mpsc::channel::<Checkpoint>();
+        let job = &job;
+        let maker =
+            scope.spawn(move || receive.into_iter().map(|c| Frame::of(job, &c).with_fill()).collect::<Vec<_>>());
+        let mut rep = Reporter { bar, history: Vec::new(), checkpoints: send, end_time: s.end_time };
+        let result = run_prepared(job, checkpoint.as_ref(), &cancel, &mut rep);
+        rep.bar.finish_and_clear();
+        let history = std::mem::take(&mut rep.history);
+        drop(rep);
+        (result, history, maker.join().expect("the thread making the frames panicked"))
+    });
+    let ran = ran.elapsed();
     let (last, code) = match result {
         Ok(o) => {
             say(format_args!(
@@ -307,27 +324,32 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
             (f.last, ExitCode::from(1))
         }
     };
+    let writing = std::time::Instant::now();
     let write = |name: &str, data: &[u8]| -> Result<()> {
         let p = out.join(name);
         std::fs::write(&p, data).with_context(|| format!("cannot write {}", p.display()))
     };
     // the frames of the run (the last one its final state); checkpoint.json keeps
     // the flow's state for --resume
-    let mut states = std::mem::take(&mut rep.checkpoints);
-    if states.last() != Some(&last) {
-        states.push(last.clone());
+    if frames.last().map(|f| &f.state) != Some(&last) {
+        frames.push(Frame::of(&job, &last).with_fill());
     }
-    let frames: Vec<Frame> = states.iter().map(|s| Frame::of(&job, s)).collect();
     let mut written = Vec::new();
     for file in result_files(&job, &frames) {
         write(file.name, &file.bytes)?;
         written.push(file.name);
     }
-    write("energy.csv", energy_csv(&rep.history).as_bytes())?;
-    write("energy.svg", energy_svg(&rep.history, &spec_path.display().to_string()).as_bytes())?;
+    write("energy.csv", energy_csv(&history).as_bytes())?;
+    write("energy.svg", energy_svg(&history, &spec_path.display().to_string()).as_bytes())?;
     write("checkpoint.json", serde_json::to_string(&last)?.as_bytes())?;
     written.extend(["energy.csv", "energy.svg", "checkpoint.json"]);
     say(format_args!("wrote {} in {}", written.join(", "), out.display()));
+    say(format_args!(
+        "took {:.3} s to prepare (inputs decoded, preprocessed, initial shape), {:.3} s to run, {:.3} s to write the results",
+        prepared.as_secs_f64(),
+        ran.as_secs_f64(),
+        writing.elapsed().as_secs_f64()
+    ));
     Ok(code)
 }
 

@@ -13,6 +13,11 @@ fn run_writes_shape_and_history_and_reports_the_stop_reason() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stdout} {}", String::from_utf8_lossy(&out.stderr));
     assert!(stdout.contains("stopped: end_time after 2500 iterations"), "{stdout}");
+    let took = stdout.lines().last().unwrap();
+    assert!(
+        took.starts_with("took ") && took.contains(" s to run, ") && took.ends_with(" s to write the results"),
+        "{took}"
+    );
     let shape: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("shape.json")).unwrap()).unwrap();
     assert_eq!(shape["dimension"], 2);
