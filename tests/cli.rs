@@ -22,6 +22,15 @@ fn run_writes_shape_and_history_and_reports_the_stop_reason() {
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("shape.json")).unwrap()).unwrap();
     assert_eq!(shape["dimension"], 2);
     assert_eq!(shape["iteration"], 2500);
+    // evolution.glb: one frame per checkpoint (every 250 iterations), in order, the
+    // frames made on a second thread while the run went on
+    let glb = std::fs::read(dir.path().join("evolution.glb")).unwrap();
+    let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let doc: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    let frames: Vec<u64> =
+        doc["nodes"].as_array().unwrap().iter().filter_map(|n| n["extras"]["iteration"].as_u64()).collect();
+    assert_eq!(frames, (0..=10).map(|k| 250 * k).collect::<Vec<u64>>());
+    assert_eq!(doc["extras"]["frames"], 11);
     let verts = shape["components"][0]["vertices"].as_array().unwrap();
     assert_eq!(verts.len(), 256);
     let exact = 0.5f64.sqrt();
