@@ -9,8 +9,7 @@
 //! a `postgres://` URL (an empty database: the bench fills it).
 //! `cargo bench --bench service` (`-- short`: the short job only).
 
-use shapeflow::flow::Checkpoint;
-use shapeflow::jobs::{parse_spec, prepare, result_files, run_prepared, Frame, RunEvents};
+use shapeflow::jobs::{parse_spec, prepare, result_files, run_prepared, run_with_frames};
 use shapeflow::service::store::{self, ClaimPolicy, JobStatus};
 use shapeflow::service::{Service, ServiceConfig};
 use std::io::BufRead;
@@ -87,11 +86,10 @@ fn main() {
         run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
         engine.push(t.elapsed().as_secs_f64() * 1e3);
         // what the CLI computes for the same job: the run, each checkpoint's
-        // fields, the result files
+        // frame (on a second thread while the run goes on), the result files
         let t = Instant::now();
-        let mut kept = Kept(Vec::new());
-        run_prepared(&job, None, &AtomicBool::new(false), &mut kept).unwrap();
-        let frames: Vec<Frame> = kept.0.iter().map(|c| Frame::of(&job, c)).collect();
+        let (result, frames) = run_with_frames(&job, None, &AtomicBool::new(false), &mut ());
+        result.unwrap();
         std::hint::black_box(result_files(&job, &frames));
         whole.push(t.elapsed().as_secs_f64() * 1e3);
         let t = Instant::now();
@@ -238,15 +236,6 @@ fn under_load(addr: SocketAddr) {
         http(addr, "POST", &format!("/v1/jobs/{id}/cancel"), None);
     }
     std::thread::sleep(Duration::from_millis(500));
-}
-
-/// Keeps the checkpoints of a run, as the CLI does.
-struct Kept(Vec<Checkpoint>);
-
-impl RunEvents for Kept {
-    fn checkpoint(&mut self, c: &Checkpoint) {
-        self.0.push(c.clone());
-    }
 }
 
 /// Read the job's event stream until its `status` event.

@@ -5,7 +5,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use shapeflow::export::{energy_csv, energy_svg};
 use shapeflow::flow::{Checkpoint, Progress};
-use shapeflow::jobs::{parse_spec, prepare, result_files, run_prepared, Frame, RunEvents};
+use shapeflow::jobs::{parse_spec, prepare, result_files, run_with_frames, RunEvents};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -243,8 +243,6 @@ async fn shutdown_signal() {
 struct Reporter {
     bar: ProgressBar,
     history: Vec<Progress>,
-    /// To the thread that makes the checkpoints' frames.
-    checkpoints: std::sync::mpsc::Sender<Checkpoint>,
     end_time: Option<f64>,
 }
 
@@ -256,10 +254,6 @@ impl RunEvents for Reporter {
             None => self.bar.set_position(p.iteration as u64),
         }
         self.bar.set_message(format!("J={:.6e} τ={:.2e} t={:.4e} n={}", p.energy, p.tau, p.time, p.vertices));
-    }
-    fn checkpoint(&mut self, c: &Checkpoint) {
-        // (the receiver lives until the run ends)
-        let _ = self.checkpoints.send(c.clone());
     }
 }
 
@@ -290,20 +284,11 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
     bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} {msg} [{elapsed}]").expect("template"));
     let cancel = AtomicBool::new(false);
     let ran = std::time::Instant::now();
-    // the frames of the checkpoints (their fields and drawing) are made on a second
-    // thread while the run goes on, as a service worker makes them
-    let (result, history, mut frames) = std::thread::scope(|scope| {
-        let (send, receive) = std::sync::mpsc::channel::<Checkpoint>();
-        let job = &job;
-        let maker =
-            scope.spawn(move || receive.into_iter().map(|c| Frame::of(job, &c).with_fill()).collect::<Vec<_>>());
-        let mut rep = Reporter { bar, history: Vec::new(), checkpoints: send, end_time: s.end_time };
-        let result = run_prepared(job, checkpoint.as_ref(), &cancel, &mut rep);
-        rep.bar.finish_and_clear();
-        let history = std::mem::take(&mut rep.history);
-        drop(rep);
-        (result, history, maker.join().expect("the thread making the frames panicked"))
-    });
+    // the checkpoints' frames (their fields and drawing) are made on a second thread
+    // while the run goes on
+    let mut rep = Reporter { bar, history: Vec::new(), end_time: s.end_time };
+    let (result, frames) = run_with_frames(&job, checkpoint.as_ref(), &cancel, &mut rep);
+    rep.bar.finish_and_clear();
     let ran = ran.elapsed();
     let (last, code) = match result {
         Ok(o) => {
@@ -331,16 +316,13 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
     };
     // the frames of the run (the last one its final state); checkpoint.json keeps
     // the flow's state for --resume
-    if frames.last().map(|f| &f.state) != Some(&last) {
-        frames.push(Frame::of(&job, &last).with_fill());
-    }
     let mut written = Vec::new();
     for file in result_files(&job, &frames) {
         write(file.name, &file.bytes)?;
         written.push(file.name);
     }
-    write("energy.csv", energy_csv(&history).as_bytes())?;
-    write("energy.svg", energy_svg(&history, &spec_path.display().to_string()).as_bytes())?;
+    write("energy.csv", energy_csv(&rep.history).as_bytes())?;
+    write("energy.svg", energy_svg(&rep.history, &spec_path.display().to_string()).as_bytes())?;
     write("checkpoint.json", serde_json::to_string(&last)?.as_bytes())?;
     written.extend(["energy.csv", "energy.svg", "checkpoint.json"]);
     say(format_args!("wrote {} in {}", written.join(", "), out.display()));

@@ -3,14 +3,16 @@
 //! needs ([`GlbContext`]). With both, any glb of the job (a checkpoint, the
 //! evolution) is encoded without preparing the job again or solving anything.
 
-use super::run::vertex_fields;
+use super::run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
 use super::spec::ColorBy;
 use super::{PreparedJob, ProblemKind};
 use crate::bulk::Polygon;
 use crate::export::{evolution_glb, shape_glb, ColorField, DomainOutline, Filled, GltfFrame};
-use crate::flow::{Checkpoint, VertexFields};
+use crate::flow::{Checkpoint, Progress, VertexFields};
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
+use std::sync::atomic::AtomicBool;
+use std::sync::mpsc::Sender;
 use std::sync::Arc;
 
 pub use crate::limits::MAX_FRAMES;
@@ -157,6 +159,54 @@ fn domain_outline(job: &PreparedJob) -> Option<DomainOutline> {
     Some(DomainOutline { outer: points(p.domain.outer()), control: [points(inner), points(outer)] })
 }
 
+/// [`run_prepared`] with each checkpoint made into its frame, drawing included
+/// ([`Frame::of`], [`Frame::with_fill`]), on a second thread while the run goes on,
+/// as the CLI makes its result files: the run's outcome and the frames of its
+/// checkpoints in order, the last one its final state (also after a failure).
+/// `events` hears the run as from [`run_prepared`].
+pub fn run_with_frames(
+    job: &PreparedJob,
+    resume: Option<&Checkpoint>,
+    cancel: &AtomicBool,
+    events: &mut dyn RunEvents,
+) -> (Result<JobOutcome, Box<JobFailure>>, Vec<Frame>) {
+    let (result, mut frames) = std::thread::scope(|scope| {
+        let (send, receive) = std::sync::mpsc::channel::<Checkpoint>();
+        let maker =
+            scope.spawn(move || receive.into_iter().map(|c| Frame::of(job, &c).with_fill()).collect::<Vec<_>>());
+        let mut tee = Tee { events, frames: send };
+        let result = run_prepared(job, resume, cancel, &mut tee);
+        drop(tee);
+        (result, maker.join().expect("the thread making the frames panicked"))
+    });
+    let last = match &result {
+        Ok(o) => &o.last,
+        Err(f) => &f.last,
+    };
+    if frames.last().map(|f| &f.state) != Some(last) {
+        frames.push(Frame::of(job, last).with_fill());
+    }
+    (result, frames)
+}
+
+/// The events of a run passed on, and its checkpoints also sent to be made into frames.
+struct Tee<'a> {
+    events: &'a mut dyn RunEvents,
+    frames: Sender<Checkpoint>,
+}
+
+impl RunEvents for Tee<'_> {
+    fn progress(&mut self, p: &Progress) {
+        self.events.progress(p);
+    }
+
+    fn checkpoint(&mut self, c: &Checkpoint) {
+        // (the receiver lives until the run ends)
+        let _ = self.frames.send(c.clone());
+        self.events.checkpoint(c);
+    }
+}
+
 /// shape.glb / checkpoints/{n}.glb of one state of `job` (its fields computed).
 pub fn state_glb(job: &PreparedJob, state: &Checkpoint) -> Vec<u8> {
     GlbContext::of(job).frame_glb(&Frame::of(job, state))
@@ -172,8 +222,7 @@ pub fn states_glb(job: &PreparedJob, states: &[Checkpoint]) -> Option<Vec<u8>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::jobs::{parse_spec, prepare, run_prepared, RunEvents};
-    use std::sync::atomic::AtomicBool;
+    use crate::jobs::{parse_spec, prepare};
 
     struct Kept(Vec<Checkpoint>);
     impl RunEvents for Kept {
@@ -197,5 +246,13 @@ mod tests {
         let context = GlbContext::of(&job);
         assert_eq!(context.evolution_glb(&ahead), context.evolution_glb(&now));
         assert_eq!(context.frame_glb(&ahead[1]), context.frame_glb(&now[1]));
+        // made on a second thread during the run: the same frames, in order, and
+        // the events passed on
+        let mut heard = Kept(Vec::new());
+        let (result, during) = run_with_frames(&job, None, &AtomicBool::new(false), &mut heard);
+        assert_eq!(result.unwrap().last, *kept.0.last().unwrap());
+        assert_eq!(heard.0, kept.0);
+        assert_eq!(during.iter().map(|f| &f.state).collect::<Vec<_>>(), kept.0.iter().collect::<Vec<_>>());
+        assert_eq!(context.evolution_glb(&during), context.evolution_glb(&now));
     }
 }
