@@ -314,8 +314,8 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
         let p = out.join(name);
         std::fs::write(&p, data).with_context(|| format!("cannot write {}", p.display()))
     };
-    // the frames of the run (the last one its final state); checkpoint.json keeps
-    // the flow's state for --resume
+    // the result files of the run's frames (the last one its final state);
+    // checkpoint.json keeps the flow's state for --resume
     let mut written = Vec::new();
     for file in result_files(&job, &frames) {
         write(file.name, &file.bytes)?;
