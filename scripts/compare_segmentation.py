@@ -39,6 +39,7 @@ Dice by ±0.002, more than the methods differ. Each peer is tuned on each draw
 import itertools
 import json
 import pathlib
+import re
 import subprocess
 import sys
 import tempfile
@@ -169,15 +170,15 @@ def shapeflow(img):
         r = subprocess.run([str(BIN), "run", str(d / "spec.json"), "--input", f"image={path}", "--out", str(d / "out")],
                            check=True, capture_output=True, text=True)
         elapsed = time.perf_counter() - t
-        # "took P s to prepare (...), R s to run, W s to write the results"
-        took = [float(w) for w in r.stdout.rsplit("took ", 1)[1].split() if w.replace(".", "", 1).isdigit()]
+        # the CLI's last line: "took P s to prepare (...), R s to run, W s to write the results"
+        took = re.search(r"took ([\d.]+) s to prepare .*?, ([\d.]+) s to run", r.stdout)
         if img.ndim == 2:
             mask = np.array(Image.open(d / "out/mask.png")) > 0
         else:
             raw = (d / "out/mask.nrrd").read_bytes().partition(b"\n\n")[2]
             mask = np.frombuffer(gzip.decompress(raw), np.uint8).reshape(img.shape) > 0
         objects = len(json.loads((d / "out/shape.json").read_text())["objects"])
-    return mask, (elapsed, took[0] + took[1]), objects
+    return mask, (elapsed, float(took[1]) + float(took[2])), objects
 
 
 def normalized(img):
@@ -231,6 +232,18 @@ def peers(img):
         yield "SimpleITK GAC", dict(sigma=sigma, k=k, propagation=prop, curvature=curv), polarity_fix(m), time.perf_counter() - t
 
 
+def tuned_peers(img, truth, count):
+    """Each peer's best run over its grid on `img`: method → (score, parameters,
+    mask, time); the score is Dice against `truth`, or without one the closeness of
+    its component count to `count`."""
+    best = {}
+    for method, params, m, t in peers(img):
+        score = dice(m, truth) if truth is not None else -abs(components(m) - count)
+        if method not in best or score > best[method][0]:
+            best[method] = (score, params, m, t)
+    return best
+
+
 def main():
     print("| image | method | Dice | Hausdorff (px) | objects (truth) | time (s) | parameters |")
     print("|---|---|---|---|---|---|---|")
@@ -239,12 +252,7 @@ def main():
         fmt = lambda m: ("%.4f" % dice(m, truth), "%.1f" % hausdorff(m, truth)) if truth is not None else ("—", "—")
         d, h = fmt(mask)
         print(f"| {name} | shapeflow, defaults | {d} | {h} | {objects} ({count}) | {elapsed[0]:.3f} ({elapsed[1]:.3f}) | — |")
-        best = {}
-        for method, params, m, t in peers(img):
-            score = dice(m, truth) if truth is not None else -abs(components(m) - count)
-            if method not in best or score > best[method][0]:
-                best[method] = (score, params, m, t)
-        for method, (_, params, m, t) in best.items():
+        for method, (_, params, m, t) in tuned_peers(img, truth, count).items():
             d, h = fmt(m)
             p = ", ".join(f"{k} {v}" for k, v in params.items())
             print(f"| {name} | {method}, tuned | {d} | {h} | {components(m)} ({count}) | {t:.3f} | {p} |")
@@ -261,10 +269,7 @@ def star_draws(n):
         img, truth = star_snr2(seed)
         mask, _, _ = shapeflow(img)
         scores.setdefault("shapeflow, defaults", []).append(dice(mask, truth))
-        best = {}
-        for method, _, m, _ in peers(img):
-            best[method] = max(best.get(method, 0.0), dice(m, truth))
-        for method, d in best.items():
+        for method, (d, _, _, _) in tuned_peers(img, truth, 1).items():
             scores.setdefault(method + ", tuned per draw", []).append(d)
     ours = np.array(scores["shapeflow, defaults"])
     print()
