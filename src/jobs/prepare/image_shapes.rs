@@ -5,7 +5,8 @@
 use super::checks::{curve, positive, surface};
 use crate::geometry::AnyMesh;
 use crate::geometry::{self, Mesh, Point};
-use crate::imaging::labels::{clean_mask, components, distance_transform, separate, split_touching};
+pub(super) use crate::imaging::labels::RegionWeights;
+use crate::imaging::labels::{clean_mask, components, distance_transform, reopen_holes, separate, split_touching};
 use crate::imaging::{contours, isosurface, Grid};
 use crate::jobs::spec::SpecError;
 
@@ -14,9 +15,10 @@ const SPLIT_RELATIVE_DEPTH: f64 = 0.0;
 /// Absolute depth (pixels) of a neck that splits touching objects.
 const SPLIT_DEPTH: f64 = 1.5;
 /// Holes of less than this fraction of the object around them are filled in the
-/// initial shape (the flow does not open new holes): objects in photographs and
-/// micrographs are mostly solid, with darker details inside; a ring keeps its
-/// hole.
+/// initial shape (the flow does not open new holes) unless their samples fit the
+/// background better than the object by more than the length of their boundary
+/// costs ([`reopen_holes`]): objects in photographs and micrographs are mostly
+/// solid, with darker details inside; a ring keeps its hole.
 const HOLE_FRACTION: f64 = 0.25;
 
 /// The thresholds of the automatic initial shape.
@@ -57,12 +59,21 @@ pub(super) struct ThresholdObjects {
 }
 
 /// The main threshold with specks dropped and small holes filled, touching objects
-/// split; then the components of the dim threshold that contain no sample of the
-/// main mask (dim objects the main threshold misses entirely) as objects of their
-/// own; one sample of background between objects.
-pub(super) fn threshold_objects(s: &Grid, levels: &Levels, min_size: f64, split: bool) -> ThresholdObjects {
+/// split, and the filled holes reopened that fit `data` outside the objects
+/// better, by the region energy of `weights`; then the components of the dim threshold that contain
+/// no sample of the main mask (dim objects the main threshold misses entirely) as
+/// objects of their own; one sample of background between objects.
+pub(super) fn threshold_objects(
+    s: &Grid,
+    data: &Grid,
+    weights: RegionWeights,
+    levels: &Levels,
+    min_size: f64,
+    split: bool,
+) -> ThresholdObjects {
     let min = min_size.ceil() as usize;
     let main: Vec<bool> = s.values.iter().map(|&v| levels.inside(v, levels.main)).collect();
+    let bare = clean_mask(&main, s.dims, min, 0.0);
     let main = clean_mask(&main, s.dims, min, HOLE_FRACTION);
     let (mut labels, mut count) = if split {
         let dist = distance_transform(&main, s.dims, [1.0; 3]);
@@ -70,6 +81,13 @@ pub(super) fn threshold_objects(s: &Grid, levels: &Levels, min_size: f64, split:
     } else {
         components(&main, s.dims)
     };
+    // the holes are reopened after the split, which judges the objects whole
+    let main = reopen_holes(&main, &bare, s.dims, &data.values, weights);
+    for (l, &m) in labels.iter_mut().zip(&main) {
+        if !m {
+            *l = 0;
+        }
+    }
     let mut object_levels = vec![levels.main; count + 1];
     if let Some(t) = levels.dim {
         let dim: Vec<bool> = s.values.iter().map(|&v| levels.inside(v, t)).collect();

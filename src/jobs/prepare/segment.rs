@@ -6,7 +6,7 @@
 
 use super::background::{border_polarity, flatten, minus};
 use super::checks::positive;
-use super::image_shapes::{inscribed, seeds, threshold_mesh, threshold_objects, Levels};
+use super::image_shapes::{inscribed, seeds, threshold_mesh, threshold_objects, Levels, RegionWeights};
 use super::inputs::load_image;
 use super::ProblemKind;
 use crate::geometry::AnyMesh;
@@ -114,7 +114,8 @@ pub(super) fn prepare_segmentation(
     }
     let means = spec.means.unwrap_or(MeansKind::PerObject);
     let merge = spec.merge.unwrap_or(false);
-    let start = image_initial(spec, initial, &grid, &pre, min_size)?;
+    let region = RegionWeights { mu, lambda_in, lambda_out };
+    let start = image_initial(spec, initial, &grid, &pre, region, min_size)?;
     let weights = ChanVeseWeights { mu, lambda_in, lambda_out, per_object: means == MeansKind::PerObject, merge };
     let (problem, second_stage, edges, edge_contrast) =
         functional(spec, model, &grid, &pre.data, &start, &weights, pre.sigma)?;
@@ -264,12 +265,14 @@ fn image_initial(
     initial: Option<&InitialSpec>,
     grid: &Grid,
     pre: &Preprocessed,
+    region: RegionWeights,
     min_size: f64,
 ) -> Result<ImageInitial, SpecError> {
     let none = ImageInitial { mesh: None, objects: 0, cut: Vec::new(), background: None };
     Ok(match initial {
         None | Some(InitialSpec::Threshold(ThresholdShape {})) => {
-            let objects = threshold_objects(&pre.smoothed, &pre.levels, min_size, spec.split_touching.unwrap_or(true));
+            let split = spec.split_touching.unwrap_or(true);
+            let objects = threshold_objects(&pre.smoothed, &pre.data, region, &pre.levels, min_size, split);
             match threshold_mesh(&pre.smoothed, &objects)? {
                 Some((m, count)) => ImageInitial {
                     mesh: Some(m),
