@@ -3,25 +3,31 @@
 //! README) and on synthetic pictures with a known answer: Dice against the truth
 //! and the number of objects found.
 
-use shapeflow::export::{mask, objects};
+use shapeflow::export::{mask, objects, ObjectRow};
 use shapeflow::jobs::{parse_spec, prepare, result_state, run_prepared, PreparedJob, StateResults};
 use std::collections::HashMap;
 use std::sync::atomic::AtomicBool;
 
 const DEFAULTS: &str = r#"{"problem": {"type": "segmentation", "image": "input:image"}}"#;
 
-/// Run `spec` on `image`; the mask (grid order, rows from the bottom), the objects
-/// found and the prepared job.
+/// Run `spec` on `image`; the mask (grid order, rows from the bottom), the number
+/// of objects found and the prepared job.
 fn segment(spec: &str, image: Vec<u8>) -> (Vec<bool>, usize, PreparedJob) {
+    let (m, rows, job) = segment_objects(spec, image);
+    (m, rows.len(), job)
+}
+
+/// As [`segment`], with the table of objects.
+fn segment_objects(spec: &str, image: Vec<u8>) -> (Vec<bool>, Vec<ObjectRow>, PreparedJob) {
     let inputs: HashMap<String, Vec<u8>> = [("image".to_string(), image)].into();
     let job = prepare(parse_spec(spec).unwrap(), &inputs).unwrap();
     let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
     let shown = result_state(&job, &out.last);
     let img = job.image.as_deref().unwrap();
     let m = mask(img, &shown.mesh);
-    let n = objects(img, &shown.mesh).1.len();
-    eprintln!("stop {:?} after {} iterations; {n} objects", out.stop, out.last.iteration);
-    (m, n, job)
+    let rows = objects(img, &shown.mesh).1;
+    eprintln!("stop {:?} after {} iterations; {} objects", out.stop, out.last.iteration, rows.len());
+    (m, rows, job)
 }
 
 /// Dice of `got` (grid order) against `truth` (file order, rows from the top).
@@ -155,11 +161,8 @@ fn star_at_snr_2() {
 fn a_ring_keeps_its_hole() {
     let (w, h) = (160usize, 160usize);
     let (png, truth) = snr_2_picture(w, h, |x, y| (24.0..53.0).contains(&(x - 80.0).hypot(y - 80.0)));
-    let (got, n, job) = segment(DEFAULTS, png);
-    let d = dice(&got, &truth, w, h);
-    let img = job.image.as_deref().unwrap();
-    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
-    let rows = objects(img, &result_state(&job, &out.last).mesh).1;
+    let (got, rows, _) = segment_objects(DEFAULTS, png);
+    let (d, n) = (dice(&got, &truth, w, h), rows.len());
     let exact = std::f64::consts::PI * (53.0f64.powi(2) - 24.0f64.powi(2));
     eprintln!("ring at SNR 2: dice {d:.4}, {n} objects, area {:.0} (exact {exact:.0})", rows[0].size);
     assert!(d >= 0.985, "dice {d}");

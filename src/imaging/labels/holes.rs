@@ -78,7 +78,7 @@ mod tests {
 
     const W: RegionWeights = RegionWeights { mu: 0.1, lambda_in: 1.0, lambda_out: 1.0 };
 
-    /// A ring whose hole (a tenth of its area) is background reopens; the same
+    /// A ring whose hole (a tenth of the disc) is background reopens; the same
     /// hole at the object's level stays filled; a hole at a level between,
     /// nearer the object's, stays filled.
     #[test]

@@ -1,8 +1,9 @@
 //! Binary masks and label images on a grid (`x` fastest, as [`super::Grid`]):
 //! connected components and hole filling here; the Euclidean distance transform
 //! (`distance`), the split of touching objects by a persistence watershed on
-//! it (`watershed`), and the holes the region model keeps open (`holes`). Face neighbours (4 in 2D, 6 in 3D) throughout. Labels are
-//! `1..=count`, 0 is background.
+//! it (`watershed`), and the holes the region model keeps open (`holes`). Face
+//! neighbours (4 in 2D, 6 in 3D) throughout. Labels are `1..=count`, 0 is
+//! background.
 
 mod distance;
 mod holes;

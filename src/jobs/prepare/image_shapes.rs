@@ -60,9 +60,10 @@ pub(super) struct ThresholdObjects {
 
 /// The main threshold with specks dropped and small holes filled, touching objects
 /// split, and the filled holes reopened that fit `data` outside the objects
-/// better, by the region energy of `weights`; then the components of the dim threshold that contain
-/// no sample of the main mask (dim objects the main threshold misses entirely) as
-/// objects of their own; one sample of background between objects.
+/// better, by the region energy of `weights`; then the components of the dim
+/// threshold that contain no sample of the main mask (dim objects the main
+/// threshold misses entirely) as objects of their own; one sample of background
+/// between objects.
 pub(super) fn threshold_objects(
     s: &Grid,
     data: &Grid,
