@@ -277,7 +277,7 @@ def held_out_pictures():
         ("seven-armed star", r < 0.3 * n * (1 + 0.25 * np.cos(7 * th)), 1),
         ("ellipse", (dx / (0.35 * n)) ** 2 + (dy / (0.18 * n)) ** 2 < 1, 1),
         ("square", (np.abs(dx) < 0.25 * n) & (np.abs(dy) < 0.25 * n), 1),
-        ("ring (hole a fifth of its area)", (r < 0.33 * n) & (r > 0.15 * n), 1),
+        ("ring (hole a fifth of the disc)", (r < 0.33 * n) & (r > 0.15 * n), 1),
         ("two discs", (np.hypot(dx - 0.2 * n, dy) < 0.14 * n) | (np.hypot(dx + 0.22 * n, dy + 0.1 * n) < 0.11 * n), 2),
     ]
     rng = np.random.default_rng(5)

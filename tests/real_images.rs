@@ -153,7 +153,7 @@ fn star_at_snr_2() {
     assert_eq!(n, 1);
 }
 
-/// A ring at SNR 2 whose hole is a fifth of its area: after smoothing, the
+/// A ring at SNR 2 whose hole is a fifth of the disc: after smoothing, the
 /// thresholded hole is below the fraction of its object that the initial shape
 /// fills, but its samples are background, so it stays open (before, the ring came
 /// out as a disc: Dice 0.88).
