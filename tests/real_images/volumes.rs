@@ -1,0 +1,108 @@
+//! Volumes: NRRD, NIfTI and TIFF stacks, touching objects in 3D.
+
+use super::*;
+
+/// Two overlapping balls (examples/data/balls.nrrd: radius 8.5, centres 15 apart,
+/// 48³) at defaults: the threshold's surface is split at the neck, and the two
+/// objects keep the union's volume. The surface's edges are kept between a
+/// quarter of a voxel and one voxel.
+#[test]
+fn two_overlapping_balls_are_two_objects() {
+    let inputs: HashMap<String, Vec<u8>> =
+        [("image".to_string(), include_bytes!("../../examples/data/balls.nrrd").to_vec())].into();
+    let job = prepare(parse_spec(DEFAULTS).unwrap(), &inputs).unwrap();
+    let sizes = job.surface_manager.unwrap().params;
+    let voxel = 1.0 / 48.0;
+    assert!(sizes.h_max <= voxel && sizes.h_min >= 0.25 * voxel, "{sizes:?}");
+    // an h_min the spec gives stays, and h_max keeps at least twice it
+    let given = r#"{"problem": {"type": "segmentation", "image": "input:image"}, "mesh": {"h_min": 0.012}}"#;
+    let other = prepare(parse_spec(given).unwrap(), &inputs).unwrap().surface_manager.unwrap().params;
+    assert!(other.h_min == 0.012 && other.h_max >= 0.024, "{other:?}");
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
+    let img = job.image.as_deref().unwrap();
+    let (_, rows) = objects(img, &result_state(&job, &out.last).mesh);
+    let volume: f64 = rows.iter().map(|r| r.size).sum();
+    let (r, d) = (8.5f64, 15.0f64);
+    let lens = std::f64::consts::PI * (2.0 * r - d).powi(2) * (d * d + 4.0 * d * r) / (12.0 * d);
+    let exact = 2.0 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) - lens;
+    eprintln!("balls: {} objects, volume {volume:.1} (exact {exact:.1})", rows.len());
+    assert_eq!(rows.len(), 2);
+    assert!((volume / exact - 1.0).abs() < 0.05, "{volume} {exact}");
+}
+
+/// A NIfTI-1 volume (gzip, float32) with slices twice as far apart as its pixels:
+/// resampled to cubic voxels (40³), two overlapping balls of radius 8 and centres
+/// 13 apart are two objects with the union's volume; the same volume as a
+/// multi-page TIFF stack of 16-bit pages gives the same objects.
+#[test]
+fn an_anisotropic_nifti_volume_and_a_tiff_stack() {
+    let (n, nz) = (40usize, 20usize);
+    let (c1, c2, r) = ([14.0, 20.0, 20.0], [27.0, 20.0, 20.0], 8.0);
+    let mut seed = 3u64;
+    let mut noise = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let mut voxels = Vec::with_capacity(n * n * nz);
+    for k in 0..nz {
+        for j in 0..n {
+            for i in 0..n {
+                // physical position: pixels 1 apart, slices 2 apart
+                let p = [i as f64 + 0.5, j as f64 + 0.5, 2.0 * (k as f64 + 0.5)];
+                let d = |c: [f64; 3]| ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt();
+                let inside = d(c1) < r || d(c2) < r;
+                voxels.push(50.0 + if inside { 100.0 } else { 0.0 } + 10.0 * noise());
+            }
+        }
+    }
+    let mut header = vec![0u8; 352];
+    header[0..4].copy_from_slice(&348i32.to_le_bytes());
+    for (o, v) in [(40, 3i16), (42, n as i16), (44, n as i16), (46, nz as i16), (70, 16), (72, 32)] {
+        header[o..o + 2].copy_from_slice(&v.to_le_bytes());
+    }
+    for (o, v) in [(80, 1.0f32), (84, 1.0), (88, 2.0), (108, 352.0)] {
+        header[o..o + 4].copy_from_slice(&v.to_le_bytes());
+    }
+    header[344..348].copy_from_slice(b"n+1\0");
+    header.extend(voxels.iter().flat_map(|v| (*v as f32).to_le_bytes()));
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    std::io::Write::write_all(&mut gz, &header).unwrap();
+    let nifti = gz.finish().unwrap();
+
+    let h = 2.0 * r - 13.0;
+    let lens = std::f64::consts::PI * h * h * (4.0 * r - h) / 6.0;
+    let exact = 2.0 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) - lens;
+    let check = |bytes: Vec<u8>, what: &str| {
+        let inputs: HashMap<String, Vec<u8>> = [("image".to_string(), bytes)].into();
+        let job = prepare(parse_spec(DEFAULTS).unwrap(), &inputs).unwrap();
+        let img = job.image.as_deref().unwrap();
+        assert_eq!(img.dims, [40, 40, 40], "{what}");
+        let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
+        let (_, rows) = objects(img, &result_state(&job, &out.last).mesh);
+        let volume: f64 = rows.iter().map(|r| r.size).sum();
+        eprintln!("{what}: {} objects, volume {volume:.1} (exact {exact:.1})", rows.len());
+        assert_eq!(rows.len(), 2, "{what}");
+        assert!((volume / exact - 1.0).abs() < 0.05, "{what}: {volume} {exact}");
+    };
+    check(nifti, "nifti");
+
+    // the same samples as a TIFF stack, ImageJ spacing 2
+    use tiff::encoder::{colortype::Gray16, TiffEncoder};
+    let mut out = std::io::Cursor::new(Vec::new());
+    let mut enc = TiffEncoder::new(&mut out).unwrap();
+    for k in 0..nz {
+        let mut image = enc.new_image::<Gray16>(n as u32, n as u32).unwrap();
+        image.encoder().write_tag(tiff::tags::Tag::ImageDescription, "ImageJ=1.11a\nspacing=2\n").unwrap();
+        // pages are stored top row first: flip rows to keep the same orientation
+        let page: Vec<u16> = (0..n * n)
+            .map(|q| {
+                let (i, row) = (q % n, q / n);
+                voxels[i + n * ((n - 1 - row) + n * k)].round().max(0.0) as u16
+            })
+            .collect();
+        image.write_data(&page).unwrap();
+    }
+    check(out.into_inner(), "tiff stack");
+}
