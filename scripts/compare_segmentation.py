@@ -302,6 +302,33 @@ def held_out_pictures():
             truth |= c < 4 + (cx + cy) % 5
     img = 60 + 130 * truth + 40 * rng.standard_normal(truth.shape)
     yield "25 small discs (radius 4–8 px), noise 40 (192²)", np.clip(np.round(img), 0, 255).astype(np.uint8), truth, 25
+    # the split of touching objects: one object with narrow parts, and touching
+    # pairs of radii 15:15, 15:10 and 16:8
+    k = 200
+    yy, xx = np.mgrid[0:k, 0:k] + 0.5
+
+    def capsule(x0, y0, x1, y1, radius):
+        px, py, ex, ey = xx - x0, yy - y0, x1 - x0, y1 - y0
+        t = np.clip((px * ex + py * ey) / (ex * ex + ey * ey), 0, 1)
+        return np.hypot(px - t * ex, py - t * ey) < radius
+
+    hand = np.hypot(xx - 100, yy - 120) < 40
+    for angle, length, radius in [(-150, 55, 8), (-115, 65, 7), (-90, 70, 7), (-65, 65, 7), (-35, 50, 6)]:
+        c, s_ = np.cos(np.radians(angle)), np.sin(np.radians(angle))
+        hand |= capsule(100 + 30 * c, 120 + 30 * s_, 100 + (30 + length) * c, 120 + (30 + length) * s_, radius)
+    cell = np.hypot(xx - 100, yy - 100) < 30
+    for angle in [20, 140, 260]:
+        c, s_ = np.cos(np.radians(angle)), np.sin(np.radians(angle))
+        cell |= capsule(100, 100, 100 + 70 * c, 100 + 70 * s_, 2.5) | (np.hypot(xx - 100 - 70 * c, yy - 100 - 70 * s_) < 6)
+    pairs = np.zeros((k, k), bool)
+    for (x0, y0, r0), (x1, y1, r1) in [((60, 60, 15), (86, 60, 15)), ((130, 60, 15), (153, 60, 10)),
+                                         ((80, 150, 16), (103, 150, 8))]:
+        pairs |= (np.hypot(xx - x0, yy - y0) < r0) | (np.hypot(xx - x1, yy - y1) < r1)
+    for name, truth, count in [("a hand (palm and five fingers)", hand, 1),
+                               ("a cell with three thin processes ending in knobs", cell, 1),
+                               ("three touching pairs, radii 15:15, 15:10, 16:8", pairs, 6)]:
+        img = 60 + 110 * truth + 40 * rng.standard_normal(truth.shape)
+        yield f"{name}, noise 40 (200²)", np.clip(np.round(img), 0, 255).astype(np.uint8), truth, count
 
 
 def held_out():

@@ -101,6 +101,23 @@ fn a_cell_in_a_phase_image() {
     assert!(d >= 0.96, "dice {d}");
 }
 
+/// scikit-image's horse silhouette (tests/data, 400×328 RGBA as it ships): one
+/// object whose head, tail and hooves join it at necks. The split of touching
+/// objects cut it into 10 before it asked for sides of comparable size and a
+/// neck clearly below the smaller one; it must be one object, Dice ≥ 0.995
+/// against the silhouette (its dark pixels).
+#[test]
+fn a_silhouette_with_legs_and_a_tail_is_one_object() {
+    let horse = image::load_from_memory(include_bytes!("../data/horse.png")).unwrap().to_luma8();
+    let (w, h) = (horse.width() as usize, horse.height() as usize);
+    let truth: Vec<bool> = horse.pixels().map(|p| p.0[0] < 128).collect();
+    let (got, n, _) = segment(DEFAULTS, include_bytes!("../data/horse.png").to_vec());
+    let d = dice(&got, &truth, w, h);
+    eprintln!("horse: dice {d:.4}, {n} objects");
+    assert_eq!(n, 1);
+    assert!(d >= 0.995, "dice {d}");
+}
+
 /// scikit-image's checkerboard (tests/data, 200², 8×8 squares of 25 px, light
 /// squares 205–255): its 32 light squares touch at their corners, where the
 /// contact rule holds them apart. Each step and the mesh management after it then

@@ -3,13 +3,34 @@
 
 use super::{find, neighbours, Dims};
 
+/// When two basins of the distance transform stay apart ([`split_touching`]): both
+/// peaks rise above their saddle by at least `max(depth, relative_depth · lower
+/// peak)`, and the higher peak is at most `size_ratio` times the lower one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Necks {
+    /// Least depth of the neck below the lower peak (samples).
+    pub depth: f64,
+    /// Least depth as a fraction of the lower peak.
+    pub relative_depth: f64,
+    /// Largest ratio of the peaks (the inscribed radii of the two sides).
+    pub size_ratio: f64,
+}
+
+impl Necks {
+    /// Whether basins with peaks `high ≥ low` meeting at `saddle` stay apart.
+    fn apart(&self, high: f64, low: f64, saddle: f64) -> bool {
+        low - saddle >= self.depth.max(self.relative_depth * low) && high <= self.size_ratio * low
+    }
+}
+
 /// Split the objects of `mask` where they touch: a watershed of the distance
 /// transform `d` (descending flood from its maxima) whose basins are merged across
-/// a saddle unless both their peaks rise above it by at least
-/// `max(depth, relative_depth · lower peak)` (a persistence criterion: two discs
-/// joined by a neck stay two objects when the neck is clearly narrower than both).
+/// a saddle unless [`Necks::apart`] keeps them apart (a persistence criterion: two
+/// discs of comparable size joined by a neck stay two objects when the neck is
+/// clearly narrower than both; a narrow part of one object much smaller than the
+/// rest, a leg or a tail, is no object of its own).
 /// Returns labels `1..=count` (0 outside `mask`) and `count`.
-pub fn split_touching(mask: &[bool], d: &[f64], dims: Dims, depth: f64, relative_depth: f64) -> (Vec<u32>, usize) {
+pub fn split_touching(mask: &[bool], d: &[f64], dims: Dims, necks: &Necks) -> (Vec<u32>, usize) {
     let mut order: Vec<usize> = (0..mask.len()).filter(|&p| mask[p]).collect();
     order.sort_unstable_by(|&a, &b| d[b].total_cmp(&d[a]).then(a.cmp(&b)));
     const NONE: u32 = u32::MAX;
@@ -40,7 +61,7 @@ pub fn split_touching(mask: &[bool], d: &[f64], dims: Dims, depth: f64, relative
         let main = roots[0];
         for &r in &roots[1..] {
             let low = peak[r as usize];
-            if low - d[p] < depth.max(relative_depth * low) {
+            if !necks.apart(peak[main as usize], low, d[p]) {
                 parent[r as usize] = main;
             }
         }
@@ -88,13 +109,15 @@ mod tests {
     use super::super::{components, disc_mask, distance_transform};
     use super::*;
 
+    const NECKS: Necks = Necks { depth: 2.0, relative_depth: 0.25, size_ratio: 2.5 };
+
     #[test]
     fn two_touching_discs_are_split_and_one_disc_is_not() {
         let (w, h) = (80, 40);
         let dims = [w, h, 1];
         let m = disc_mask(w, h, &[(25.0, 20.0, 12.0), (46.0, 20.0, 11.0)]);
         let d = distance_transform(&m, dims, [1.0; 3]);
-        let (mut labels, n) = split_touching(&m, &d, dims, 2.0, 0.25);
+        let (mut labels, n) = split_touching(&m, &d, dims, &NECKS);
         assert_eq!(n, 2);
         assert_eq!(components(&m, dims).1, 1);
         let cleared = separate(&mut labels, dims);
@@ -109,6 +132,26 @@ mod tests {
             })
             .collect();
         let d = distance_transform(&e, dims, [1.0; 3]);
-        assert_eq!(split_touching(&e, &d, dims, 2.0, 0.25).1, 1);
+        assert_eq!(split_touching(&e, &d, dims, &NECKS).1, 1);
+    }
+
+    /// A small side is a part of the larger one (a leg), whatever its neck; two
+    /// sides joined by a wide neck are one object.
+    #[test]
+    fn a_small_side_and_a_wide_neck_stay_one_object() {
+        let (w, h) = (80, 40);
+        let dims = [w, h, 1];
+        // inscribed radii 16 and about 5.5 with a neck of half-width about 2
+        let m = disc_mask(w, h, &[(28.0, 20.0, 16.0), (50.0, 20.0, 6.0)]);
+        let d = distance_transform(&m, dims, [1.0; 3]);
+        assert_eq!(components(&m, dims).1, 1);
+        let loose = Necks { depth: 1.0, relative_depth: 0.0, size_ratio: 100.0 };
+        assert_eq!(split_touching(&m, &d, dims, &loose).1, 2);
+        assert_eq!(split_touching(&m, &d, dims, &Necks { size_ratio: 2.5, ..loose }).1, 1);
+        // equal discs whose centres are 1.1 radii apart: a neck of about 0.85 radii
+        let m = disc_mask(w, h, &[(31.5, 20.0, 12.0), (44.5, 20.0, 12.0)]);
+        let d = distance_transform(&m, dims, [1.0; 3]);
+        assert_eq!(split_touching(&m, &d, dims, &loose).1, 2);
+        assert_eq!(split_touching(&m, &d, dims, &Necks { relative_depth: 0.18, ..loose }).1, 1);
     }
 }

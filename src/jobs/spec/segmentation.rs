@@ -114,8 +114,9 @@ pub struct SegmentationSpec {
     #[schemars(range(min = MIN_SIZE.min, max = MIN_SIZE.max))]
     pub min_size: Option<f64>,
     /// (Addition) the automatic initial shape splits objects that touch, where a
-    /// neck is clearly narrower than both sides (a watershed of the distance
-    /// transform); they then stay separate objects. Default true.
+    /// neck is clearly narrower than both sides and the sides are of comparable
+    /// size (a watershed of the distance transform); they then stay separate
+    /// objects. Default true.
     #[serde(default)]
     pub split_touching: Option<bool>,
     /// (Addition, Chan–Vese with per-object means) whether objects merge where
