@@ -82,7 +82,12 @@ fn an_anisotropic_nifti_volume_and_a_tiff_stack() {
         let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
         let (_, rows) = objects(img, &result_state(&job, &out.last).mesh);
         let volume: f64 = rows.iter().map(|r| r.size).sum();
-        eprintln!("{what}: {} objects, volume {volume:.1} (exact {exact:.1})", rows.len());
+        eprintln!(
+            "{what}: {:?} after {} iterations, {} objects, volume {volume:.1} (exact {exact:.1})",
+            out.stop,
+            out.last.iteration,
+            rows.len()
+        );
         assert_eq!(rows.len(), 2, "{what}");
         assert!((volume / exact - 1.0).abs() < 0.05, "{what}: {volume} {exact}");
     };
