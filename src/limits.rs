@@ -4,6 +4,16 @@
 /// Largest number of vertices an initial mesh may have (shapes, mesh files).
 pub const MAX_VERTICES: usize = 2_000_000;
 
+/// A run's mesh may grow by mesh management to this many times the vertices it
+/// started with (at least [`MIN_VERTEX_ALLOWANCE`], at most [`MAX_VERTICES`]);
+/// beyond, the run fails with a message on its last state instead of refining
+/// until the machine's memory runs out (steps made unstable by the settings:
+/// no backtracking and no step control).
+pub const MAX_MESH_GROWTH: usize = 8;
+
+/// The vertices a run's mesh may always grow to (see [`MAX_MESH_GROWTH`]).
+pub const MIN_VERTEX_ALLOWANCE: usize = 100_000;
+
 /// Largest number of vertices of a stressed film's initial surface.
 pub const MAX_FILM_VERTICES: usize = 100_000;
 

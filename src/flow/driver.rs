@@ -98,6 +98,9 @@ pub struct Flow<'p, const D: usize> {
     /// steps, oldest first, at most [`rules::WINDOW`] + 1 of them: the test over
     /// several steps.
     pub(super) recent: Vec<f64>,
+    /// The most vertices mesh management may give the mesh
+    /// ([`crate::limits::MAX_MESH_GROWTH`] times those it started with).
+    pub(super) vertex_limit: usize,
 }
 
 impl<'p, const D: usize> Flow<'p, D> {
@@ -245,6 +248,13 @@ impl<'p, const D: usize> Flow<'p, D> {
             candidate = self.problem.constrain_step(&self.mesh, candidate);
             if s.conservation.is_some() {
                 candidate = candidate.with_component_measures(&components);
+            }
+            // the constraints may have flattened elements against them (a long step
+            // out of a segmentation's image box, clamped onto its faces)
+            if let Some(shorter) = report.retry(rules::tangling(&self.mesh, &candidate, tau)) {
+                tangled = true;
+                tau = shorter;
+                continue;
             }
             let mut energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
             if energy.is_nan() || energy == f64::NEG_INFINITY {

@@ -20,4 +20,9 @@ pub enum FlowError {
     Settings { field: &'static str, reason: String },
     #[error("checkpoint does not fit: {0}")]
     Checkpoint(String),
+    #[error(
+        "mesh management grew the mesh to {vertices} vertices, more than the {limit} this run may have \
+         (the steps are unstable at these settings: see flow.backtracking and flow.step_control)"
+    )]
+    MeshGrowth { vertices: usize, limit: usize },
 }

@@ -23,6 +23,9 @@ impl<const D: usize> Flow<'_, D> {
             Managed::Moved(m) => (m, false),
             Managed::Remeshed(m) => (m, true),
         };
+        if mesh.num_vertices() > self.vertex_limit {
+            return Err(FlowError::MeshGrowth { vertices: mesh.num_vertices(), limit: self.vertex_limit });
+        }
         // the problem's constraints hold for every state the flow holds, as for
         // every step's: a management pass may move or insert vertices past them (a
         // regularized surface bulging out of a segmentation's image box), and a
@@ -110,5 +113,47 @@ mod tests {
             assert_eq!(flow.energy(), flow.mesh().boundary_measure());
         }
         assert!(flow.mesh().positions().iter().filter(|p| p[1] == 0.0).count() > 4);
+    }
+
+    /// A management pass that splits every segment in two.
+    struct Doubling;
+
+    impl MeshManager<2> for Doubling {
+        fn manage(&mut self, mesh: &Mesh<2>) -> Result<Managed<2>, crate::flow::FlowError> {
+            let mut x = mesh.positions().to_vec();
+            let mut elements = Vec::with_capacity(2 * mesh.num_elements());
+            for &[a, b] in mesh.elements() {
+                x.push((x[a] + x[b]) * 0.5);
+                let m = x.len() - 1;
+                elements.extend([[a, m], [m, b]]);
+            }
+            Ok(Managed::Remeshed(Mesh::from_trusted_parts(x, elements)))
+        }
+    }
+
+    /// Mesh management that refines without bound ends the run with a message
+    /// once the mesh would pass its allowance (a circle of 64 vertices may grow to
+    /// 100,000), on the last state it held.
+    #[test]
+    fn a_mesh_that_grows_without_bound_ends_the_run() {
+        let mut problem = AboveTheLine;
+        let mesh = circle([0.0, 0.5], 0.25, 64).unwrap();
+        let settings = FlowSettings { tau: 1e-6, ..FlowSettings::default() };
+        let mut flow = Flow::new(&mut problem, mesh, settings).unwrap().with_mesh_manager(Box::new(Doubling));
+        let mut steps = 0;
+        let error = loop {
+            match flow.step() {
+                Ok(report) => {
+                    assert!(report.accepted && report.stop.is_none());
+                    steps += 1;
+                }
+                Err(e) => break e,
+            }
+        };
+        // 64 · 2^11 = 131,072 > 100,000
+        assert_eq!(steps, 10);
+        assert_eq!(error, crate::flow::FlowError::MeshGrowth { vertices: 131_072, limit: 100_000 });
+        assert_eq!(flow.mesh().num_vertices(), 65_536);
+        assert!(error.to_string().contains("flow.backtracking"));
     }
 }

@@ -87,6 +87,7 @@ impl<'p, const D: usize> Flow<'p, D> {
         tau: f64,
         energy: f64,
     ) -> Self {
+        let vertices = mesh.num_vertices();
         let pattern = Pattern::new(mesh.num_vertices(), mesh.elements());
         let solver = SemiImplicitStep::new(settings.solver);
         let matrices = Matrices::assemble(&mesh, &pattern);
@@ -106,6 +107,13 @@ impl<'p, const D: usize> Flow<'p, D> {
             rediscretized_at: None,
             settled_tau: 0.0,
             recent: Vec::new(),
+            vertex_limit: vertex_limit(vertices),
         }
     }
+}
+
+/// The most vertices a run that starts with `vertices` may grow to.
+fn vertex_limit(vertices: usize) -> usize {
+    use crate::limits::{MAX_MESH_GROWTH, MAX_VERTICES, MIN_VERTEX_ALLOWANCE};
+    (MAX_MESH_GROWTH.saturating_mul(vertices)).max(MIN_VERTEX_ALLOWANCE).min(MAX_VERTICES.max(vertices))
 }

@@ -111,3 +111,20 @@ fn an_anisotropic_nifti_volume_and_a_tiff_stack() {
     }
     check(out.into_inner(), "tiff stack");
 }
+
+/// A first step so long (λ_in 1000, no step control) that the image box's
+/// constraint clamps the surface flat onto the box's faces: the flattened trial
+/// is retried with a shorter step like a tangled one. Accepted, it had made the
+/// next step's velocity non-finite, and the run failed.
+#[test]
+fn a_step_flattened_against_the_image_box_is_retried() {
+    let spec = r#"{"problem": {"type": "segmentation", "image": "input:image", "lambda_in": 1000},
+        "flow": {"step_control": 0}, "initial": {"shape": "seeds", "spacing": 30, "radius": 5}}"#;
+    let inputs: HashMap<String, Vec<u8>> =
+        [("image".to_string(), include_bytes!("../../examples/data/balls.nrrd").to_vec())].into();
+    let job = prepare(parse_spec(spec).unwrap(), &inputs).unwrap();
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ());
+    let out = out.unwrap_or_else(|f| panic!("the run failed: {}", f.error));
+    eprintln!("{:?} after {} iterations", out.stop, out.last.iteration);
+    assert!(out.last.iteration > 0);
+}
