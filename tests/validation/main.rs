@@ -161,6 +161,13 @@ fn bad_images_give_errors_naming_the_input() {
         &[("picture", good.clone())],
     );
     assert!(e.starts_with("problem.sigma:"), "{e}");
+    // a smoothing far wider than the image leaves it constant: the smoothing is
+    // named, not the image
+    let e = image_error(
+        r#"{"problem": {"type": "segmentation", "image": "input:picture", "sigma": 64}}"#,
+        &[("picture", good.clone())],
+    );
+    assert!(e.starts_with("problem.sigma:") && e.contains("16 × 16") && e.contains("smaller"), "{e}");
     let e = image_error(
         r#"{"problem": {"type": "segmentation", "image": "input:picture", "lambda_final": -2}}"#,
         &[("picture", good.clone())],

@@ -168,6 +168,16 @@ fn constant_image(source: &ImageSource) -> SpecError {
     SpecError::new("problem.image", format!("the image {names} is constant: there is nothing to segment"))
 }
 
+/// The error of an image that is not constant but that the smoothing by `sigma`
+/// pixels made so (a `sigma` far above the image's size).
+fn smoothed_away(sigma: f64, grid: &Grid) -> SpecError {
+    let sides = grid.dims[..grid.dimension].iter().map(|n| n.to_string()).collect::<Vec<_>>().join(" × ");
+    SpecError::new(
+        "problem.sigma",
+        format!("smoothing by {sigma} pixels leaves the image ({sides} pixels) constant: give a smaller sigma"),
+    )
+}
+
 /// Normalization, noise, smoothing, polarity, illumination and thresholds.
 fn preprocess(spec: &SegmentationSpec, grid: &Grid, model: SegmentationModel) -> Result<Preprocessed, SpecError> {
     let d = grid.dimension;
@@ -194,7 +204,8 @@ fn preprocess(spec: &SegmentationSpec, grid: &Grid, model: SegmentationModel) ->
         None => smoothing_for_noise(noise, d).max(crate::jobs::spec::default_sigma(d)),
     };
     let smoothed = gaussian_smooth(&unit, sigma);
-    let first = otsu(&smoothed.values).ok_or_else(constant)?;
+    // the image is not constant (it has a normalization): the smoothing made it so
+    let first = otsu(&smoothed.values).ok_or_else(|| smoothed_away(sigma, grid))?;
     let polarity = spec.polarity.unwrap_or_else(|| border_polarity(&smoothed, first));
     let background = spec.background.unwrap_or(BackgroundModel::Quadratic);
     let offset = match background {
@@ -218,7 +229,13 @@ fn preprocess(spec: &SegmentationSpec, grid: &Grid, model: SegmentationModel) ->
     };
     let threshold = match spec.threshold {
         Some(t) => LEVEL.check("problem.threshold", t)?,
-        None => otsu(&smoothed.values).ok_or_else(constant)?,
+        None => otsu(&smoothed.values).ok_or_else(|| match spec.sigma {
+            Some(_) => smoothed_away(sigma, grid),
+            None => SpecError::new(
+                "problem.background",
+                "the image is its quadratic background alone: there is nothing to segment (`flat` keeps it)",
+            ),
+        })?,
     };
     // dim objects: above the background level by DIM_OBJECT_SNR times the
     // background's fluctuation at the smoothing scale, the larger of the smoothed
@@ -332,7 +349,7 @@ fn functional(
                 _ => crate::jobs::spec::default_lambda(d, l),
             });
             let (field, k) =
-                EdgeField::with_contrast(grid, sigma, spec.edge_contrast).ok_or_else(|| constant_image(&spec.image))?;
+                EdgeField::with_contrast(grid, sigma, spec.edge_contrast).ok_or_else(|| smoothed_away(sigma, grid))?;
             Some((Segmentation { field: Arc::new(field), lambda, epsilon }, k))
         }
     };
