@@ -298,14 +298,29 @@ impl<'p, const D: usize> Flow<'p, D> {
             // because it is short, not because the state is stationary
             let limited = report.backtracks > 0 || report.reductions > 0;
             let (judged, settled) = rules::judged_step(tau, self.settled_tau, tangled, growing, limited);
-            self.settled_tau = settled;
-            let (per_time, tolerance) = (s.tolerance_per_time, s.tolerance);
+            let last_settled = std::mem::replace(&mut self.settled_tau, settled);
+            let (per_time, tolerance, tau_min) = (s.tolerance_per_time, s.tolerance, s.tau_min);
             let judged = judged || per_time;
             let scale = if s.tolerance_per_time { tau / s.tau } else { 1.0 };
             if judged && s.tolerance > 0.0 && (previous - energy).abs() <= s.tolerance * previous.abs() * scale {
                 report.stop = Some(StopReason::Converged);
             }
-            match self.manage_mesh()? {
+            let managed = match self.manage_mesh() {
+                Err(FlowError::Management(reason)) => {
+                    // the step left a shape the management cannot repair: it is taken
+                    // back, and the next call tries half of it
+                    tracing::debug!(iteration = self.iteration, %reason, tau, "management failed, step taken back");
+                    (self.mesh, self.time, self.energy, self.settled_tau) = (before, time, previous, last_settled);
+                    self.tau = 0.25 * tau;
+                    self.iteration -= 1;
+                    report.accepted = false;
+                    report.rejected = Some(Rejection::Management);
+                    report.stop = (0.5 * tau < tau_min).then_some(StopReason::TauMin);
+                    return Ok(report);
+                }
+                other => other?,
+            };
+            match managed {
                 Some(StopReason::PinchOff) => {
                     // a neck collapsed during this step, which the mesh no longer
                     // resolves: the run ends on the last good state, before the step

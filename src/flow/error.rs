@@ -20,6 +20,11 @@ pub enum FlowError {
     Settings { field: &'static str, reason: String },
     #[error("checkpoint does not fit: {0}")]
     Checkpoint(String),
+    /// The mesh management could not repair the shape a step left (a fold of a
+    /// curve it could not resolve); the driver takes such a step back and tries a
+    /// shorter one.
+    #[error("mesh management: {0}")]
+    Management(String),
     #[error(
         "mesh management grew the mesh to {vertices} vertices, more than the {limit} this run may have \
          (the steps are unstable at these settings: see flow.backtracking and flow.step_control)"

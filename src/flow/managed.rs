@@ -156,4 +156,42 @@ mod tests {
         assert_eq!(flow.mesh().num_vertices(), 65_536);
         assert!(error.to_string().contains("flow.backtracking"));
     }
+
+    /// A management pass that fails on its first call (a fold it cannot resolve).
+    struct FailingOnce(bool);
+
+    impl MeshManager<2> for FailingOnce {
+        fn manage(&mut self, _mesh: &Mesh<2>) -> Result<Managed<2>, crate::flow::FlowError> {
+            if std::mem::replace(&mut self.0, true) {
+                return Ok(Managed::Unchanged);
+            }
+            Err(crate::flow::FlowError::Management("segments 1 and 3 intersect".into()))
+        }
+    }
+
+    /// A step whose shape the management cannot repair is taken back, and the
+    /// next call tries half of it; with `tau_min` above that half the run stops
+    /// `tau_min`, saying why.
+    #[test]
+    fn a_step_the_management_cannot_repair_is_taken_back() {
+        let mut problem = AboveTheLine;
+        let mesh = circle([0.0, 0.5], 0.25, 64).unwrap();
+        let settings = FlowSettings { tau: 1e-3, ..FlowSettings::default() };
+        let mut flow =
+            Flow::new(&mut problem, mesh.clone(), settings).unwrap().with_mesh_manager(Box::new(FailingOnce(false)));
+        let first = flow.step().unwrap();
+        assert!(!first.accepted && first.stop.is_none());
+        assert_eq!(first.rejected, Some(crate::flow::Rejection::Management));
+        assert_eq!((flow.iteration, flow.time), (0, 0.0));
+        assert_eq!(flow.mesh(), &mesh);
+        let second = flow.step().unwrap();
+        assert!(second.accepted);
+        assert_eq!((flow.iteration, flow.tau), (1, 5e-4));
+        let mut problem = AboveTheLine;
+        let settings = FlowSettings { tau: 1e-3, tau_min: 6e-4, ..FlowSettings::default() };
+        let mut flow = Flow::new(&mut problem, mesh, settings).unwrap().with_mesh_manager(Box::new(FailingOnce(false)));
+        let stop = flow.run(&std::sync::atomic::AtomicBool::new(false), |_| {}).unwrap();
+        assert_eq!(stop, crate::flow::StopReason::TauMin);
+        assert_eq!(flow.stop_cause(), Some(crate::flow::Rejection::Management));
+    }
 }

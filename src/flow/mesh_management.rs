@@ -117,7 +117,7 @@ fn manage_curves(
     watch: Option<&mut CrossingWatch>,
     mesh: &CurveMesh,
 ) -> Result<Managed<2>, FlowError> {
-    let fail = |e: crate::geometry::MeshError| FlowError::Problem(format!("mesh management: {e}"));
+    let fail = |e: crate::geometry::MeshError| FlowError::Management(e.to_string());
     if s.topology_changes && crate::geometry::all_loops_below(mesh, s.params.min_area) {
         return Ok(Managed::Vanished);
     }

@@ -82,6 +82,9 @@ pub enum Rejection {
     Inadmissible,
     /// The energy would increase (backtracking).
     EnergyIncrease,
+    /// The mesh management could not repair the shape the step left (the step is
+    /// taken back after it was accepted).
+    Management,
 }
 
 impl Rejection {
@@ -99,6 +102,10 @@ impl Rejection {
                  stressed film: the surface met the substrate or a lateral wall outside its crossing)"
             }
             Rejection::EnergyIncrease => "every trial step increased the energy (backtracking)",
+            Rejection::Management => {
+                "the mesh management could not repair the curve that every trial step left (a fold it could \
+                 not resolve)"
+            }
         }
     }
 }

@@ -174,7 +174,7 @@ fn smoothed_away(sigma: f64, grid: &Grid) -> SpecError {
     let sides = grid.dims[..grid.dimension].iter().map(|n| n.to_string()).collect::<Vec<_>>().join(" × ");
     SpecError::new(
         "problem.sigma",
-        format!("smoothing by {sigma} pixels leaves the image ({sides} pixels) constant: give a smaller sigma"),
+        format!("smoothing by {sigma} pixels leaves the image ({sides} samples) constant: give a smaller sigma"),
     )
 }
 
