@@ -31,6 +31,17 @@ fn segment_objects(spec: &str, image: Vec<u8>) -> (Vec<bool>, Vec<ObjectRow>, Pr
     (m, rows, job)
 }
 
+/// Uniform samples in `[0, 1)` from a xorshift generator started at `seed`: the
+/// fixed noise of the synthetic pictures.
+fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 /// Dice of `got` (grid order) against `truth` (file order, rows from the top).
 fn dice(got: &[bool], truth: &[bool], w: usize, h: usize) -> f64 {
     let (mut both, mut a, mut b) = (0usize, 0usize, 0usize);

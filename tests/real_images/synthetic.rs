@@ -18,17 +18,7 @@ fn many_objects_of_different_contrast_some_touching() {
     // a touching pair of different contrast
     discs.push((42.0, 86.0, 10.0, 60.0));
     discs.push((62.0, 86.0, 10.0, 130.0));
-    let mut seed = 17u64;
-    let mut noise = || {
-        let mut s = 0.0;
-        for _ in 0..12 {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            s += (seed >> 11) as f64 / (1u64 << 53) as f64;
-        }
-        s - 6.0
-    };
+    let mut noise = gaussian(17);
     let mut pixels = vec![0u8; w * h];
     let mut truth = vec![false; w * h];
     for r in 0..h {
@@ -56,17 +46,7 @@ fn many_objects_of_different_contrast_some_touching() {
 /// contrast 130, Gaussian noise of 65 from a fixed xorshift generator, clipped to
 /// 8 bits): the PNG and the truth (file order).
 fn snr_2_picture(w: usize, h: usize, inside: impl Fn(f64, f64) -> bool) -> (Vec<u8>, Vec<bool>) {
-    let mut seed = 5u64;
-    let mut noise = || {
-        let mut s = 0.0;
-        for _ in 0..12 {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            s += (seed >> 11) as f64 / (1u64 << 53) as f64;
-        }
-        s - 6.0
-    };
+    let mut noise = gaussian(5);
     let mut pixels = vec![0u8; w * h];
     let mut truth = vec![false; w * h];
     for r in 0..h {
@@ -111,4 +91,17 @@ fn a_ring_keeps_its_hole() {
     assert!(d >= 0.985, "dice {d}");
     assert_eq!(n, 1);
     assert!((rows[0].size / exact - 1.0).abs() < 0.03, "area {} against {exact}", rows[0].size);
+}
+
+/// Standard normal samples (approximately: the sum of 12 uniform ones, less 6)
+/// from [`uniform`] started at `seed`.
+fn gaussian(seed: u64) -> impl FnMut() -> f64 {
+    let mut u = uniform(seed);
+    move || {
+        let mut s = 0.0;
+        for _ in 0..12 {
+            s += u();
+        }
+        s - 6.0
+    }
 }

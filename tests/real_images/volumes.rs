@@ -38,13 +38,8 @@ fn two_overlapping_balls_are_two_objects() {
 fn an_anisotropic_nifti_volume_and_a_tiff_stack() {
     let (n, nz) = (40usize, 20usize);
     let (c1, c2, r) = ([14.0, 20.0, 20.0], [27.0, 20.0, 20.0], 8.0);
-    let mut seed = 3u64;
-    let mut noise = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut u = uniform(3);
+    let mut noise = move || u() - 0.5;
     let mut voxels = Vec::with_capacity(n * n * nz);
     for k in 0..nz {
         for j in 0..n {

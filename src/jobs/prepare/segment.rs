@@ -116,7 +116,7 @@ pub(super) fn prepare_segmentation(
     let merge = spec.merge.unwrap_or(false);
     let region = RegionWeights { mu, lambda_in, lambda_out };
     let start = image_initial(spec, initial, &grid, &pre, region, min_size)?;
-    let weights = ChanVeseWeights { mu, lambda_in, lambda_out, per_object: means == MeansKind::PerObject, merge };
+    let weights = ChanVeseWeights { region, per_object: means == MeansKind::PerObject, merge };
     let (problem, second_stage, edges, edge_contrast) =
         functional(spec, model, &grid, &pre.data, &start, &weights, pre.sigma)?;
     let setup = SegmentationSetup {
@@ -320,9 +320,7 @@ fn image_initial(
 
 /// The weights and switches of the Chan–Vese functional.
 struct ChanVeseWeights {
-    mu: f64,
-    lambda_in: f64,
-    lambda_out: f64,
+    region: RegionWeights,
     per_object: bool,
     merge: bool,
 }
@@ -372,7 +370,8 @@ fn functional(
             values[p] = bg;
         }
     }
-    let mut cv = ChanVese::new(d, grid.dims, &values, w.mu / l, (w.lambda_in, w.lambda_out));
+    let RegionWeights { mu, lambda_in, lambda_out } = w.region;
+    let mut cv = ChanVese::new(d, grid.dims, &values, mu / l, (lambda_in, lambda_out));
     cv.per_object = w.per_object;
     cv.separate = w.per_object && !w.merge;
     cv.geodesic = geodesic;
