@@ -8,7 +8,7 @@ mod shape_design;
 mod stressed_film;
 mod surface_diffusion;
 
-pub use chan_vese::{ChanVese, ChanVeseRun};
+pub use chan_vese::{ChanVese, ChanVeseRun, Territories};
 pub use curvature_flow::CurvatureFlow;
 pub use edge_refinement::{blur_variance, refine_to_edges, EdgeRefinement};
 pub use segmentation::Segmentation;

@@ -1,10 +1,13 @@
 //! Mesh management for closed triangle surfaces (paper §4.1): volume-preserving
 //! tangential regularization ([`regularize_surface`]), and adaptivity
 //! ([`adapt_surface`]) by edge split, collapse and flip with angle-width control,
+//! and the replacement of clusters of tiny triangles (a crumpled spot, or a neck
+//! pinching off),
 //! one module per operation over one [`adjacency`] structure. Pure functions from a
 //! surface mesh to a surface mesh.
 
 mod adjacency;
+mod clusters;
 mod collapse;
 mod flip;
 mod regularize;
@@ -15,6 +18,7 @@ pub use adjacency::{surface_edges, SurfaceEdge};
 pub use regularize::regularize_surface;
 
 use adjacency::Adjacency;
+use clusters::replace_clusters;
 use collapse::collapse_edges;
 use flip::flip_edges;
 use split::split_edges;
@@ -53,10 +57,10 @@ pub fn edge_statistics(mesh: &SurfaceMesh) -> (f64, f64, f64) {
     (sum / edges.len().max(1) as f64, hb, bh)
 }
 
-/// One adaptation pass: splits (refinement and angle-width control), collapses,
-/// flips, each stage kept only if its result is a valid closed oriented surface (a
-/// stage that would break it is skipped, the others still apply). Returns `None`
-/// if nothing changed.
+/// One adaptation pass: clusters of tiny triangles replaced ([`replace_clusters`]),
+/// splits (refinement and angle-width control), collapses, flips, each stage kept
+/// only if its result is a valid closed oriented surface (a stage that would break
+/// it is skipped, the others still apply). Returns `None` if nothing changed.
 pub fn adapt_surface(mesh: &SurfaceMesh, s: &SurfaceRemeshSettings) -> Option<SurfaceMesh> {
     let mut p = mesh.positions().to_vec();
     let mut tris = mesh.elements().to_vec();
@@ -76,6 +80,7 @@ pub fn adapt_surface(mesh: &SurfaceMesh, s: &SurfaceRemeshSettings) -> Option<Su
             changed = true;
         }
     };
+    stage(&|p, t, a| replace_clusters(p, t, a, s), &mut p, &mut tris, &mut adjacency);
     stage(
         &|p, t, a| match split_edges(p, t, a, s) {
             Some(new) => {

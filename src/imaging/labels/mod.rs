@@ -1,16 +1,19 @@
 //! Binary masks and label images on a grid (`x` fastest, as [`super::Grid`]):
 //! connected components and hole filling here; the Euclidean distance transform
 //! (`distance`), the split of touching objects by a persistence watershed on
-//! it (`watershed`), and the holes the region model keeps open (`holes`). Face
+//! it (`watershed`), the holes the region model keeps open (`holes`), and the
+//! territory of every object (`territory`). Face
 //! neighbours (4 in 2D, 6 in 3D) throughout. Labels are `1..=count`, 0 is
 //! background.
 
 mod distance;
 mod holes;
+mod territory;
 mod watershed;
 
 pub use distance::distance_transform;
 pub use holes::{reopen_holes, RegionWeights};
+pub use territory::territories;
 pub use watershed::{separate, split_touching, Necks};
 
 /// Grid dimensions `[n_x, n_y, n_z]` (`n_z = 1` in 2D).

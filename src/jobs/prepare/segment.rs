@@ -10,6 +10,7 @@ use super::image_shapes::{inscribed, seeds, threshold_mesh, threshold_objects, L
 use super::inputs::load_image;
 use super::ProblemKind;
 use crate::geometry::AnyMesh;
+use crate::imaging::labels::territories;
 use crate::imaging::{
     background_spread, gaussian_smooth, histogram_mode, noise_level, otsu, smoothed_noise, smoothing_for_noise,
     EdgeField, Grid, Normalization, PERCENTILES,
@@ -19,7 +20,7 @@ use crate::jobs::spec::{
     BackgroundModel, ImageSource, InitialSpec, InscribedShape, MeansKind, Polarity, SeedsShape, SegmentationModel,
     SegmentationSpec, SpecError, ThresholdShape,
 };
-use crate::problems::{ChanVese, Segmentation};
+use crate::problems::{ChanVese, Segmentation, Territories};
 use serde::Serialize;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -273,6 +274,9 @@ struct ImageInitial {
     /// Samples between touching objects, and the background level they get.
     cut: Vec<usize>,
     background: Option<f64>,
+    /// Volumes with several objects: the territory of every object (the contact
+    /// rule of surfaces, [`Territories`]).
+    territories: Option<Territories>,
 }
 
 /// The initial shape from the image (`initial` omitted, `threshold`, `seeds` or
@@ -285,17 +289,20 @@ fn image_initial(
     region: RegionWeights,
     min_size: f64,
 ) -> Result<ImageInitial, SpecError> {
-    let none = ImageInitial { mesh: None, objects: 0, cut: Vec::new(), background: None };
+    let none = ImageInitial { mesh: None, objects: 0, cut: Vec::new(), background: None, territories: None };
     Ok(match initial {
         None | Some(InitialSpec::Threshold(ThresholdShape {})) => {
             let split = spec.split_touching.unwrap_or(true);
             let objects = threshold_objects(&pre.smoothed, &pre.data, region, &pre.levels, min_size, split);
+            let territories = (grid.dimension == 3 && objects.count > 1)
+                .then(|| Territories::new(territories(&objects.labels, pre.smoothed.dims)));
             match threshold_mesh(&pre.smoothed, &objects)? {
                 Some((m, count)) => ImageInitial {
                     mesh: Some(m),
                     objects: count,
                     cut: objects.cleared,
                     background: Some(objects.background),
+                    territories,
                 },
                 // nothing above the threshold (a constant or near-constant image): the
                 // flow starts from the inscribed shape and decides; with no object it
@@ -374,6 +381,7 @@ fn functional(
     let mut cv = ChanVese::new(d, grid.dims, &values, mu / l, (lambda_in, lambda_out));
     cv.per_object = w.per_object;
     cv.separate = w.per_object && !w.merge;
+    cv.territories = if cv.separate { start.territories.clone() } else { None };
     cv.geodesic = geodesic;
     let edges = match (&cv.geodesic, spec.edge_refinement) {
         (Some(g), Some(true)) => Some(g.field.clone()),

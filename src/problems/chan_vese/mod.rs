@@ -30,9 +30,11 @@ use moments::{accumulate_moments, Moments};
 pub use run::ChanVeseRun;
 use run::Objects;
 use std::sync::Arc;
+pub use territory::Territories;
 
 mod moments;
 mod run;
+mod territory;
 
 /// Default `flow.tau`, in pixels: the data term's speed is at most
 /// `max(λ_in, λ_out)` (normalized intensities), so a step moves the contour at most
@@ -61,6 +63,9 @@ pub struct ChanVese {
     /// objects would overlap is inadmissible, `J = +∞`): touching objects stay
     /// separate instead of merging.
     pub separate: bool,
+    /// With `separate`, for surfaces: the territory of every initial object,
+    /// which its vertices do not leave ([`Territories`]).
+    pub territories: Option<Territories>,
 }
 
 impl ChanVese {
@@ -82,6 +87,7 @@ impl ChanVese {
             totals,
             geodesic: None,
             separate: false,
+            territories: None,
         }
     }
 
@@ -263,10 +269,18 @@ impl<const D: usize> Problem<D> for ChanVeseRun {
     /// crossing segments keep their positions of `current` (a contact holds the
     /// contours where they meet, and the rest of the step goes on), repeated while
     /// new crossings appear (at most 8 rounds; what is left is inadmissible).
+    /// Surfaces: the vertices that would enter another object's territory keep
+    /// theirs ([`Territories::hold`]).
     fn constrain_step(&self, current: &Mesh<D>, candidate: Mesh<D>) -> Mesh<D> {
         let mut candidate = Problem::<D>::constrain(self, candidate);
-        if !(self.cv.separate && D == 2) || current.num_vertices() != candidate.num_vertices() {
+        if !self.cv.separate || current.num_vertices() != candidate.num_vertices() {
             return candidate;
+        }
+        if D == 3 {
+            return match &self.cv.territories {
+                Some(t) => t.hold(&self.cv.intensity, current, candidate),
+                None => candidate,
+            };
         }
         for _ in 0..8 {
             let held = crossing_vertices(&candidate);
