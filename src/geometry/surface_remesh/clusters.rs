@@ -5,10 +5,12 @@
 //! of the hole is closed by a fan around one new vertex, placed so that the
 //! enclosed volume is kept.
 //!
-//! The patch cut out is a disk (a crumpled spot or spike: one fan replaces it)
-//! or an annulus (a thin neck whose circumference has shrunk below `h_min`: two
+//! The patch cut out is a disk (a crumpled spot or spike: one fan replaces it),
+//! an annulus (a thin neck whose circumference has shrunk below `h_min`: two
 //! fans cap the two sides, and the surface pinches off there, as the paper's
-//! topological changes of curves do).
+//! topological changes of curves do), or a whole closed component that has
+//! shrunk to less than `SPAN·h_min` (it vanishes, as curves below `min_area` do;
+//! the last component stays).
 
 use super::adjacency::Adjacency;
 use super::SurfaceRemeshSettings;
@@ -26,7 +28,7 @@ const RINGS: usize = 6;
 
 /// Replaces each cluster of vertices joined by edges below `TINY·h_min`: the patch
 /// is the triangles touching the cluster, grown ring by ring until it is a disk
-/// or an annulus whose fans do not fold. Returns whether a cluster was replaced
+/// or an annulus whose fans do not fold, or a whole small component (removed). Returns whether a cluster was replaced
 /// (the fans' triangles are appended, the patches' inner vertices left unused).
 pub(super) fn replace_clusters(
     p: &mut Vec<Point<3>>,
@@ -38,7 +40,8 @@ pub(super) fn replace_clusters(
     let mut locked = vec![false; p.len()];
     let mut dead = vec![false; tris.len()];
     let mut fans: Vec<(Point<3>, Vec<usize>)> = Vec::new();
-    let mut caps_of_disks = 0;
+    // patches replaced, and whether one was cut at a neck (or vanished)
+    let (mut removed, mut cut) = (0, false);
     for cluster in clusters.iter().filter(|c| span(p, c) < SPAN * s.h_min) {
         let mut inner = cluster.clone();
         for _ in 0..RINGS {
@@ -47,26 +50,31 @@ pub(super) fn replace_clusters(
             if vertices.iter().any(|&v| locked[v]) {
                 break;
             }
-            if let Some(caps) = Patch::of(tris, &triangles, vertices.len()).and_then(|patch| patch.caps(p, tris)) {
+            let Some(patch) = Patch::of(tris, &triangles, vertices.len()) else {
+                inner = vertices;
+                continue;
+            };
+            // a whole component within the cluster's reach has shrunk away
+            let vanished = patch.loops.is_empty() && span(p, &vertices) < SPAN * s.h_min;
+            let caps = if vanished { Some(Vec::new()) } else { patch.caps(p, tris) };
+            if let Some(caps) = caps {
                 for &t in &triangles {
                     dead[t] = true;
                 }
                 for &v in &vertices {
                     locked[v] = true;
                 }
-                if caps.len() == 1 {
-                    caps_of_disks += 1;
-                }
+                removed += 1;
+                cut |= caps.len() != 1;
                 fans.extend(caps);
                 break;
             }
             inner = vertices;
         }
     }
-    if fans.is_empty() {
+    if removed == 0 {
         return false;
     }
-    let cut = fans.len() > caps_of_disks;
     let mut kept: Vec<[usize; 3]> = tris.iter().zip(&dead).filter(|(_, d)| !**d).map(|(t, _)| *t).collect();
     for (centre, boundary) in fans {
         p.push(centre);
@@ -75,6 +83,9 @@ pub(super) fn replace_clusters(
     }
     if cut {
         drop_slivers(p, &mut kept, (2.0 * s.h_min).powi(3));
+    }
+    if kept.is_empty() {
+        return false; // the last component stays (its tangles end the run)
     }
     *tris = kept;
     true
@@ -165,16 +176,16 @@ struct Patch<'a> {
 }
 
 impl<'a> Patch<'a> {
-    /// The patch of `triangles` (on `vertices` vertices), if it is a disk or an
-    /// annulus: every boundary vertex starts exactly one boundary edge, and the
-    /// Euler characteristic is 2 minus the number of loops.
+    /// The patch of `triangles` (on `vertices` vertices), if it is a disk, an
+    /// annulus or a sphere: every boundary vertex starts exactly one boundary edge,
+    /// and the Euler characteristic is 2 minus the number of loops.
     fn of(tris: &[[usize; 3]], triangles: &'a [usize], vertices: usize) -> Option<Patch<'a>> {
         let mut directed: Vec<(usize, usize)> =
             triangles.iter().flat_map(|&t| (0..3).map(move |k| (tris[t][k], tris[t][(k + 1) % 3]))).collect();
         directed.sort_unstable();
         let next: Vec<(usize, usize)> =
             directed.iter().copied().filter(|&(a, b)| directed.binary_search(&(b, a)).is_err()).collect();
-        if next.len() < 3 || next.windows(2).any(|w| w[0].0 == w[1].0) {
+        if (!next.is_empty() && next.len() < 3) || next.windows(2).any(|w| w[0].0 == w[1].0) {
             return None;
         }
         let step = |a: usize| next.binary_search_by(|e| e.0.cmp(&a)).ok().map(|k| next[k].1);
@@ -302,6 +313,25 @@ mod tests {
         assert!((v1 - v0).abs() < 1e-12 * v0, "{v0} {v1}");
         // a sphere without tiny edges is left as it is
         assert!(replaced(&sphere, &s).is_none());
+    }
+
+    /// A sphere shrunk to a radius of 1e-4 beside a sphere of radius 1: the small
+    /// one, all of whose edges are tiny, has vanished and is removed; alone it
+    /// stays (the mesh is never emptied).
+    #[test]
+    fn a_component_shrunk_below_h_min_vanishes_unless_it_is_the_last() {
+        let big = icosphere([0.0; 3], 1.0, 2).unwrap();
+        let small = icosphere([3.0, 0.0, 0.0], 1e-4, 1).unwrap();
+        let n = big.num_vertices();
+        let p: Vec<Point<3>> = big.positions().iter().chain(small.positions()).copied().collect();
+        let t: Vec<[usize; 3]> =
+            big.elements().iter().copied().chain(small.elements().iter().map(|t| t.map(|v| v + n))).collect();
+        let both = Mesh::new(p, t).unwrap();
+        let s = settings(0.05);
+        let out = replaced(&both, &s).expect("the small sphere vanishes");
+        assert_eq!(out.component_labels().1, 1);
+        assert!((out.enclosed_measure() - big.enclosed_measure()).abs() < 1e-12);
+        assert!(replaced(&small, &s).is_none());
     }
 
     /// A sphere pinched at its equator to a ring of radius 1e-4: the band around
