@@ -121,7 +121,9 @@ pub struct SegmentationSpec {
     pub split_touching: Option<bool>,
     /// (Addition, Chan–Vese with per-object means) whether objects merge where
     /// their contours meet; default false: objects that start separate stay the
-    /// objects they are (a trial step that would make them overlap is shortened).
+    /// objects they are (curves: a trial step that would make them overlap is
+    /// shortened; surfaces: each keeps to its territory, the voxels nearer to it
+    /// than to any other initial object).
     #[serde(default)]
     pub merge: Option<bool>,
 }
