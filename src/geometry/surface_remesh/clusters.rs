@@ -28,8 +28,9 @@ const RINGS: usize = 6;
 
 /// Replaces each cluster of vertices joined by edges below `TINY·h_min`: the patch
 /// is the triangles touching the cluster, grown ring by ring until it is a disk
-/// or an annulus whose fans do not fold, or a whole small component (removed). Returns whether a cluster was replaced
-/// (the fans' triangles are appended, the patches' inner vertices left unused).
+/// or an annulus whose fans do not fold, or a whole small component (removed).
+/// Returns whether a cluster was replaced (the fans' triangles are appended, the
+/// patches' inner vertices left unused); `p` and `tris` are untouched otherwise.
 pub(super) fn replace_clusters(
     p: &mut Vec<Point<3>>,
     tris: &mut Vec<[usize; 3]>,
@@ -76,6 +77,9 @@ pub(super) fn replace_clusters(
         return false;
     }
     let mut kept: Vec<[usize; 3]> = tris.iter().zip(&dead).filter(|(_, d)| !**d).map(|(t, _)| *t).collect();
+    if kept.is_empty() && fans.is_empty() {
+        return false; // the last component stays (its tangles end the run)
+    }
     for (centre, boundary) in fans {
         p.push(centre);
         let x = p.len() - 1;
@@ -83,9 +87,6 @@ pub(super) fn replace_clusters(
     }
     if cut {
         drop_slivers(p, &mut kept, (2.0 * s.h_min).powi(3));
-    }
-    if kept.is_empty() {
-        return false; // the last component stays (its tangles end the run)
     }
     *tris = kept;
     true
