@@ -86,6 +86,18 @@ mod tests {
         }
     }
 
+    /// Curve shortening above the line of a circle of 64 vertices, radius 0.25,
+    /// centred at `(0, y)`, with the mesh manager `manager`.
+    fn above_the_line<'p>(
+        problem: &'p mut AboveTheLine,
+        y: f64,
+        settings: FlowSettings,
+        manager: Box<dyn MeshManager<2>>,
+    ) -> Flow<'p, 2> {
+        let mesh = circle([0.0, y], 0.25, 64).unwrap();
+        Flow::new(problem, mesh, settings).unwrap().with_mesh_manager(manager)
+    }
+
     /// A management pass that moves every vertex down by 0.1, past the obstacle
     /// near the curve's bottom.
     struct Sinking;
@@ -104,9 +116,8 @@ mod tests {
     #[test]
     fn a_managed_state_keeps_the_constraints() {
         let mut problem = AboveTheLine;
-        let mesh = circle([0.0, 0.3], 0.25, 64).unwrap();
         let settings = FlowSettings { tau: 1e-4, ..FlowSettings::default() };
-        let mut flow = Flow::new(&mut problem, mesh, settings).unwrap().with_mesh_manager(Box::new(Sinking));
+        let mut flow = above_the_line(&mut problem, 0.3, settings, Box::new(Sinking));
         for _ in 0..3 {
             assert!(flow.step().unwrap().accepted);
             assert!(flow.mesh().positions().iter().all(|p| p[1] >= 0.0));
@@ -137,9 +148,8 @@ mod tests {
     #[test]
     fn a_mesh_that_grows_without_bound_ends_the_run() {
         let mut problem = AboveTheLine;
-        let mesh = circle([0.0, 0.5], 0.25, 64).unwrap();
         let settings = FlowSettings { tau: 1e-6, ..FlowSettings::default() };
-        let mut flow = Flow::new(&mut problem, mesh, settings).unwrap().with_mesh_manager(Box::new(Doubling));
+        let mut flow = above_the_line(&mut problem, 0.5, settings, Box::new(Doubling));
         let mut steps = 0;
         let error = loop {
             match flow.step() {
@@ -175,10 +185,9 @@ mod tests {
     #[test]
     fn a_step_the_management_cannot_repair_is_taken_back() {
         let mut problem = AboveTheLine;
-        let mesh = circle([0.0, 0.5], 0.25, 64).unwrap();
         let settings = FlowSettings { tau: 1e-3, ..FlowSettings::default() };
-        let mut flow =
-            Flow::new(&mut problem, mesh.clone(), settings).unwrap().with_mesh_manager(Box::new(FailingOnce(false)));
+        let mut flow = above_the_line(&mut problem, 0.5, settings, Box::new(FailingOnce(false)));
+        let mesh = flow.mesh().clone();
         let first = flow.step().unwrap();
         assert!(!first.accepted && first.stop.is_none());
         assert_eq!(first.rejected, Some(crate::flow::Rejection::Management));
@@ -189,7 +198,7 @@ mod tests {
         assert_eq!((flow.iteration, flow.tau), (1, 5e-4));
         let mut problem = AboveTheLine;
         let settings = FlowSettings { tau: 1e-3, tau_min: 6e-4, ..FlowSettings::default() };
-        let mut flow = Flow::new(&mut problem, mesh, settings).unwrap().with_mesh_manager(Box::new(FailingOnce(false)));
+        let mut flow = above_the_line(&mut problem, 0.5, settings, Box::new(FailingOnce(false)));
         let stop = flow.run(&std::sync::atomic::AtomicBool::new(false), |_| {}).unwrap();
         assert_eq!(stop, crate::flow::StopReason::TauMin);
         assert_eq!(flow.stop_cause(), Some(crate::flow::Rejection::Management));

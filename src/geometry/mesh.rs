@@ -154,36 +154,7 @@ impl<const D: usize> Mesh<D> {
 
     /// Component label of every vertex and the number of components.
     pub fn component_labels(&self) -> (Vec<usize>, usize) {
-        let n = self.positions.len();
-        let mut parent: Vec<usize> = (0..n).collect();
-        fn find(p: &mut [usize], mut x: usize) -> usize {
-            while p[x] != x {
-                p[x] = p[p[x]];
-                x = p[x];
-            }
-            x
-        }
-        for el in self.elements.iter() {
-            let r0 = find(&mut parent, el[0]);
-            for &v in &el[1..] {
-                let r = find(&mut parent, v);
-                if r != r0 {
-                    parent[r] = r0;
-                }
-            }
-        }
-        let mut label = vec![usize::MAX; n];
-        let mut count = 0;
-        let mut out = vec![0; n];
-        for v in 0..n {
-            let r = find(&mut parent, v);
-            if label[r] == usize::MAX {
-                label[r] = count;
-                count += 1;
-            }
-            out[v] = label[r];
-        }
-        (out, count)
+        components(self.positions.len(), &self.elements)
     }
 }
 
@@ -297,4 +268,40 @@ pub fn segment_cycles(n: usize, segments: impl Iterator<Item = (usize, usize)>) 
         out.push(cyc);
     }
     out
+}
+
+/// Component label (`0..count`, in the order of each component's first vertex) of
+/// each of `n` vertices joined by `elements` (segments, triangles, or any vertex
+/// sets), and the number of components; a vertex in no element is a component of
+/// its own. Union–find over the elements.
+pub fn components<const K: usize>(n: usize, elements: &[[usize; K]]) -> (Vec<usize>, usize) {
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    for el in elements {
+        let r0 = find(&mut parent, el[0]);
+        for &v in &el[1..] {
+            let r = find(&mut parent, v);
+            if r != r0 {
+                parent[r] = r0;
+            }
+        }
+    }
+    let mut label = vec![usize::MAX; n];
+    let mut count = 0;
+    let mut out = vec![0; n];
+    for v in 0..n {
+        let r = find(&mut parent, v);
+        if label[r] == usize::MAX {
+            label[r] = count;
+            count += 1;
+        }
+        out[v] = label[r];
+    }
+    (out, count)
 }

@@ -28,7 +28,7 @@ pub use curve_topology::{resolve_crossings, resolve_intersections};
 pub use curves::{all_loops_below, circle, curves_from_loops, drop_small_loops, ellipse, polygon, rectangle};
 pub use intersect::{find_periodic_intersections, find_segment_intersections, SegmentHit};
 pub use measures::{vertex_normals, MeshQuality};
-pub use mesh::{segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};
+pub use mesh::{components, segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};
 pub use objects::Objects;
 pub use surface_remesh::{
     adapt_surface, edge_statistics, regularize_surface, surface_edges, SurfaceEdge, SurfaceRemeshSettings,

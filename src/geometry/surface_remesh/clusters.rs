@@ -14,7 +14,7 @@
 
 use super::adjacency::Adjacency;
 use super::SurfaceRemeshSettings;
-use crate::geometry::Point;
+use crate::geometry::{components, Point};
 
 /// Edges shorter than this fraction of `h_min` join their ends into a cluster.
 const TINY: f64 = 0.25;
@@ -95,56 +95,36 @@ pub(super) fn replace_clusters(
 /// Drops the closed components that enclose less than `min_volume` (a cut at a
 /// neck next to a spike's tip leaves the tip), unless that would drop them all.
 fn drop_slivers(p: &[Point<3>], tris: &mut Vec<[usize; 3]>, min_volume: f64) {
-    let mut root: Vec<usize> = (0..p.len()).collect();
+    let (component, count) = components(p.len(), tris);
+    let mut volume = vec![0.0; count];
+    let mut reference = vec![None; count];
     for t in tris.iter() {
-        for k in 1..3 {
-            let (ra, rb) = (find(&mut root, t[0]), find(&mut root, t[k]));
-            root[ra.max(rb)] = ra.min(rb);
-        }
-    }
-    let mut volume = vec![0.0; p.len()];
-    let mut reference = vec![None; p.len()];
-    for t in tris.iter() {
-        let r = find(&mut root, t[0]);
-        let o: Point<3> = *reference[r].get_or_insert(p[t[0]]);
+        let c = component[t[0]];
+        let o: Point<3> = *reference[c].get_or_insert(p[t[0]]);
         let [x, y, z] = t.map(|v| p[v] - o);
-        volume[r] += x.dot(&y.cross(&z)) / 6.0;
+        volume[c] += x.dot(&y.cross(&z)) / 6.0;
     }
-    let keep: Vec<bool> = tris.iter().map(|t| volume[find(&mut root, t[0])].abs() >= min_volume).collect();
-    if keep.iter().any(|&k| k) {
-        let mut k = keep.iter();
-        tris.retain(|_| *k.next().unwrap());
+    if volume.iter().any(|v| v.abs() >= min_volume) {
+        tris.retain(|t| volume[component[t[0]]].abs() >= min_volume);
     }
 }
 
-/// The vertex sets (of two or more) joined by edges shorter than `tiny`.
+/// The vertex sets (of two or more, each in increasing order) joined by edges
+/// shorter than `tiny`, in the order of their second vertex.
 fn clusters(p: &[Point<3>], adjacency: &Adjacency, tiny: f64) -> Vec<Vec<usize>> {
-    let mut root: Vec<usize> = (0..p.len()).collect();
-    for e in adjacency.edges.iter().filter(|e| (p[e.b] - p[e.a]).norm() < tiny) {
-        let (ra, rb) = (find(&mut root, e.a), find(&mut root, e.b));
-        root[ra.max(rb)] = ra.min(rb);
+    let short: Vec<[usize; 2]> =
+        adjacency.edges.iter().filter(|e| (p[e.b] - p[e.a]).norm() < tiny).map(|e| [e.a, e.b]).collect();
+    if short.is_empty() {
+        return Vec::new();
     }
-    let mut slot = vec![usize::MAX; p.len()];
-    let mut out: Vec<Vec<usize>> = Vec::new();
-    for v in 0..p.len() {
-        let r = find(&mut root, v);
-        if r != v {
-            if slot[r] == usize::MAX {
-                slot[r] = out.len();
-                out.push(vec![r]);
-            }
-            out[slot[r]].push(v);
-        }
+    let (component, count) = components(p.len(), &short);
+    let mut members = vec![Vec::new(); count];
+    for (v, &c) in component.iter().enumerate() {
+        members[c].push(v);
     }
-    out
-}
-
-fn find(root: &mut [usize], mut v: usize) -> usize {
-    while root[v] != v {
-        root[v] = root[root[v]];
-        v = root[v];
-    }
-    v
+    members.retain(|m| m.len() >= 2);
+    members.sort_unstable_by_key(|m| m[1]);
+    members
 }
 
 /// The diagonal of the bounding box of the vertices `vs`.
@@ -230,20 +210,16 @@ impl<'a> Patch<'a> {
         let area = |l: &[usize]| {
             (0..l.len()).fold(Point::<3>::zeros(), |acc, i| acc + (p[l[i]] - r).cross(&(p[l[(i + 1) % l.len()]] - r)))
         };
-        let (mut flat, mut scale) = (0.0, 0.0);
-        for l in &self.loops {
-            let s = area(l);
-            flat += (centroid(l) - r).dot(&s);
-            scale += s.norm();
-        }
+        let loops: Vec<(Point<3>, Point<3>)> = self.loops.iter().map(|l| (centroid(l), area(l))).collect();
+        let flat: f64 = loops.iter().map(|(c, s)| (c - r).dot(s)).sum();
+        let scale: f64 = loops.iter().map(|(_, s)| s.norm()).sum();
         if scale == 0.0 {
             return None;
         }
         let height = (volume - flat) / scale;
         let mut caps = Vec::with_capacity(self.loops.len());
-        for l in &self.loops {
-            let s = area(l);
-            let x = centroid(l) + s.normalize() * height;
+        for (l, (c, s)) in self.loops.iter().zip(&loops) {
+            let x = c + s.normalize() * height;
             let folds = (0..l.len()).any(|i| {
                 let (a, b) = (p[l[i]], p[l[(i + 1) % l.len()]]);
                 let m = (b - a).cross(&(x - a));
