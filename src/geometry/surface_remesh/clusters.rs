@@ -223,7 +223,7 @@ impl<'a> Patch<'a> {
             let folds = (0..l.len()).any(|i| {
                 let (a, b) = (p[l[i]], p[l[(i + 1) % l.len()]]);
                 let m = (b - a).cross(&(x - a));
-                m.norm() <= 1e-12 * s.norm() || m.dot(&s) <= 0.0
+                m.norm() <= 1e-12 * s.norm() || m.dot(s) <= 0.0
             });
             if folds {
                 return None;
