@@ -18,20 +18,28 @@ pub(super) enum Verdict {
     },
 }
 
-/// Geometric control (paper §4.1): with `ratio = τ max_T |V⃗(z_a) − V⃗(z_b)|/h_T`
-/// above `ε`, retry with `τ · min(0.9 ε/ratio, ½)`.
-pub(super) fn step_control<const D: usize>(
-    mesh: &Mesh<D>,
-    velocity: &[Point<D>],
-    tau: f64,
-    eps: Option<f64>,
-) -> Verdict {
-    let Some(eps) = eps else { return Verdict::Accept };
-    let ratio = tau * relative_motion(mesh, velocity);
-    if ratio > eps {
-        Verdict::Retry { tau: tau * (0.9 * eps / ratio).min(0.5), rejection: Rejection::StepControl }
-    } else {
-        Verdict::Accept
+/// The longest step the geometric control (paper §4.1) allows, from a trial step
+/// of length `tau` that moved `old` to `new`: with the displacements `d = τ V⃗`,
+/// `ratio = max_T |d(z_a) − d(z_b)|/h_T` stays at most `ε` up to `τ ε / ratio`;
+/// `None` without step control (or without any relative motion). The
+/// displacements are those of the step as taken, after the problem's constraints:
+/// a vertex held against the image's box or another object's territory pushes
+/// without moving, and does not shorten the step.
+pub(super) fn motion_limit<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, tau: f64, eps: Option<f64>) -> Option<f64> {
+    let eps = eps?;
+    let moved: Vec<Point<D>> = new.positions().iter().zip(old.positions()).map(|(b, a)| b - a).collect();
+    let ratio = relative_motion(old, &moved);
+    (ratio > 0.0).then(|| tau * eps / ratio)
+}
+
+/// Geometric control: a step longer than its [`motion_limit`] (its ratio above
+/// `ε`) is retried with `min(0.9 · limit, τ/2)`, that is `τ · min(0.9 ε/ratio, ½)`.
+pub(super) fn step_control(tau: f64, limit: Option<f64>) -> Verdict {
+    match limit {
+        Some(limit) if tau > limit => {
+            Verdict::Retry { tau: (0.9 * limit).min(0.5 * tau), rejection: Rejection::StepControl }
+        }
+        _ => Verdict::Accept,
     }
 }
 
@@ -127,7 +135,8 @@ pub(super) fn stationary_over_window(recent: &[f64], tolerance: f64) -> bool {
     }
 }
 
-/// `max_T max_{a,b ∈ T} |V⃗(z_a) − V⃗(z_b)| / h_T`: relative motion per unit time.
+/// `max_T max_{a,b ∈ T} |d(z_a) − d(z_b)| / h_T`: the relative motion of the
+/// vertex displacements `d`.
 fn relative_motion<const D: usize>(mesh: &Mesh<D>, v: &[Point<D>]) -> f64 {
     let mut worst: f64 = 0.0;
     for (e, el) in mesh.elements().iter().enumerate() {
@@ -207,14 +216,23 @@ mod tests {
     fn step_control_limits_the_relative_motion() {
         let mesh = circle([0.0, 0.0], 1.0, 64).unwrap();
         let shift = vec![Point::<2>::new(1.0, 0.0); 64];
-        assert_eq!(step_control(&mesh, &shift, 10.0, Some(0.5)), Verdict::Accept);
+        let moved = |v: &[Point<2>]| mesh.with_positions(mesh.positions().iter().zip(v).map(|(x, v)| x + v).collect());
+        // a translation moves nothing relative (up to the rounding of the positions)
+        assert!(motion_limit(&mesh, &moved(&shift), 1.0, Some(0.5)).is_none_or(|l| l > 1e12));
+        assert_eq!(step_control(10.0, None), Verdict::Accept);
         let stretch: Vec<Point<2>> = mesh.positions().iter().map(|p| p * 2.0).collect();
-        // relative motion of a stretch: |2(x_a − x_b)|/|x_a − x_b| = 2
-        assert_eq!(step_control(&mesh, &stretch, 0.2, Some(0.5)), Verdict::Accept);
-        let (tau, why) = retried(step_control(&mesh, &stretch, 1.0, Some(0.5))).unwrap();
+        // relative motion of a stretch: |2(x_a − x_b)|/|x_a − x_b| = 2, so τ ≤ ε/2
+        let limit = motion_limit(&mesh, &moved(&stretch), 1.0, Some(0.5)).unwrap();
+        let half = motion_limit(&mesh, &moved(&stretch), 0.5, Some(0.5)).unwrap();
+        assert!((half - 0.125).abs() < 1e-12, "the same displacement in half the time: {half}");
+        assert!((limit - 0.25).abs() < 1e-12, "{limit}");
+        assert_eq!(step_control(0.2, Some(limit)), Verdict::Accept);
+        let (tau, why) = retried(step_control(1.0, Some(limit))).unwrap();
         assert_eq!(why, Rejection::StepControl);
         assert!((tau - 0.9 * 0.5 / 2.0).abs() < 1e-12, "{tau}"); // τ · 0.9 ε/ratio
-        assert_eq!(step_control(&mesh, &stretch, 1.0, None), Verdict::Accept);
+        let (tau, _) = retried(step_control(0.3, Some(limit))).unwrap();
+        assert!((tau - 0.15).abs() < 1e-12, "at least halved: {tau}");
+        assert_eq!(motion_limit(&mesh, &moved(&stretch), 1.0, None), None);
     }
 
     /// A mirrored curve (every segment flipped) and a collapsed one tangle; a

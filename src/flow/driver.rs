@@ -226,11 +226,16 @@ impl<'p, const D: usize> Flow<'p, D> {
                 bending: self.problem.bending(),
             };
             let vel = self.solver.velocity(&sys)?;
-            if let Some(shorter) = report.retry(rules::step_control(&self.mesh, &vel.vector, tau, s.step_control)) {
+            let advanced = advanced(&self.mesh, &vel.vector, tau);
+            let a1 = if s.conservation.is_some() { advanced.enclosed_measure() } else { a0 };
+            // the problem's constraints (an obstacle, the image's box, the objects'
+            // territories)
+            let mut candidate = self.problem.constrain_step(&self.mesh, advanced);
+            let limit = rules::motion_limit(&self.mesh, &candidate, tau, s.step_control);
+            if let Some(shorter) = report.retry(rules::step_control(tau, limit)) {
                 tau = shorter;
                 continue;
             }
-            let mut candidate = advanced(&self.mesh, &vel.vector, tau);
             // a tangled step is retried with half the step; below tau_min the run
             // stops with `tau_min` on the last good state
             if let Some(shorter) = report.retry(rules::tangling(&self.mesh, &candidate, tau)) {
@@ -238,23 +243,19 @@ impl<'p, const D: usize> Flow<'p, D> {
                 tau = shorter;
                 continue;
             }
-            let a1 = if s.conservation.is_some() { candidate.enclosed_measure() } else { a0 };
             if let Some(shorter) = report.retry(rules::conservation(a0, a1, s.conservation, tau, s.tau_min)) {
                 tau = shorter;
                 continue;
             }
-            // the problem's constraints (an obstacle), then the step's O(τ²) change of
-            // each component's measure (and what the constraint added) removed
-            candidate = self.problem.constrain_step(&self.mesh, candidate);
             if s.conservation.is_some() {
+                // the step's O(τ²) change of each component's measure (and what the
+                // constraint added) removed
                 candidate = candidate.with_component_measures(&components);
-            }
-            // the constraints may have flattened elements against them (a long step
-            // out of a segmentation's image box, clamped onto its faces)
-            if let Some(shorter) = report.retry(rules::tangling(&self.mesh, &candidate, tau)) {
-                tangled = true;
-                tau = shorter;
-                continue;
+                if let Some(shorter) = report.retry(rules::tangling(&self.mesh, &candidate, tau)) {
+                    tangled = true;
+                    tau = shorter;
+                    continue;
+                }
             }
             let mut energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
             if energy.is_nan() || energy == f64::NEG_INFINITY {

@@ -103,8 +103,9 @@ pub struct FlowSpec {
     pub tolerance: Option<f64>,
     /// Halve τ until J decreases; default on, off for physical flows.
     pub backtracking: Option<bool>,
-    /// ε of the geometric time-step control `τ max_T |V⃗(z_a) − V⃗(z_b)|/h_T ≤ ε`;
-    /// 0 switches it off; default 0.5.
+    /// ε of the geometric time-step control `τ max_T |V⃗(z_a) − V⃗(z_b)|/h_T ≤ ε`
+    /// (`τV⃗` the step's displacements after the problem's constraints); 0 switches
+    /// it off; default 0.5.
     #[schemars(range(min = 0))]
     pub step_control: Option<f64>,
     /// α of the plain `h1` product; default 0.01.
