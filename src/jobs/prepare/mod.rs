@@ -17,7 +17,7 @@ mod segment;
 mod shapes;
 
 pub use job::{PreparedJob, ProblemKind};
-pub use segment::{default_min_size, default_mu, SegmentationSetup};
+pub use segment::{default_min_size, default_mu, default_mu_in, SegmentationSetup};
 
 use crate::flow::{CurveManager, ScalarProduct};
 use crate::geometry::AnyMesh;

@@ -26,12 +26,22 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 /// Default `problem.mu` (intensity² × pixels) for noise of standard deviation
-/// `noise` (normalized scale): `max(0.05, noise/2)`. The fit of an unsmoothed image
-/// along a contour fluctuates with the noise; the length term has to outweigh that
-/// at the scale of a pixel.
+/// `noise` (normalized scale) on a curve: `max(0.05, noise/2)`. The fit of an
+/// unsmoothed image along a contour fluctuates with the noise; the length term has
+/// to outweigh that at the scale of a pixel.
 pub fn default_mu(noise: f64) -> f64 {
     (0.5 * noise).max(0.05)
 }
+
+/// Default `problem.mu` in dimension `d`: [`default_mu`] divided by `d − 1`. The
+/// length term pulls a contour in with `μκ`, and a surface's mean curvature is the
+/// sum of its two principal curvatures: a ball of radius `r` has `κ = 2/r` where a
+/// disc has `1/r`. Dividing by `d − 1` gives objects of one radius the same pull,
+/// hence the same inward shift of their edges, in 2D and 3D.
+pub fn default_mu_in(noise: f64, d: usize) -> f64 {
+    default_mu(noise) / (d.max(2) - 1) as f64
+}
+
 /// Dim objects are detected this many times the background's fluctuation at the
 /// smoothing scale away from the background level (for Gaussian fluctuations a
 /// false detection per independent sample has a probability of about 1e-9).
@@ -98,7 +108,7 @@ pub(super) fn prepare_segmentation(
         Some(m) => MIN_SIZE.check("problem.min_size", m)?,
         None => default_min_size(d),
     };
-    let mu = WEIGHT.check("problem.mu", spec.mu.unwrap_or(default_mu(pre.noise)))?;
+    let mu = WEIGHT.check("problem.mu", spec.mu.unwrap_or(default_mu_in(pre.noise, d)))?;
     let lambda_in = WEIGHT.check("problem.lambda_in", spec.lambda_in.unwrap_or(1.0))?;
     let lambda_out = WEIGHT.check("problem.lambda_out", spec.lambda_out.unwrap_or(1.0))?;
     // the geodesic model's weights are checked whichever model runs

@@ -64,7 +64,9 @@ pub struct SegmentationSpec {
     pub model: Option<SegmentationModel>,
     /// (Addition, Chan–Vese) weight of the contour's length, in intensity² ×
     /// pixels (the image normalized to [0, 1]); default `max(0.05, noise/2)` with
-    /// the noise's standard deviation on that scale.
+    /// the noise's standard deviation on that scale, halved in 3D (a surface's
+    /// mean curvature is the sum of two principal curvatures, so that objects of
+    /// one radius are pulled in alike).
     #[serde(default)]
     #[schemars(range(min = WEIGHT.min, max = WEIGHT.max))]
     pub mu: Option<f64>,
