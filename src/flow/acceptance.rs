@@ -235,6 +235,45 @@ mod tests {
         assert_eq!(motion_limit(&mesh, &moved(&stretch), 1.0, None), None);
     }
 
+    /// A circle blown up by a pressure against walls that hold every vertex where
+    /// it is (as an image's box or another object's territory holds a
+    /// segmentation's vertices): its velocity alone would cut the step to about
+    /// 1e-3, but nothing moves, so the step is taken at `flow.tau`.
+    #[test]
+    fn a_held_vertex_does_not_shorten_the_step() {
+        use crate::flow::{Flow, FlowSettings, Problem, ProblemError, ShapeGradient, SurfaceState};
+        struct Walled;
+        impl Problem<2> for Walled {
+            fn name(&self) -> &'static str {
+                "walled"
+            }
+            fn energy(&mut self, mesh: &Mesh<2>) -> Result<f64, ProblemError> {
+                Ok(mesh.boundary_measure() - 100.0 * mesh.enclosed_measure())
+            }
+            fn shape_gradient(&mut self, state: &SurfaceState<'_, 2>) -> Result<ShapeGradient, ProblemError> {
+                let n = state.mesh.num_vertices();
+                Ok(ShapeGradient { g: vec![1.0; n], f: vec![-100.0; n], aux: Vec::new() })
+            }
+            fn constrain_step(&self, current: &Mesh<2>, _candidate: Mesh<2>) -> Mesh<2> {
+                current.clone()
+            }
+        }
+        let mesh = circle([0.0, 0.0], 0.25, 64).unwrap();
+        let settings = FlowSettings { tau: 1e-2, ..FlowSettings::default() };
+        let mut problem = Walled;
+        let mut flow = Flow::new(&mut problem, mesh.clone(), settings).unwrap();
+        let report = flow.step().unwrap();
+        assert!(report.accepted);
+        assert_eq!(report.rejected, None, "{report:?}");
+        assert_eq!(flow.progress().tau, 1e-2);
+        assert_eq!(flow.mesh().positions(), mesh.positions());
+        // what the unconstrained velocity V = 100 − κ would have allowed
+        let v: Vec<Point<2>> = mesh.positions().iter().map(|p| p * (96.0 / 0.25)).collect();
+        let moved = mesh.with_positions(mesh.positions().iter().zip(&v).map(|(x, v)| x + v).collect());
+        let limit = motion_limit(&mesh, &moved, 1.0, Some(0.5)).unwrap();
+        assert!(limit < 2e-3, "{limit}");
+    }
+
     /// A mirrored curve (every segment flipped) and a collapsed one tangle; a
     /// slightly shrunk one does not.
     #[test]
