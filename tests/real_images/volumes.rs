@@ -15,6 +15,9 @@ fn two_overlapping_balls_are_two_objects() {
     let voxel = 1.0 / 48.0;
     assert!(sizes.h_max <= voxel && sizes.h_min >= 0.25 * voxel, "{sizes:?}");
     // an h_min the spec gives stays, and h_max keeps at least twice it
+    // a surface's length term weighs half a curve's (its mean curvature sums two)
+    let setup = job.segmentation.as_ref().unwrap();
+    assert_eq!(setup.mu, shapeflow::jobs::default_mu(setup.noise) / 2.0);
     let given = r#"{"problem": {"type": "segmentation", "image": "input:image"}, "mesh": {"h_min": 0.012}}"#;
     let other = prepare(parse_spec(given).unwrap(), &inputs).unwrap().surface_manager.unwrap().params;
     assert!(other.h_min == 0.012 && other.h_max >= 0.024, "{other:?}");
