@@ -5,7 +5,7 @@
 //! Below `τ_min`, [`stop_below_tau_min`] decides between `tau_min` and `converged`.
 
 use super::report::{Rejection, StopReason};
-use crate::geometry::{degenerate_measure, simplex, Mesh, Point};
+use crate::geometry::{degenerate_measure, simplex, Mesh};
 
 /// What a rule says about a trial step of size `τ`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -27,8 +27,7 @@ pub(super) enum Verdict {
 /// without moving, and does not shorten the step.
 pub(super) fn motion_limit<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, tau: f64, eps: Option<f64>) -> Option<f64> {
     let eps = eps?;
-    let moved: Vec<Point<D>> = new.positions().iter().zip(old.positions()).map(|(b, a)| b - a).collect();
-    let ratio = relative_motion(old, &moved);
+    let ratio = relative_motion(old, new);
     (ratio > 0.0).then(|| tau * eps / ratio)
 }
 
@@ -135,15 +134,17 @@ pub(super) fn stationary_over_window(recent: &[f64], tolerance: f64) -> bool {
     }
 }
 
-/// `max_T max_{a,b ∈ T} |d(z_a) − d(z_b)| / h_T`: the relative motion of the
-/// vertex displacements `d`.
-fn relative_motion<const D: usize>(mesh: &Mesh<D>, v: &[Point<D>]) -> f64 {
+/// `max_T max_{a,b ∈ T} |d(z_a) − d(z_b)| / h_T` on `old`: the relative motion of
+/// the vertex displacements `d` from `old` to `new`.
+fn relative_motion<const D: usize>(old: &Mesh<D>, new: &Mesh<D>) -> f64 {
+    let (x0, x1) = (old.positions(), new.positions());
+    let d = |v: usize| x1[v] - x0[v];
     let mut worst: f64 = 0.0;
-    for (e, el) in mesh.elements().iter().enumerate() {
-        let h = simplex::diameter(&mesh.element_points(e));
+    for (e, el) in old.elements().iter().enumerate() {
+        let h = simplex::diameter(&old.element_points(e));
         for a in 0..D {
             for b in a + 1..D {
-                worst = worst.max((v[el[a]] - v[el[b]]).norm() / h);
+                worst = worst.max((d(el[a]) - d(el[b])).norm() / h);
             }
         }
     }
@@ -177,7 +178,7 @@ fn trace_tangle<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, e: usize, tau: f64
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::circle;
+    use crate::geometry::{circle, Point};
 
     fn retried(v: Verdict) -> Option<(f64, Rejection)> {
         match v {

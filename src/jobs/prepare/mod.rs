@@ -13,6 +13,7 @@ mod image_shapes;
 mod inputs;
 mod job;
 mod mesh_settings;
+mod preprocess;
 mod segment;
 mod shapes;
 
