@@ -3,7 +3,7 @@
 //! the end), cancellation, and resumption from a checkpoint.
 
 use super::{AnyMesh, PreparedJob, ProblemKind};
-use crate::flow::{Checkpoint, Flow, FlowError, MeshManager, Problem, Progress, StopReason, VertexFields};
+use crate::flow::{Checkpoint, Flow, FlowError, MeshData, MeshManager, Problem, Progress, StopReason, VertexFields};
 use crate::geometry::Mesh;
 use std::sync::atomic::AtomicBool;
 
@@ -81,6 +81,7 @@ fn run_stages<const D: usize>(
     let mut stage = resume.map_or(0, |c| c.stage.min(usize::from(job.second_stage.is_some())));
     // the state a later stage starts from was reported as the end of the one before
     let mut reported = false;
+    let mut splits = 0;
     loop {
         let out = run_stage::<D>(job, stage, mesh, dim, start.as_ref(), reported, cancel, events)?;
         if stage == 0 && job.second_stage.is_some() && out.stop == StopReason::Converged {
@@ -89,8 +90,39 @@ fn run_stages<const D: usize>(
             (start, stage, reported) = (Some(first), 1, true);
             continue;
         }
+        if out.stop == StopReason::Converged && splits < MAX_NECK_SPLITS {
+            if let Some(next) = split_at_necks::<D>(job, dim, &out.last) {
+                // a new state, one iteration on: reported, then run to convergence
+                splits += 1;
+                (start, reported) = (Some(next), false);
+                continue;
+            }
+        }
         return Ok(out);
     }
+}
+
+/// How many times a run goes on after splitting its converged contours at necks
+/// ([`NeckSplit`](super::NeckSplit)): each split adds objects, and an object split once is rarely
+/// split again.
+const MAX_NECK_SPLITS: usize = 3;
+
+/// The state after `last` with its objects split at necks (a fresh step size,
+/// its energy on the new curves), or `None` if the job splits none.
+fn split_at_necks<const D: usize>(job: &PreparedJob, dim: &Dimension<'_, D>, last: &Checkpoint) -> Option<Checkpoint> {
+    let split = job.neck_split.as_ref()?;
+    let curves = split.split(&last.mesh.to_mesh_unvalidated::<2>()?)?;
+    let mesh: MeshData = (&curves).into();
+    let energy = (dim.problem)(job.stage_problem(last.stage)).ok()?.energy(&mesh.to_mesh_unvalidated::<D>()?).ok()?;
+    energy.is_finite().then(|| Checkpoint {
+        iteration: last.iteration + 1,
+        tau: job.settings.tau,
+        energy,
+        mesh,
+        settled_tau: 0.0,
+        recent_energies: Vec::new(),
+        ..last.clone()
+    })
 }
 
 /// One stage of [`run_prepared`]: the flow of the stage's problem from `start`

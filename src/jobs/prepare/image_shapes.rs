@@ -20,7 +20,7 @@ use crate::jobs::spec::SpecError;
 /// ratios up to 1.8; the false cuts of a horse's silhouette are at depths of 6 %
 /// (its head) and 16 % (its body), and at ratios of 2.8 (its tail) and 6.6–7.6
 /// (its hooves).
-const NECKS: Necks = Necks { depth: 1.5, relative_depth: 0.18, size_ratio: 2.5 };
+pub(super) const NECKS: Necks = Necks { depth: 1.5, relative_depth: 0.18, size_ratio: 2.5 };
 /// Holes of less than this fraction of the object around them are filled in the
 /// initial shape (the flow does not open new holes) unless their samples fit the
 /// background better than the object by more than the length of their boundary

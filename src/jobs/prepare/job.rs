@@ -5,6 +5,7 @@ use super::SegmentationSetup;
 use crate::flow::{CurveManager, FlowError, FlowSettings, Problem, SurfaceManager};
 use crate::geometry::AnyMesh;
 use crate::imaging::{EdgeField, Grid};
+use crate::jobs::necks::NeckSplit;
 use crate::jobs::spec::JobSpec;
 use crate::problems::{ChanVese, CurvatureFlow, Segmentation, ShapeDesign, StressedFilm, SurfaceDiffusion};
 use std::sync::Arc;
@@ -82,4 +83,7 @@ pub struct PreparedJob {
     pub edges: Option<Arc<EdgeField>>,
     /// (Addition) the settings of a segmentation, automatic or given.
     pub segmentation: Option<SegmentationSetup>,
+    /// (Addition) the split of touching objects at the necks of converged
+    /// contours (2D Chan–Vese segmentation with `problem.split_touching`).
+    pub neck_split: Option<NeckSplit>,
 }

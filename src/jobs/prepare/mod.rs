@@ -42,6 +42,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     let mut edges = None;
     let mut image_mesh = None;
     let mut segmentation = None;
+    let mut neck_split = None;
     // the problems that need the initial curve are built once it is there
     let early = match &spec.problem {
         ProblemSpec::CurvatureFlow(CurvatureFlowSpec { gamma, lambda }) => {
@@ -57,8 +58,8 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         ProblemSpec::Segmentation(seg) => {
             let prepared = segment::prepare_segmentation(seg, spec.initial.as_ref(), inputs)?;
             image = Some(Arc::new(prepared.grid));
-            (second_stage, edges, image_mesh, segmentation) =
-                (prepared.second_stage, prepared.edges, prepared.mesh, Some(prepared.setup));
+            (second_stage, edges, image_mesh, segmentation, neck_split) =
+                (prepared.second_stage, prepared.edges, prepared.mesh, Some(prepared.setup), prepared.neck_split);
             Some(prepared.problem)
         }
         ProblemSpec::ShapeDesign(_) | ProblemSpec::StressedFilm(_) => None,
@@ -207,5 +208,6 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         image,
         edges,
         segmentation,
+        neck_split,
     })
 }

@@ -53,7 +53,11 @@ pub(super) fn smoothed_away(sigma: f64, grid: &Grid) -> SpecError {
 }
 
 /// Normalization, noise, smoothing, polarity, illumination and thresholds.
-pub(super) fn preprocess(spec: &SegmentationSpec, grid: &Grid, model: SegmentationModel) -> Result<Preprocessed, SpecError> {
+pub(super) fn preprocess(
+    spec: &SegmentationSpec,
+    grid: &Grid,
+    model: SegmentationModel,
+) -> Result<Preprocessed, SpecError> {
     let d = grid.dimension;
     let percentiles = spec.percentiles.unwrap_or([PERCENTILES.0, PERCENTILES.1]);
     PERCENTILE.check("problem.percentiles[0]", percentiles[0])?;

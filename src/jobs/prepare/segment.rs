@@ -5,17 +5,18 @@
 //! that the results report.
 
 use super::checks::positive;
-use super::image_shapes::{inscribed, seeds, threshold_mesh, threshold_objects, RegionWeights};
+use super::image_shapes::{inscribed, seeds, threshold_mesh, threshold_objects, RegionWeights, NECKS};
 use super::inputs::load_image;
 use super::preprocess::{preprocess, smoothed_away, Preprocessed};
 use super::ProblemKind;
 use crate::geometry::AnyMesh;
 use crate::imaging::labels::territories;
 use crate::imaging::{EdgeField, Grid};
+use crate::jobs::necks::NeckSplit;
 use crate::jobs::spec::bounds::{MIN_SIZE, WEIGHT};
 use crate::jobs::spec::{
-    BackgroundModel, InitialSpec, InscribedShape, MeansKind, Polarity, SeedsShape, SegmentationModel,
-    SegmentationSpec, SpecError, ThresholdShape,
+    BackgroundModel, InitialSpec, InscribedShape, MeansKind, Polarity, SeedsShape, SegmentationModel, SegmentationSpec,
+    SpecError, ThresholdShape,
 };
 use crate::problems::{ChanVese, Segmentation, Territories};
 use serde::Serialize;
@@ -85,6 +86,7 @@ pub(super) struct PreparedSegmentation {
     /// The initial shape when it comes from the image (`None`: built from the spec).
     pub mesh: Option<AnyMesh>,
     pub setup: SegmentationSetup,
+    pub neck_split: Option<NeckSplit>,
 }
 
 pub(super) fn prepare_segmentation(
@@ -143,7 +145,15 @@ pub(super) fn prepare_segmentation(
         means,
         merge,
     };
-    Ok(PreparedSegmentation { grid, problem, second_stage, edges, mesh: start.mesh, setup })
+    // the converged contours of separate objects are split where the flow brought
+    // out a neck (curves; surfaces keep the initial shape's objects)
+    let separate = matches!(&problem, ProblemKind::ChanVese(cv) if cv.separate);
+    let neck_split = (d == 2 && separate && spec.split_touching.unwrap_or(true)).then(|| NeckSplit {
+        dims: [grid.dims[0], grid.dims[1]],
+        necks: NECKS,
+        min_size: min_size.ceil() as usize,
+    });
+    Ok(PreparedSegmentation { grid, problem, second_stage, edges, mesh: start.mesh, setup, neck_split })
 }
 
 /// The initial shape when it comes from the image.
