@@ -4,10 +4,11 @@
 //! smoothed image narrows ([`split_touching`]); the smoothing fills shallow
 //! notches, so two objects whose neck only the flow brings out (it fits the
 //! unsmoothed image) start as one. After the flow converges, each object of the
-//! contours is drawn on the image's grid and split by the same rule; an object
-//! that splits is traced again, one closed curve per part with a sample of
-//! background between them, and the flow goes on from there. The parts then stay
-//! separate objects (the curves' contact rule), as the initial shape's do.
+//! contours is drawn on the image's grid and split by the same rule, where the
+//! cut is a notch at both of its ends ([`PINCH`]); an object that splits is traced
+//! again, one closed curve per part along the boundary of its samples, and the
+//! flow goes on from there. The parts then stay separate objects (the curves'
+//! contact rule), as the initial shape's do.
 
 use crate::geometry::{curves_from_loops, segment_cycles, CurveMesh, Point};
 use crate::imaging::contours::zero_level;
