@@ -204,3 +204,51 @@ fn shrinking_sphere_keeps_its_exact_solution_with_surface_management() {
     assert!(err < 5e-3, "{err}");
     assert!(q.min_angle_deg > 30.0);
 }
+
+/// Objects kept apart (`keep_apart`, a segmentation's separate objects): when a
+/// pass would make two of them cross, those two are held as they are and the
+/// others are still managed. Before, the whole pass was dropped, so that a
+/// segment shrinking beside a contact was never collapsed and the step control
+/// halved `τ` at every step until the run stopped `converged` on vanishing steps.
+#[test]
+fn a_pass_that_would_make_two_objects_cross_still_manages_the_others() {
+    use shapeflow::flow::Managed;
+    use shapeflow::geometry::manage_curve;
+    let p = |x: f64, y: f64| Point::<2>::new(x, y);
+    // a block with a notch on top, its bottom off-centre, and a wedge in the notch
+    // whose tip is just above the notch's bottom
+    let block =
+        polygon(&[p(0.0, 0.0), p(4.0, 0.0), p(4.0, 4.0), p(2.6, 4.0), p(1.7, 2.5), p(1.4, 4.0), p(0.0, 4.0)], None)
+            .unwrap();
+    let wedge = polygon(&[p(1.7, 2.501), p(2.3, 3.9), p(1.6, 3.9)], None).unwrap();
+    // far away, a circle with one segment of 1e-4
+    let mut pts: Vec<Point<2>> = (0..40)
+        .map(|k| {
+            let t = 2.0 * PI * k as f64 / 40.0;
+            p(10.0 + t.cos(), 10.0 + t.sin())
+        })
+        .collect();
+    pts.insert(1, p(11.0, 10.0001));
+    let ring = polygon(&pts, None).unwrap();
+    let mesh = union(&[block.clone(), wedge.clone(), ring.clone()]).unwrap();
+    let mut params = CurveManager::defaults_for(&mesh);
+    params.keep_apart = true;
+    // the pass on every loop makes the block and the wedge cross
+    let (all, _) = manage_curve(&mesh, &params, true, 3).unwrap();
+    let all = all.unwrap();
+    assert!(!all.crossings_between_components(&all.crossings()).is_empty());
+    let mut m = CurveManager { regularize: true, sweeps: 3, adapt: true, topology_changes: true, params };
+    let out = match m.manage(&mesh).unwrap() {
+        Managed::Moved(x) | Managed::Remeshed(x) => x,
+        _ => panic!("the ring is managed"),
+    };
+    assert!(out.crossings_between_components(&out.crossings()).is_empty());
+    let (label, count) = out.component_labels();
+    assert_eq!(count, 3);
+    let points = |c: usize| -> Vec<Point<2>> {
+        out.positions().iter().zip(&label).filter(|(_, &l)| l == c).map(|(x, _)| *x).collect()
+    };
+    assert_eq!(points(0), block.positions().to_vec());
+    assert_eq!(points(1), wedge.positions().to_vec());
+    assert!(points(2).len() < ring.num_vertices(), "the ring's short segment is collapsed");
+}

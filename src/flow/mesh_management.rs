@@ -4,8 +4,8 @@
 
 use super::FlowError;
 use crate::geometry::{
-    adapt_surface, edge_statistics, manage_curve, regularize_surface, resolve_crossings, CrossingWatch, CurveMesh,
-    CurveRemeshSettings, Mesh, SurfaceMesh, SurfaceRemeshSettings,
+    adapt_surface, edge_statistics, manage_curve, manage_curve_holding, regularize_surface, resolve_crossings,
+    CrossingWatch, CurveMesh, CurveRemeshSettings, Mesh, SurfaceMesh, SurfaceRemeshSettings,
 };
 
 /// What mesh management did to the mesh after a step.
@@ -131,13 +131,39 @@ fn manage_curves(
     };
     if s.topology_changes {
         let cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
-        let hits = match watch {
+        let mut hits = match watch {
             Some(w) if cur.period().is_none() => w.crossings_of(cur),
             _ => cur.crossings(),
         };
-        if s.params.keep_apart && !cur.crossings_between_components(&hits).is_empty() {
-            return Ok(Managed::Unchanged);
+        if s.params.keep_apart {
+            // the loops a pass would make cross another object's are held as they
+            // are, and the pass is made again for the others
+            let mut hold = vec![false; mesh.num_components()];
+            loop {
+                let cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
+                let between = cur.crossings_between_components(&hits);
+                if between.is_empty() {
+                    break;
+                }
+                let (label, _) = cur.component_labels();
+                let mut more = false;
+                for e in between.iter().flat_map(|h| [h.a, h.b]) {
+                    let c = label[cur.elements()[e][0]];
+                    more |= !std::mem::replace(&mut hold[c], true);
+                }
+                if !more {
+                    // the step itself made them cross, not the pass
+                    return Ok(Managed::Unchanged);
+                }
+                (remeshed, moved) = match manage_curve_holding(mesh, &s.params, s.adapt, sweeps, &hold).map_err(fail)? {
+                    (Some(m), true) => (Some(m), None),
+                    (m, _) => (None, m),
+                };
+                let cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
+                hits = cur.crossings();
+            }
         }
+        let cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
         match resolve_crossings(cur, &hits, s.params.min_area, s.params.fill_pockets) {
             Err(crate::geometry::MeshError::Empty) => return Ok(Managed::Vanished),
             r => {

@@ -24,9 +24,9 @@ pub struct CurveRemeshSettings {
     /// exterior that a curve closed around are filled (shape design, where such a
     /// pocket of `Ω` would be cut off from `Σ`).
     pub fill_pockets: bool,
-    /// Different components never merge: a management pass that would make two of
-    /// them cross is not applied (segmentation: touching objects stay the objects
-    /// they are).
+    /// Different components never merge: the loops that a management pass would
+    /// make cross another component are left as they are in that pass, and the
+    /// others managed (segmentation: touching objects stay the objects they are).
     pub keep_apart: bool,
 }
 
@@ -243,6 +243,19 @@ pub fn manage_curve(
     adapt: bool,
     sweeps: usize,
 ) -> Result<(Option<CurveMesh>, bool), MeshError> {
+    manage_curve_holding(mesh, s, adapt, sweeps, &[])
+}
+
+/// [`manage_curve`] leaving the loops `c` with `hold[c]` as they are. Loops are
+/// numbered as the mesh's components ([`Mesh::component_labels`]: by their first
+/// vertex), and the result keeps that order.
+pub fn manage_curve_holding(
+    mesh: &CurveMesh,
+    s: &CurveRemeshSettings,
+    adapt: bool,
+    sweeps: usize,
+    hold: &[bool],
+) -> Result<(Option<CurveMesh>, bool), MeshError> {
     if !adapt && sweeps == 0 {
         return Ok((None, false));
     }
@@ -259,6 +272,10 @@ pub fn manage_curve(
             Some(r) => Loop { p: x[r[c].clone()].to_vec(), shift: Point::<2>::zeros() },
             None => lifted_loop(mesh, &cycles[c]),
         };
+        if hold.get(c).copied().unwrap_or(false) {
+            loops.push(l);
+            continue;
+        }
         let (mut len, mut beta) = metrics(&l);
         if adapt {
             if let Some(new) = adapt_loop(&l, &len, &beta, s) {

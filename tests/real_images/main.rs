@@ -72,7 +72,7 @@ fn nuclei_at_defaults() {
     let (got, n, job) = segment(DEFAULTS, include_bytes!("../data/nuclei.png").to_vec());
     let d = dice(&got, &truth, w, h);
     eprintln!("nuclei: dice {d:.4}, {n} objects (125 annotated); {:?}", job.segmentation);
-    assert!(d >= 0.90, "dice {d}");
+    assert!(d >= 0.91, "dice {d}");
     assert!((80..=170).contains(&n), "{n} objects");
 }
 
