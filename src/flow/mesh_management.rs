@@ -5,7 +5,7 @@
 use super::FlowError;
 use crate::geometry::{
     adapt_surface, edge_statistics, manage_curve, manage_curve_holding, regularize_surface, resolve_crossings,
-    CrossingWatch, CurveMesh, CurveRemeshSettings, Mesh, SurfaceMesh, SurfaceRemeshSettings,
+    CrossingWatch, CurveMesh, CurveRemeshSettings, Hold, Mesh, SurfaceMesh, SurfaceRemeshSettings,
 };
 
 /// What mesh management did to the mesh after a step.
@@ -136,9 +136,10 @@ fn manage_curves(
             _ => cur.crossings(),
         };
         if s.params.keep_apart {
-            // the loops a pass would make cross another object's are held as they
-            // are, and the pass is made again for the others
-            let mut hold = vec![false; mesh.num_components()];
+            // the loops a pass would make cross another object's only have their
+            // tiny segments collapsed, then (if they still cross) are held as
+            // they are, and the pass is made again for the others
+            let mut hold = vec![Hold::Free; mesh.num_components()];
             loop {
                 let cur = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
                 let between = cur.crossings_between_components(&hits);
@@ -146,10 +147,17 @@ fn manage_curves(
                     break;
                 }
                 let (label, _) = cur.component_labels();
+                let mut crossing: Vec<usize> =
+                    between.iter().flat_map(|h| [h.a, h.b]).map(|e| label[cur.elements()[e][0]]).collect();
+                crossing.sort_unstable();
+                crossing.dedup();
                 let mut more = false;
-                for e in between.iter().flat_map(|h| [h.a, h.b]) {
-                    let c = label[cur.elements()[e][0]];
-                    more |= !std::mem::replace(&mut hold[c], true);
+                for c in crossing {
+                    let next = match hold[c] {
+                        Hold::Free => Hold::Collapse,
+                        _ => Hold::Whole,
+                    };
+                    more |= std::mem::replace(&mut hold[c], next) != Hold::Whole;
                 }
                 if !more {
                     // the step itself made them cross, not the pass

@@ -25,8 +25,9 @@ pub struct CurveRemeshSettings {
     /// pocket of `Ω` would be cut off from `Σ`).
     pub fill_pockets: bool,
     /// Different components never merge: the loops that a management pass would
-    /// make cross another component are left as they are in that pass, and the
-    /// others managed (segmentation: touching objects stay the objects they are).
+    /// make cross another component only have their tiny segments collapsed in
+    /// that pass, or are left as they are ([`Hold`]), and the others are managed
+    /// (segmentation: touching objects stay the objects they are).
     pub keep_apart: bool,
 }
 
@@ -246,15 +247,31 @@ pub fn manage_curve(
     manage_curve_holding(mesh, s, adapt, sweeps, &[])
 }
 
-/// [`manage_curve`] leaving the loops `c` with `hold[c]` as they are. Loops are
-/// numbered as the mesh's components ([`Mesh::component_labels`]: by their first
-/// vertex), and the result keeps that order.
+/// How much of a pass [`manage_curve_holding`] makes on one loop.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Hold {
+    /// The whole pass.
+    #[default]
+    Free,
+    /// Only its segments shorter than a quarter of `h_min` collapsed (with
+    /// `adapt`): a segment shrinking beside a contact would otherwise hold every
+    /// step to a fraction of its length, and the collapse moves the loop by less
+    /// than an eighth of `h_min`.
+    Collapse,
+    /// Nothing.
+    Whole,
+}
+
+/// [`manage_curve`] with loop `c` managed as `hold[c]` says (free beyond the
+/// slice). Loops are numbered as the mesh's components
+/// ([`Mesh::component_labels`]: by their first vertex), and the result keeps that
+/// order.
 pub fn manage_curve_holding(
     mesh: &CurveMesh,
     s: &CurveRemeshSettings,
     adapt: bool,
     sweeps: usize,
-    hold: &[bool],
+    hold: &[Hold],
 ) -> Result<(Option<CurveMesh>, bool), MeshError> {
     if !adapt && sweeps == 0 {
         return Ok((None, false));
@@ -272,9 +289,20 @@ pub fn manage_curve_holding(
             Some(r) => Loop { p: x[r[c].clone()].to_vec(), shift: Point::<2>::zeros() },
             None => lifted_loop(mesh, &cycles[c]),
         };
-        if hold.get(c).copied().unwrap_or(false) {
-            loops.push(l);
-            continue;
+        match hold.get(c).copied().unwrap_or_default() {
+            Hold::Free => {}
+            Hold::Collapse => {
+                if let Some(short) = adapt.then(|| collapse_short(&l, 0.25 * s.h_min)).flatten() {
+                    changed = true;
+                    l = short;
+                }
+                loops.push(l);
+                continue;
+            }
+            Hold::Whole => {
+                loops.push(l);
+                continue;
+            }
         }
         let (mut len, mut beta) = metrics(&l);
         if adapt {
@@ -312,6 +340,29 @@ pub fn manage_curve_holding(
         }
     }
     Ok((Some(mesh.with_positions(pos)), false))
+}
+
+/// `l` with every segment shorter than `min` collapsed to its midpoint (at least
+/// three vertices kept), or `None` if it has none.
+fn collapse_short(l: &Loop, min: f64) -> Option<Loop> {
+    let n = l.p.len();
+    let next = |k: usize| if k + 1 == n { l.p[0] + l.shift } else { l.p[k + 1] };
+    if n <= 3 || (0..n).all(|k| (next(k) - l.p[k]).norm() >= min) {
+        return None;
+    }
+    let mut p: Vec<Point<2>> = Vec::with_capacity(n);
+    for &x in &l.p {
+        match p.last_mut() {
+            Some(last) if (x - *last).norm() < min => *last = 0.5 * (*last + x),
+            _ => p.push(x),
+        }
+    }
+    // the closing segment (a periodic loop's last point lies one shift before the first)
+    while p.len() > 3 && (p[0] + l.shift - p[p.len() - 1]).norm() < min {
+        let last = p.pop().expect("more than three points");
+        p[0] = 0.5 * (p[0] + last - l.shift);
+    }
+    (p.len() >= 3 && p.len() < n).then_some(Loop { p, shift: l.shift })
 }
 
 /// The loops of a closed curve mesh as vertex ranges, if every element `e` is
