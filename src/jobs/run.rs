@@ -108,9 +108,13 @@ fn run_stages<const D: usize>(
 const MAX_NECK_SPLITS: usize = 3;
 
 /// The state after `last` with its objects split at necks (a fresh step size,
-/// its energy on the new curves), or `None` if the job splits none.
+/// its energy on the new curves), or `None` if the job splits none or has no
+/// iteration left.
 fn split_at_necks<const D: usize>(job: &PreparedJob, dim: &Dimension<'_, D>, last: &Checkpoint) -> Option<Checkpoint> {
     let split = job.neck_split.as_ref()?;
+    if last.iteration >= job.settings.max_iterations {
+        return None;
+    }
     let curves = split.split(&last.mesh.to_mesh_unvalidated::<2>()?)?;
     let mesh: MeshData = (&curves).into();
     let energy = (dim.problem)(job.stage_problem(last.stage)).ok()?.energy(&mesh.to_mesh_unvalidated::<D>()?).ok()?;
