@@ -155,6 +155,7 @@ fn manage_curves(
                 for c in crossing {
                     let next = match hold[c] {
                         Hold::Free => Hold::Collapse,
+                        Hold::Collapse => Hold::CollapseTiny,
                         _ => Hold::Whole,
                     };
                     more |= std::mem::replace(&mut hold[c], next) != Hold::Whole;

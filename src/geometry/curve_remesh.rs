@@ -258,6 +258,9 @@ pub enum Hold {
     /// step to a fraction of its length, and the collapse moves the loop by less
     /// than an eighth of `h_min`.
     Collapse,
+    /// Only its segments shorter than `h_min/64` collapsed: a loop whose
+    /// [`Hold::Collapse`] still crosses a neighbour it touches.
+    CollapseTiny,
     /// Nothing.
     Whole,
 }
@@ -291,8 +294,9 @@ pub fn manage_curve_holding(
         };
         match hold.get(c).copied().unwrap_or_default() {
             Hold::Free => {}
-            Hold::Collapse => {
-                if let Some(short) = adapt.then(|| collapse_short(&l, 0.25 * s.h_min)).flatten() {
+            hold @ (Hold::Collapse | Hold::CollapseTiny) => {
+                let min = if hold == Hold::Collapse { 0.25 } else { 1.0 / 64.0 } * s.h_min;
+                if let Some(short) = adapt.then(|| collapse_short(&l, min)).flatten() {
                     changed = true;
                     l = short;
                 }
