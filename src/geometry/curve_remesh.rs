@@ -446,4 +446,32 @@ mod tests {
         let r5 = regularize_curve(&m, 30, None).quality();
         assert!(r5.max_edge / r5.min_edge < 0.5 * q0.max_edge / q0.min_edge, "{r5:?}");
     }
+    /// Short segments collapse to their midpoints, the closing one too (across a
+    /// periodic loop's shift); a loop with none, or of three points, is left alone.
+    #[test]
+    fn short_segments_collapse_to_their_midpoints() {
+        let p = |x: f64, y: f64| Point::<2>::new(x, y);
+        let square = Loop {
+            p: vec![p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1e-3), p(1.0, 1.0), p(0.0, 1.0)],
+            shift: Point::<2>::zeros(),
+        };
+        let c = collapse_short(&square, 0.01).unwrap();
+        assert_eq!(c.p, vec![p(0.0, 0.0), p(1.0, 0.5e-3), p(1.0, 1.0), p(0.0, 1.0)]);
+        assert!(collapse_short(&c, 0.01).is_none());
+        // the closing segment, from the last point to the first
+        let closing = Loop {
+            p: vec![p(1e-3, 0.0), p(1.0, 0.0), p(1.0, 1.0), p(0.0, 1.0), p(0.0, 0.0)],
+            shift: Point::<2>::zeros(),
+        };
+        let c = collapse_short(&closing, 0.01).unwrap();
+        assert_eq!(c.p, vec![p(0.5e-3, 0.0), p(1.0, 0.0), p(1.0, 1.0), p(0.0, 1.0)]);
+        // a periodic chain: its last point lies one shift before the first
+        let shift = p(2.0, 0.0);
+        let chain = Loop { p: vec![p(0.0, 0.0), p(1.0, 1.0), p(2.0 - 1e-3, 0.0)], shift };
+        assert!(collapse_short(&chain, 0.01).is_none(), "three points are kept");
+        let chain = Loop { p: vec![p(0.0, 0.0), p(0.5, 1.0), p(1.5, 1.0), p(2.0 - 1e-3, 0.0)], shift };
+        let c = collapse_short(&chain, 0.01).unwrap();
+        assert_eq!(c.p.len(), 3);
+        assert!((c.p[0] - p(-0.5e-3, 0.0)).norm() < 1e-15, "{:?}", c.p[0]);
+    }
 }
