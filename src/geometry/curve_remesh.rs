@@ -26,7 +26,7 @@ pub struct CurveRemeshSettings {
     pub fill_pockets: bool,
     /// Different components never merge: the loops that a management pass would
     /// make cross another component only have their tiny segments collapsed in
-    /// that pass, or are left as they are ([`Hold`]), and the others are managed
+    /// that pass, or are left as they are ([`Hold`](super::Hold)), and the others are managed
     /// (segmentation: touching objects stay the objects they are).
     pub keep_apart: bool,
 }
@@ -91,7 +91,7 @@ pub fn regularize_curve(mesh: &CurveMesh, sweeps: usize, sizes: Option<&CurveRem
 }
 
 /// The cycle `cyc` of `mesh` as a loop lifted vertex by vertex.
-fn lifted_loop(mesh: &CurveMesh, cyc: &[usize]) -> Loop {
+pub(super) fn lifted_loop(mesh: &CurveMesh, cyc: &[usize]) -> Loop {
     let x = mesh.positions();
     let mut p: Vec<Point<2>> = Vec::with_capacity(cyc.len());
     if mesh.period().is_none() {
@@ -140,7 +140,7 @@ pub fn adapt_curve(mesh: &CurveMesh, s: &CurveRemeshSettings) -> Result<Option<C
 }
 
 /// [`adapt_curve`] on one loop, given its segment lengths and turning angles.
-fn adapt_loop(l: &Loop, len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> Option<Loop> {
+pub(super) fn adapt_loop(l: &Loop, len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> Option<Loop> {
     let n = l.len();
     if !may_adapt(len, beta, s) {
         return None;
@@ -233,166 +233,6 @@ fn may_adapt(len: &[f64], beta: &[f64], s: &CurveRemeshSettings) -> bool {
     work > 0 || flat as usize >= n.div_ceil(32)
 }
 
-/// One pass of curve management short of topology: refinement/coarsening (if
-/// `adapt`), then `sweeps` regularization sweeps towards the desired sizes (if
-/// `adapt`, else equal lengths), with the lengths and turning angles of each loop
-/// computed once. Returns the new mesh, `None` if nothing was to be done, and
-/// whether the connectivity changed.
-pub fn manage_curve(
-    mesh: &CurveMesh,
-    s: &CurveRemeshSettings,
-    adapt: bool,
-    sweeps: usize,
-) -> Result<(Option<CurveMesh>, bool), MeshError> {
-    manage_curve_holding(mesh, s, adapt, sweeps, &[])
-}
-
-/// How much of a pass [`manage_curve_holding`] makes on one loop.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Hold {
-    /// The whole pass.
-    #[default]
-    Free,
-    /// Only its segments shorter than a quarter of `h_min` collapsed (with
-    /// `adapt`): a segment shrinking beside a contact would otherwise hold every
-    /// step to a fraction of its length, and the collapse moves the loop by less
-    /// than an eighth of `h_min`.
-    Collapse,
-    /// Only its segments shorter than `h_min/64` collapsed: a loop whose
-    /// [`Hold::Collapse`] still crosses a neighbour it touches.
-    CollapseTiny,
-    /// Nothing.
-    Whole,
-}
-
-/// [`manage_curve`] with loop `c` managed as `hold[c]` says (free beyond the
-/// slice). Loops are numbered as the mesh's components
-/// ([`Mesh::component_labels`]: by their first vertex), and the result keeps that
-/// order.
-pub fn manage_curve_holding(
-    mesh: &CurveMesh,
-    s: &CurveRemeshSettings,
-    adapt: bool,
-    sweeps: usize,
-    hold: &[Hold],
-) -> Result<(Option<CurveMesh>, bool), MeshError> {
-    if !adapt && sweeps == 0 {
-        return Ok((None, false));
-    }
-    let x = mesh.positions();
-    // meshes built from polylines store each loop as a run of vertices: no cycle
-    // search, no gather, no scatter
-    let runs = if mesh.period().is_none() { contiguous_loops(mesh) } else { None };
-    let cycles = if runs.is_none() { mesh.cycles() } else { Vec::new() };
-    let count = runs.as_ref().map_or(cycles.len(), Vec::len);
-    let mut loops = Vec::with_capacity(count);
-    let mut changed = false;
-    for c in 0..count {
-        let mut l = match &runs {
-            Some(r) => Loop { p: x[r[c].clone()].to_vec(), shift: Point::<2>::zeros() },
-            None => lifted_loop(mesh, &cycles[c]),
-        };
-        match hold.get(c).copied().unwrap_or_default() {
-            Hold::Free => {}
-            hold @ (Hold::Collapse | Hold::CollapseTiny) => {
-                let min = if hold == Hold::Collapse { 0.25 } else { 1.0 / 64.0 } * s.h_min;
-                if let Some(short) = adapt.then(|| collapse_short(&l, min)).flatten() {
-                    changed = true;
-                    l = short;
-                }
-                loops.push(l);
-                continue;
-            }
-            Hold::Whole => {
-                loops.push(l);
-                continue;
-            }
-        }
-        let (mut len, mut beta) = metrics(&l);
-        if adapt {
-            if let Some(new) = adapt_loop(&l, &len, &beta, s) {
-                changed = true;
-                l = new;
-                (len, beta) = metrics(&l);
-            }
-        }
-        if sweeps > 0 {
-            let hd = if adapt { desired_sizes(&len, &beta, s) } else { vec![1.0; l.len()] };
-            regularize_loop(&mut l, &hd, sweeps, adapt.then(|| size_bounds(s)));
-        }
-        loops.push(l);
-    }
-    if changed {
-        return rebuild(mesh, loops.into_iter().map(|l| l.p).collect(), false).map(|m| (Some(m), true));
-    }
-    // same connectivity: back to the mesh's own representatives
-    if let Some(runs) = runs {
-        let pos = if loops.len() == 1 { loops.pop().unwrap().p } else { loops.into_iter().flat_map(|l| l.p).collect() };
-        debug_assert!(runs.last().is_some_and(|r| r.end == pos.len()));
-        return Ok((Some(mesh.with_positions(pos)), false));
-    }
-    let mut pos = x.to_vec();
-    for (cyc, l) in cycles.iter().zip(&loops) {
-        if mesh.period().is_none() {
-            for (&v, p) in cyc.iter().zip(&l.p) {
-                pos[v] = *p;
-            }
-        } else {
-            for (&v, p) in cyc.iter().zip(&l.p) {
-                pos[v] = mesh.lift(*p, &x[v]);
-            }
-        }
-    }
-    Ok((Some(mesh.with_positions(pos)), false))
-}
-
-/// `l` with every segment shorter than `min` collapsed to its midpoint (at least
-/// three vertices kept), or `None` if it has none.
-fn collapse_short(l: &Loop, min: f64) -> Option<Loop> {
-    let n = l.p.len();
-    let next = |k: usize| if k + 1 == n { l.p[0] + l.shift } else { l.p[k + 1] };
-    if n <= 3 || (0..n).all(|k| (next(k) - l.p[k]).norm() >= min) {
-        return None;
-    }
-    let mut p: Vec<Point<2>> = Vec::with_capacity(n);
-    for &x in &l.p {
-        match p.last_mut() {
-            Some(last) if (x - *last).norm() < min => *last = 0.5 * (*last + x),
-            _ => p.push(x),
-        }
-    }
-    // the closing segment (a periodic loop's last point lies one shift before the first)
-    while p.len() > 3 && (p[0] + l.shift - p[p.len() - 1]).norm() < min {
-        let last = p.pop().expect("more than three points");
-        p[0] = 0.5 * (p[0] + last - l.shift);
-    }
-    (p.len() >= 3 && p.len() < n).then_some(Loop { p, shift: l.shift })
-}
-
-/// The loops of a closed curve mesh as vertex ranges, if every element `e` is
-/// `[e, e + 1]` except the last of each loop, which closes it (the layout of meshes
-/// built from polylines); `None` otherwise.
-fn contiguous_loops(mesh: &CurveMesh) -> Option<Vec<std::ops::Range<usize>>> {
-    let elements = mesh.elements();
-    if elements.len() != mesh.num_vertices() || elements.is_empty() {
-        return None;
-    }
-    let mut runs = Vec::new();
-    let mut start = 0;
-    for (e, &[a, b]) in elements.iter().enumerate() {
-        if a != e {
-            return None;
-        }
-        if b == start {
-            runs.push(start..e + 1);
-            start = e + 1;
-        } else if b != e + 1 {
-            return None;
-        }
-    }
-    (start == elements.len()).then_some(runs)
-}
-
 /// `−∮ y dx` of a loop: the shoelace area for closed loops, and for loops winding
 /// around the period minus the area between them and `y = 0`; invariant under
 /// shifts by the period, linear in a uniform normal offset with slope the length.
@@ -445,33 +285,5 @@ mod tests {
         assert!(q1.max_edge / q1.min_edge < 1.2 && q0.max_edge / q0.min_edge > 3.0, "{q0:?} {q1:?}");
         let r5 = regularize_curve(&m, 30, None).quality();
         assert!(r5.max_edge / r5.min_edge < 0.5 * q0.max_edge / q0.min_edge, "{r5:?}");
-    }
-    /// Short segments collapse to their midpoints, the closing one too (across a
-    /// periodic loop's shift); a loop with none, or of three points, is left alone.
-    #[test]
-    fn short_segments_collapse_to_their_midpoints() {
-        let p = |x: f64, y: f64| Point::<2>::new(x, y);
-        let square = Loop {
-            p: vec![p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1e-3), p(1.0, 1.0), p(0.0, 1.0)],
-            shift: Point::<2>::zeros(),
-        };
-        let c = collapse_short(&square, 0.01).unwrap();
-        assert_eq!(c.p, vec![p(0.0, 0.0), p(1.0, 0.5e-3), p(1.0, 1.0), p(0.0, 1.0)]);
-        assert!(collapse_short(&c, 0.01).is_none());
-        // the closing segment, from the last point to the first
-        let closing = Loop {
-            p: vec![p(1e-3, 0.0), p(1.0, 0.0), p(1.0, 1.0), p(0.0, 1.0), p(0.0, 0.0)],
-            shift: Point::<2>::zeros(),
-        };
-        let c = collapse_short(&closing, 0.01).unwrap();
-        assert_eq!(c.p, vec![p(0.5e-3, 0.0), p(1.0, 0.0), p(1.0, 1.0), p(0.0, 1.0)]);
-        // a periodic chain: its last point lies one shift before the first
-        let shift = p(2.0, 0.0);
-        let chain = Loop { p: vec![p(0.0, 0.0), p(1.0, 1.0), p(2.0 - 1e-3, 0.0)], shift };
-        assert!(collapse_short(&chain, 0.01).is_none(), "three points are kept");
-        let chain = Loop { p: vec![p(0.0, 0.0), p(0.5, 1.0), p(1.5, 1.0), p(2.0 - 1e-3, 0.0)], shift };
-        let c = collapse_short(&chain, 0.01).unwrap();
-        assert_eq!(c.p.len(), 3);
-        assert!((c.p[0] - p(-0.5e-3, 0.0)).norm() < 1e-15, "{:?}", c.p[0]);
     }
 }

@@ -7,6 +7,7 @@ mod crossing_watch;
 mod curve_loop;
 pub use any_mesh::AnyMesh;
 pub use curve_loop::loop_area;
+mod curve_pass;
 mod curve_remesh;
 mod curve_topology;
 mod curves;
@@ -23,7 +24,8 @@ mod winding;
 pub use validate::degenerate_measure;
 
 pub use crossing_watch::CrossingWatch;
-pub use curve_remesh::{adapt_curve, manage_curve, manage_curve_holding, regularize_curve, CurveRemeshSettings, Hold};
+pub use curve_pass::{manage_curve, manage_curve_holding, Hold};
+pub use curve_remesh::{adapt_curve, regularize_curve, CurveRemeshSettings};
 pub use curve_topology::{resolve_crossings, resolve_intersections};
 pub use curves::{all_loops_below, circle, curves_from_loops, drop_small_loops, ellipse, polygon, rectangle};
 pub use intersect::{find_periodic_intersections, find_segment_intersections, SegmentHit};

@@ -5,10 +5,29 @@
 //! by the mean of its four corners. Samples outside the grid count as negative, so
 //! every polygon closes.
 
+use crate::geometry::Point;
 use std::collections::HashMap;
 
 /// A closed polygon in grid coordinates (sample `(i, j)` at `(i, j)`).
 pub type Polygon = Vec<[f64; 2]>;
+
+/// `poly` as a closed loop of points `to_point(q)` on a grid of `l` samples per
+/// unit length: a point within a tenth of a sample of the one kept before it is
+/// dropped, and so are the last points within that of the first; `None` if fewer
+/// than three are left.
+pub fn polygon_loop(poly: Polygon, l: f64, to_point: impl Fn([f64; 2]) -> Point<2>) -> Option<Vec<Point<2>>> {
+    let mut pts: Vec<Point<2>> = Vec::with_capacity(poly.len());
+    for q in poly {
+        let x = to_point(q);
+        if pts.last().is_none_or(|p| (p - x).norm() * l > 0.1) {
+            pts.push(x);
+        }
+    }
+    while pts.len() > 3 && (pts[0] - pts[pts.len() - 1]).norm() * l <= 0.1 {
+        pts.pop();
+    }
+    (pts.len() >= 3).then_some(pts)
+}
 
 /// The zero level of `value(i, j)` over the samples `i ∈ [i0, i1)`, `j ∈ [j0, j1)`
 /// (a window of a larger grid; outside it the function is negative). `value` must

@@ -11,7 +11,7 @@
 //! contact rule), as the initial shape's do.
 
 use crate::geometry::{curves_from_loops, segment_cycles, CurveMesh, Point};
-use crate::imaging::contours::zero_level;
+use crate::imaging::contours::{polygon_loop, zero_level};
 use crate::imaging::labels::{distance_transform, label_sizes, split_touching, Necks};
 use crate::imaging::rasterize_curve_window;
 
@@ -113,21 +113,9 @@ impl NeckSplit {
                 0 => -1.0,
                 _ => -3.0,
             };
-            for poly in zero_level([0, w, 0, h], level) {
-                let mut pts: Vec<Point<2>> = Vec::with_capacity(poly.len());
-                for q in poly {
-                    let x = Point::<2>::new(unit(q[0], window[0]), unit(q[1], window[2]));
-                    if pts.last().is_none_or(|p| (p - x).norm() * l > 0.1) {
-                        pts.push(x);
-                    }
-                }
-                while pts.len() > 3 && (pts[0] - pts[pts.len() - 1]).norm() * l <= 0.1 {
-                    pts.pop();
-                }
-                if pts.len() >= 3 {
-                    parts.push(pts);
-                }
-            }
+            let to_point = |q: [f64; 2]| Point::<2>::new(unit(q[0], window[0]), unit(q[1], window[2]));
+            parts
+                .extend(zero_level([0, w, 0, h], level).into_iter().filter_map(|poly| polygon_loop(poly, l, to_point)));
         }
         Some(parts)
     }

@@ -13,6 +13,7 @@
 use super::intersect::cross;
 use super::Point;
 
+mod collapse;
 mod regularize;
 
 pub(super) use regularize::regularize_loop;

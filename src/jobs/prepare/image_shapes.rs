@@ -161,21 +161,11 @@ pub(super) fn threshold_mesh(s: &Grid, objects: &ThresholdObjects) -> Result<Opt
         if s.dimension == 2 {
             let polys = contours::zero_level([i0, i1, j0, j1], |i, j| level(i, j, 0));
             count += !polys.is_empty() as usize;
-            for poly in polys {
-                let mut pts: Vec<Point<2>> = Vec::with_capacity(poly.len());
-                for q in poly {
-                    let x = Point::<2>::new(unit(q[0]), unit(q[1]));
-                    if pts.last().is_none_or(|p| (p - x).norm() * l > 0.1) {
-                        pts.push(x);
-                    }
-                }
-                while pts.len() > 3 && (pts[0] - pts[pts.len() - 1]).norm() * l <= 0.1 {
-                    pts.pop();
-                }
-                if pts.len() >= 3 {
-                    loops.push(pts);
-                }
-            }
+            loops.extend(
+                polys
+                    .into_iter()
+                    .filter_map(|poly| contours::polygon_loop(poly, l, |q| Point::<2>::new(unit(q[0]), unit(q[1])))),
+            );
         } else {
             let (v, tris) = isosurface::zero_level_3d([i0, i1, j0, j1, k0, k1], level);
             count += !tris.is_empty() as usize;
