@@ -16,7 +16,10 @@ use super::{CurveMesh, Point};
 /// the reverse for holes) are kept; the others (doubly covered lenses, inverted
 /// slivers) and closed loops with `|area| < min_area` are dropped. The crossing
 /// points themselves are then removed from the kept loops, so that loops which met
-/// at a crossing do not touch. Two overlapping circles become one curve; a curve
+/// at a crossing do not touch; where that shortcut would cross another segment (a
+/// fold pressed against a neighbouring curve), a crossing point whose other loop
+/// was dropped stays instead: the kept loop then runs along parts of the two
+/// crossed segments, which crossed nothing else. Two overlapping circles become one curve; a curve
 /// pinched into a figure eight becomes two; on the cylinder, a winding curve that
 /// touches itself or its periodic image encloses a closed component. With
 /// `fill_pockets`, clockwise closed loops (a pocket of the exterior that a curve
@@ -80,13 +83,14 @@ pub fn resolve_crossings(
     }
     let lift = |p: Point<2>, near: &Point<2>| lift_near(mesh.period(), p, near);
     let mut seen = vec![false; node_pos.len()];
-    let mut loops: Vec<(Loop, Vec<bool>)> = Vec::new();
+    // each loop with the node behind each of its points
+    let mut loops: Vec<(Loop, Vec<usize>)> = Vec::new();
     for start in 0..node_pos.len() {
         if seen[start] || (start < nv && next[start] == usize::MAX) {
             continue;
         }
         let mut l: Vec<Point<2>> = Vec::new();
-        let mut is_crossing = Vec::new();
+        let mut node = Vec::new();
         let mut v = start;
         while !seen[v] {
             seen[v] = true;
@@ -95,17 +99,17 @@ pub fn resolve_crossings(
                 None => node_pos[v],
             };
             l.push(p);
-            is_crossing.push(v >= nv);
+            node.push(v);
             v = next[v];
         }
         if l.len() >= 3 {
             let shift = lift(l[0], l.last().unwrap()) - l[0];
-            loops.push((Loop { p: l, shift }, is_crossing));
+            loops.push((Loop { p: l, shift }, node));
         }
     }
     let probe = WindingProbe::of(mesh);
-    let mut kept = Vec::new();
-    for (l, is_crossing) in loops {
+    let mut kept: Vec<(Vec<Point<2>>, Vec<usize>)> = Vec::new();
+    for (l, node) in loops {
         let n = l.len();
         if l.shift.norm() == 0.0 && loop_area(&l.p).abs() < min_area {
             continue;
@@ -125,13 +129,29 @@ pub fn resolve_crossings(
         // in the plane, one is a pocket of the exterior, filled on request
         let island = (mesh.period().is_some() || fill_pockets) && l.shift.norm() == 0.0 && loop_area(&l.p) < 0.0;
         if left != right && !island {
-            let p: Vec<Point<2>> = l.p.into_iter().zip(is_crossing).filter(|(_, c)| !c).map(|(p, _)| p).collect();
-            if p.len() >= 3 {
-                kept.push(p);
-            }
+            kept.push((l.p, node));
         }
     }
-    rebuild(mesh, kept, true).map(Some)
+    // the partner of every crossing node, and whether it lies on a kept loop
+    let mut on_kept = vec![false; node_pos.len()];
+    for &v in kept.iter().flat_map(|(_, node)| node) {
+        on_kept[v] = true;
+    }
+    let mut partner_of = vec![usize::MAX; node_pos.len()];
+    for &(na, nb) in &partner {
+        (partner_of[na], partner_of[nb]) = (nb, na);
+    }
+    let loops_without_crossings = |keep_lone: bool| -> Vec<Vec<Point<2>>> {
+        let stays = |v: usize| v < nv || (keep_lone && !on_kept[partner_of[v]]);
+        kept.iter()
+            .map(|(p, node)| p.iter().zip(node).filter(|&(_, &v)| stays(v)).map(|(q, _)| *q).collect::<Vec<_>>())
+            .filter(|p| p.len() >= 3)
+            .collect()
+    };
+    match rebuild(mesh, loops_without_crossings(false), true) {
+        Err(MeshError::SelfIntersection { .. }) => rebuild(mesh, loops_without_crossings(true), true).map(Some),
+        r => r.map(Some),
+    }
 }
 
 #[cfg(test)]
@@ -227,6 +247,39 @@ mod tests {
         assert_eq!(filled.num_components(), 1);
         let disk = 4.0 * std::f64::consts::PI;
         assert!((filled.enclosed_measure() - disk).abs() < 0.01 * disk, "{}", filled.enclosed_measure());
+    }
+
+    /// A fold on the top side of the unit square (its segment `C → D` crosses
+    /// `A → B` at `X`) beside a small neighbouring triangle that the shortcut
+    /// `A → D` would cross: the lens `X B C` is dropped, and the square keeps `X`
+    /// as a corner. Without the neighbour, `X` goes as usual.
+    #[test]
+    fn a_fold_pressed_against_a_neighbour_keeps_its_crossing_point() {
+        let p = |x: f64, y: f64| Point::<2>::new(x, y);
+        let square = [p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0), p(0.7, 1.0), p(0.5, 1.0), p(0.6, 0.9), p(0.55, 1.1)]
+            .into_iter()
+            .chain([p(0.3, 1.0), p(0.0, 1.0)]);
+        let neighbour = [p(0.62, 1.02), p(0.64, 1.02), p(0.63, 1.06)];
+        let x = p(0.575, 1.0);
+        let has_x = |m: &CurveMesh| m.positions().iter().any(|q| (q - x).norm() < 1e-12);
+        let mesh = |parts: Vec<Vec<Point<2>>>| {
+            let (mut pts, mut els) = (Vec::new(), Vec::new());
+            for part in parts {
+                let (base, n) = (pts.len(), part.len());
+                pts.extend(part);
+                els.extend((0..n).map(|k| [base + k, base + (k + 1) % n]));
+            }
+            CurveMesh::from_trusted_parts(pts, els)
+        };
+        let pressed = mesh(vec![square.clone().collect(), neighbour.to_vec()]);
+        assert_eq!(pressed.crossings().len(), 1);
+        let out = resolve_intersections(&pressed, 1e-6, false).unwrap().unwrap();
+        assert_eq!(out.num_components(), 2);
+        assert!(out.crossings().is_empty());
+        assert!(has_x(&out));
+        let alone = resolve_intersections(&mesh(vec![square.collect()]), 1e-6, false).unwrap().unwrap();
+        assert_eq!(alone.num_components(), 1);
+        assert!(!has_x(&alone));
     }
 }
 #[cfg(test)]
