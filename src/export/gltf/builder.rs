@@ -21,15 +21,18 @@ pub(super) struct Builder {
 }
 
 impl Builder {
-    pub(super) fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
+    /// A buffer view of the bytes that `write` appends to the binary chunk (from a
+    /// 4-byte boundary); returns its index.
+    fn view(&mut self, target: Option<u32>, write: impl FnOnce(&mut Vec<u8>)) -> usize {
         while self.bin.len() % 4 != 0 {
             self.bin.push(0);
         }
-        let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
+        let offset = self.bin.len();
+        write(&mut self.bin);
+        let mut v = json!({"buffer": 0, "byteOffset": offset, "byteLength": self.bin.len() - offset});
         if let Some(t) = target {
             v["target"] = json!(t);
         }
-        self.bin.extend_from_slice(bytes);
         self.views.push(v);
         self.views.len() - 1
     }
@@ -44,8 +47,7 @@ impl Builder {
             lo[i % comps] = lo[i % comps].min(x);
             hi[i % comps] = hi[i % comps].max(x);
         }
-        let bytes: Vec<u8> = data.iter().flat_map(|x| x.to_le_bytes()).collect();
-        let view = self.view(&bytes, target);
+        let view = self.view(target, |bin| extend_le(bin, data, f32::to_le_bytes));
         let as_json = |v: &[f32]| v.iter().map(|&x| json!(x as f64)).collect::<Vec<_>>();
         self.accessors.push(json!({
             "bufferView": view, "componentType": FLOAT, "count": count, "type": kind,
@@ -55,8 +57,7 @@ impl Builder {
     }
 
     pub(super) fn indices(&mut self, data: &[u32]) -> usize {
-        let bytes: Vec<u8> = data.iter().flat_map(|x| x.to_le_bytes()).collect();
-        let view = self.view(&bytes, Some(ELEMENT_ARRAY_BUFFER));
+        let view = self.view(Some(ELEMENT_ARRAY_BUFFER), |bin| extend_le(bin, data, u32::to_le_bytes));
         self.accessors
             .push(json!({"bufferView": view, "componentType": UNSIGNED_INT, "count": data.len(), "type": "SCALAR"}));
         self.accessors.len() - 1
@@ -109,6 +110,14 @@ impl Builder {
             doc["animations"] = json!(animations);
         }
         glb(&serde_json::to_vec(&doc).expect("JSON"), &self.bin)
+    }
+}
+
+/// `data` appended to `bin` as the little-endian bytes `bytes` gives each value.
+fn extend_le<T: Copy>(bin: &mut Vec<u8>, data: &[T], bytes: impl Fn(T) -> [u8; 4]) {
+    bin.reserve(4 * data.len());
+    for &x in data {
+        bin.extend_from_slice(&bytes(x));
     }
 }
 
