@@ -24,6 +24,11 @@ pub const MAX_BOUNDARY_VERTICES: usize = 100_000;
 /// (first and last checkpoint always kept).
 pub const MAX_FRAMES: usize = 500;
 
+/// About the largest size of evolution.glb: runs whose frames have many vertices
+/// keep fewer of them (evenly picked, first and last always kept; see
+/// `GlbContext::evolution_glb`).
+pub const MAX_EVOLUTION_BYTES: usize = 64 * 1024 * 1024;
+
 /// Largest accepted JSON request body (a job spec).
 pub const MAX_BODY_BYTES: usize = 2 * 1024 * 1024;
 
