@@ -19,12 +19,12 @@ use super::{CurveMesh, Point};
 /// at a crossing do not touch; where that shortcut would cross another segment (a
 /// fold pressed against a neighbouring curve), a crossing point whose other loop
 /// was dropped stays instead: the kept loop then runs along parts of the two
-/// crossed segments, which crossed nothing else. Two overlapping circles become one curve; a curve
-/// pinched into a figure eight becomes two; on the cylinder, a winding curve that
-/// touches itself or its periodic image encloses a closed component. With
-/// `fill_pockets`, clockwise closed loops (a pocket of the exterior that a curve
-/// closed around) are dropped too, so the pocket joins the interior. Returns `None`
-/// if no segments cross.
+/// crossed segments, which crossed nothing else. Two overlapping circles become
+/// one curve; a curve pinched into a figure eight becomes two; on the cylinder, a
+/// winding curve that touches itself or its periodic image encloses a closed
+/// component. With `fill_pockets`, clockwise closed loops (a pocket of the exterior
+/// that a curve closed around) are dropped too, so the pocket joins the interior.
+/// Returns `None` if no segments cross.
 pub fn resolve_intersections(
     mesh: &CurveMesh,
     min_area: f64,
