@@ -4,15 +4,15 @@
 //! database commits (at most [`QUEUE`] batches wait; beyond that the engine waits).
 //! The batches that wait are written together, in one transaction.
 //! A checkpoint is stored as a [`Frame`]: its per-vertex fields are computed once,
-//! by the writer, on the blocking pool, with its drawing for the glb files
-//! ([`Frame::with_fill`]), so that the result files need little work when the
-//! run ends.
+//! by the writer, on the blocking pool, with its drawing for the glb files while
+//! the frames fit in evolution.glb ([`FrameMaker`]), so that the result files need
+//! little work when the run ends.
 //! A lost lease or a storage error stops the run (through its cancel flag) and is
 //! reported when the recorder is closed.
 
 use super::store::{Lease, Store, StoreError};
 use crate::flow::{Checkpoint, Progress};
-use crate::jobs::{Frame, PreparedJob, RunEvents};
+use crate::jobs::{Frame, FrameMaker, PreparedJob, RunEvents};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -84,6 +84,7 @@ impl Recorder {
         let (id, lease) = (id.to_string(), lease.clone());
         let writer = rt.spawn(async move {
             let mut state = WriteState::default();
+            let mut maker = FrameMaker::default();
             while let Some(first) = rx.recv().await {
                 // the batches that queued while the last one was written go together,
                 // in one transaction: a writer that falls behind catches up
@@ -99,11 +100,16 @@ impl Recorder {
                 let frames = if checkpoints.is_empty() {
                     Vec::new()
                 } else {
-                    let job = job.clone();
-                    let fields =
-                        move || checkpoints.iter().map(|cp| Frame::of(&job, cp).with_fill()).collect::<Vec<_>>();
+                    let (job, mut making) = (job.clone(), std::mem::take(&mut maker));
+                    let fields = move || {
+                        let frames = checkpoints.iter().map(|cp| making.make(&job, cp)).collect::<Vec<_>>();
+                        (frames, making)
+                    };
                     match tokio::task::spawn_blocking(fields).await {
-                        Ok(frames) => frames,
+                        Ok((frames, made)) => {
+                            maker = made;
+                            frames
+                        }
                         Err(e) => {
                             state.error = Some(format!("the fields of a checkpoint: {e}"));
                             cancel.store(true, Ordering::Relaxed);
