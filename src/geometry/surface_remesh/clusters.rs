@@ -3,7 +3,9 @@
 //! their turn and angle checks, its vertex stars too tangled for the link
 //! condition), is cut out with the triangles around it, and each boundary loop
 //! of the hole is closed by a fan around one new vertex, placed so that the
-//! enclosed volume is kept.
+//! enclosed volume is kept; a loop that no such fan closes without folding (not
+//! star-shaped seen along its normal) is closed by triangles between its own
+//! vertices ([`ear_cap`]), which changes the volume by at most the patch's.
 //!
 //! The patch cut out is a disk (a crumpled spot or spike: one fan replaces it),
 //! an annulus (a thin neck whose circumference has shrunk below `h_min`: two
@@ -13,6 +15,7 @@
 //! the last component stays).
 
 use super::adjacency::Adjacency;
+use super::ears::ear_cap;
 use super::SurfaceRemeshSettings;
 use crate::geometry::{components, Point};
 
@@ -40,37 +43,40 @@ pub(super) fn replace_clusters(
     let clusters = clusters(p, adjacency, TINY * s.h_min);
     let mut locked = vec![false; p.len()];
     let mut dead = vec![false; tris.len()];
-    let mut fans: Vec<(Point<3>, Vec<usize>)> = Vec::new();
+    let mut fans: Vec<Cap> = Vec::new();
     // patches replaced, and whether one was cut at a neck (or vanished)
     let (mut removed, mut cut) = (0, false);
     for cluster in clusters.iter().filter(|c| span(p, c) < SPAN * s.h_min) {
-        let mut inner = cluster.clone();
-        for _ in 0..RINGS {
-            let triangles = star_of(adjacency, &inner);
-            let vertices = vertices_of(tris, &triangles);
-            if vertices.iter().any(|&v| locked[v]) {
-                break;
-            }
-            let Some(patch) = Patch::of(tris, &triangles, vertices.len()) else {
+        // fans on the growing patches first; ears only if no fan closes any
+        'ears: for ears in [false, true] {
+            let mut inner = cluster.clone();
+            for _ in 0..RINGS {
+                let triangles = star_of(adjacency, &inner);
+                let vertices = vertices_of(tris, &triangles);
+                if vertices.iter().any(|&v| locked[v]) {
+                    break 'ears;
+                }
+                let Some(patch) = Patch::of(tris, &triangles, vertices.len()) else {
+                    inner = vertices;
+                    continue;
+                };
+                // a whole component within the cluster's reach has shrunk away
+                let vanished = patch.loops.is_empty() && span(p, &vertices) < SPAN * s.h_min;
+                let caps = if vanished { Some(Vec::new()) } else { patch.caps(p, tris, ears) };
+                if let Some(caps) = caps {
+                    for &t in &triangles {
+                        dead[t] = true;
+                    }
+                    for &v in &vertices {
+                        locked[v] = true;
+                    }
+                    removed += 1;
+                    cut |= caps.len() != 1;
+                    fans.extend(caps);
+                    break 'ears;
+                }
                 inner = vertices;
-                continue;
-            };
-            // a whole component within the cluster's reach has shrunk away
-            let vanished = patch.loops.is_empty() && span(p, &vertices) < SPAN * s.h_min;
-            let caps = if vanished { Some(Vec::new()) } else { patch.caps(p, tris) };
-            if let Some(caps) = caps {
-                for &t in &triangles {
-                    dead[t] = true;
-                }
-                for &v in &vertices {
-                    locked[v] = true;
-                }
-                removed += 1;
-                cut |= caps.len() != 1;
-                fans.extend(caps);
-                break;
             }
-            inner = vertices;
         }
     }
     if removed == 0 {
@@ -80,10 +86,15 @@ pub(super) fn replace_clusters(
     if kept.is_empty() && fans.is_empty() {
         return false; // the last component stays (its tangles end the run)
     }
-    for (centre, boundary) in fans {
-        p.push(centre);
-        let x = p.len() - 1;
-        kept.extend((0..boundary.len()).map(|i| [boundary[i], boundary[(i + 1) % boundary.len()], x]));
+    for cap in fans {
+        match cap {
+            Cap::Fan(centre, boundary) => {
+                p.push(centre);
+                let x = p.len() - 1;
+                kept.extend((0..boundary.len()).map(|i| [boundary[i], boundary[(i + 1) % boundary.len()], x]));
+            }
+            Cap::Ears(triangles) => kept.extend(triangles),
+        }
     }
     if cut {
         drop_slivers(p, &mut kept, (2.0 * s.h_min).powi(3));
@@ -149,6 +160,14 @@ fn vertices_of(tris: &[[usize; 3]], triangles: &[usize]) -> Vec<usize> {
     vertices
 }
 
+/// What closes one boundary loop of a patch cut out.
+enum Cap {
+    /// A fan around a new vertex at the point, over the loop.
+    Fan(Point<3>, Vec<usize>),
+    /// Triangles between the loop's own vertices.
+    Ears(Vec<[usize; 3]>),
+}
+
 /// A patch of triangles of genus 0 with one or two boundary loops.
 struct Patch<'a> {
     triangles: &'a [usize],
@@ -192,10 +211,11 @@ impl<'a> Patch<'a> {
 
     /// One fan per boundary loop: its vertex above the loop's centroid along the
     /// loop's vector area `S_k`, at a height `s` common to the loops that keeps the
-    /// enclosed volume (a fan's signed volume about a point `r` is `(x − r)·S_k/6`);
-    /// `None` if a triangle of a fan would be degenerate or folded over (its
-    /// normal against `S_k`).
-    fn caps(&self, p: &[Point<3>], tris: &[[usize; 3]]) -> Option<Vec<(Point<3>, Vec<usize>)>> {
+    /// enclosed volume (a fan's signed volume about a point `r` is `(x − r)·S_k/6`).
+    /// A loop whose fan would have a degenerate or folded triangle (its normal
+    /// against `S_k`) is closed by ears instead if `ears`; `None` if that fails
+    /// too, or without `ears`.
+    fn caps(&self, p: &[Point<3>], tris: &[[usize; 3]], ears: bool) -> Option<Vec<Cap>> {
         let all: Vec<usize> = self.loops.iter().flatten().copied().collect();
         let r = all.iter().fold(Point::<3>::zeros(), |acc, &v| acc + p[v]) / all.len() as f64;
         let volume: f64 = self
@@ -225,10 +245,11 @@ impl<'a> Patch<'a> {
                 let m = (b - a).cross(&(x - a));
                 m.norm() <= 1e-12 * s.norm() || m.dot(s) <= 0.0
             });
-            if folds {
-                return None;
-            }
-            caps.push((x, l.clone()));
+            caps.push(match (folds, ears) {
+                (false, _) => Cap::Fan(x, l.clone()),
+                (true, true) => Cap::Ears(ear_cap(p, l, s)?),
+                (true, false) => return None,
+            });
         }
         Some(caps)
     }
@@ -345,5 +366,23 @@ mod tests {
         assert_eq!(out.component_labels().1, 2);
         let v1 = out.enclosed_measure();
         assert!((v1 - v0).abs() < 1e-12 * v0, "{v0} {v1}");
+    }
+
+    /// A patch whose boundary is a comb (seen along its normal, not star-shaped
+    /// about its centroid): no fan closes it without folding, the ears do.
+    #[test]
+    fn a_comb_shaped_patch_is_closed_by_ears_only_when_asked() {
+        let outline = [[0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [3.0, 3.0], [3.0, 1.0], [2.5, 1.0], [2.5, 3.0]]
+            .into_iter()
+            .chain([[1.5, 3.0], [1.5, 1.0], [1.0, 1.0], [1.0, 3.0], [0.0, 3.0]]);
+        let p: Vec<Point<3>> = outline.map(|[x, y]| Point::<3>::new(x, y, 0.01 * x * y)).collect();
+        let l: Vec<usize> = (0..p.len()).collect();
+        let tris = ear_cap(&p, &l, &Point::<3>::z()).unwrap();
+        let all: Vec<usize> = (0..tris.len()).collect();
+        let patch = Patch::of(&tris, &all, p.len()).expect("a disk");
+        assert_eq!(patch.loops.len(), 1);
+        assert!(patch.caps(&p, &tris, false).is_none());
+        let caps = patch.caps(&p, &tris, true).unwrap();
+        assert!(matches!(&caps[..], [Cap::Ears(t)] if t.len() == p.len() - 2));
     }
 }

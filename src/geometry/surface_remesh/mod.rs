@@ -9,6 +9,7 @@
 mod adjacency;
 mod clusters;
 mod collapse;
+mod ears;
 mod flip;
 mod regularize;
 mod split;
