@@ -10,7 +10,8 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum SolverKind {
-    /// Lumped masses, explicit sparse Schur complement, faer direct solve (default).
+    /// Lumped masses, explicit sparse Schur complement, faer direct solve (default;
+    /// symmetric surface systems by conjugate gradients first).
     #[default]
     Lumped,
     /// Consistent masses, matrix-free Schur complement, GMRES (the paper's path).
@@ -33,7 +34,7 @@ pub struct SemiImplicitStep {
 
 impl SemiImplicitStep {
     pub fn new(kind: SolverKind) -> Self {
-        SemiImplicitStep { kind, lumped: LumpedSolver::new(), consistent: ConsistentSolver::new() }
+        SemiImplicitStep { kind, lumped: LumpedSolver::iterative(), consistent: ConsistentSolver::new() }
     }
 
     pub fn kind(&self) -> SolverKind {

@@ -6,8 +6,10 @@
 mod cholesky;
 mod cyclic;
 mod gmres;
+mod pcg;
 
 pub use cholesky::SparseCholesky;
 pub use cyclic::solve_cyclic_tridiagonal;
 pub(crate) use cyclic::{cyclic_solve, cyclic_solve_checked, CyclicComponent};
 pub use gmres::{gmres, GmresOutcome};
+pub use pcg::pcg;

@@ -38,7 +38,7 @@ use crate::fem::{csc_mul, Pattern};
 use crate::flow::system::{LinearSystem, ProductWeights};
 use crate::flow::FlowError;
 use crate::geometry::segment_cycles;
-use crate::linalg::{cyclic_solve, cyclic_solve_checked, gmres, CyclicComponent, SparseCholesky};
+use crate::linalg::{cyclic_solve, cyclic_solve_checked, gmres, pcg, CyclicComponent, SparseCholesky};
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
@@ -80,11 +80,23 @@ pub struct LumpedSolver {
     lu: Option<SymbolicLu<usize>>,
     two_ring: Option<TwoRing>,
     pub(super) last: Last,
+    /// Symmetric surface complements by conjugate gradients first
+    /// ([`LumpedSolver::iterative`]); the direct solve otherwise, whose factor
+    /// [`LumpedSolver::apply_last_factor`] applies.
+    iterative: bool,
 }
 
 impl Default for LumpedSolver {
     fn default() -> Self {
-        LumpedSolver { cycles: None, chol: None, chol32: None, lu: None, two_ring: None, last: Last::None }
+        LumpedSolver {
+            cycles: None,
+            chol: None,
+            chol32: None,
+            lu: None,
+            two_ring: None,
+            last: Last::None,
+            iterative: false,
+        }
     }
 }
 
@@ -100,9 +112,17 @@ impl LumpedSolver {
         Self::default()
     }
 
+    /// A solver that solves symmetric surface complements by Jacobi-preconditioned
+    /// conjugate gradients (a lumped mass plus a step's stiffness: a few dozen
+    /// iterations) before falling back to the direct solve; not for use as a
+    /// preconditioner ([`LumpedSolver::apply_last_factor`] needs a factor).
+    pub fn iterative() -> Self {
+        LumpedSolver { iterative: true, ..Self::default() }
+    }
+
     /// Forget the symbolic factorizations (after a connectivity change).
     pub fn reset(&mut self) {
-        *self = Self::default();
+        *self = LumpedSolver { iterative: self.iterative, ..Self::default() };
     }
 
     /// Solve for the scalar normal velocity `V`.
@@ -121,6 +141,11 @@ impl LumpedSolver {
             }
         }
         if s.symmetric {
+            if D == 3 && self.iterative {
+                if let Some(v) = self.solve_pcg(sys, &s) {
+                    return Ok(v);
+                }
+            }
             let sym = sys.pattern.symbolic().as_ref();
             if self.chol.is_none() {
                 self.chol = Some(SparseCholesky::new(sym).map_err(FlowError::Factorization)?);
@@ -141,6 +166,21 @@ impl LumpedSolver {
         let (v, lu) = lu_solve(&mut self.lu, sys.pattern.symbolic(), s)?;
         self.last = Last::Lu(Box::new(lu));
         Ok(v)
+    }
+
+    /// `S` symmetric (surfaces): Jacobi-preconditioned conjugate gradients to a
+    /// relative residual of 1e-12; `None` if they do not get there in 300
+    /// iterations (then the direct solve).
+    fn solve_pcg<const D: usize>(&mut self, sys: &LinearSystem<'_, D>, s: &SchurMatrix) -> Option<Vec<f64>> {
+        let p = sys.pattern;
+        let (col_ptr, row_idx) = (p.col_ptr(), p.row_idx());
+        let diagonal: Vec<f64> = (0..p.size())
+            .map(|j| (col_ptr[j]..col_ptr[j + 1]).find(|&k| row_idx[k] == j).map_or(0.0, |k| s.values[k]))
+            .collect();
+        let mut v = vec![0.0; p.size()];
+        pcg(|x, y| csc_mul(col_ptr, row_idx, &s.values, x, y), &diagonal, &s.rhs, &mut v, 1e-12, 300)?;
+        self.last = Last::None;
+        Some(v)
     }
 
     /// `S` not symmetric only through `τ g_i Q_ij` with `g > 0` varying (e.g. `g = H`
