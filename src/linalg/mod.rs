@@ -1,7 +1,8 @@
 //! The general linear-algebra solvers the layers above share: a stateful sparse
 //! Cholesky factorization (symbolic once per pattern, over faer), the `O(n)` solve
-//! of cyclic tridiagonal systems (closed curves), and restarted GMRES with right
-//! preconditioning. Nothing here knows about meshes or flows.
+//! of cyclic tridiagonal systems (closed curves), restarted GMRES with right
+//! preconditioning, and conjugate gradients with a diagonal preconditioner.
+//! Nothing here knows about meshes or flows.
 
 mod cholesky;
 mod cyclic;
