@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 #[serde(rename_all = "snake_case")]
 pub enum SolverKind {
     /// Lumped masses, explicit sparse Schur complement, faer direct solve (default;
-    /// symmetric surface systems by conjugate gradients first).
+    /// surfaces with the L2 product by conjugate gradients first).
     #[default]
     Lumped,
     /// Consistent masses, matrix-free Schur complement, GMRES (the paper's path).

@@ -44,6 +44,11 @@ use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::MatMut;
 
+/// The most conjugate-gradient iterations tried on a surface's L2 complement
+/// before the direct solve (the nuclei volume's steps take 7–61; at 100, the step
+/// bench's 163,842-vertex sphere fell back and took 1.9 times the factorization).
+const PCG_ITERATIONS: usize = 300;
+
 /// The two-ring pattern used by the `H^{-1}` Schur complement.
 struct TwoRing {
     col_ptr: Vec<usize>,
@@ -80,7 +85,7 @@ pub struct LumpedSolver {
     lu: Option<SymbolicLu<usize>>,
     two_ring: Option<TwoRing>,
     pub(super) last: Last,
-    /// Symmetric surface complements by conjugate gradients first
+    /// L2 surface complements by conjugate gradients first
     /// ([`LumpedSolver::iterative`]); the direct solve otherwise, whose factor
     /// [`LumpedSolver::apply_last_factor`] applies.
     iterative: bool,
@@ -112,7 +117,7 @@ impl LumpedSolver {
         Self::default()
     }
 
-    /// A solver that solves symmetric surface complements by Jacobi-preconditioned
+    /// A solver that solves the L2 complements of surfaces by Jacobi-preconditioned
     /// conjugate gradients (a lumped mass plus a step's stiffness: a few dozen
     /// iterations) before falling back to the direct solve; not for use as a
     /// preconditioner ([`LumpedSolver::apply_last_factor`] needs a factor).
@@ -141,7 +146,7 @@ impl LumpedSolver {
             }
         }
         if s.symmetric {
-            if D == 3 && self.iterative {
+            if D == 3 && self.iterative && matches!(sys.product, ProductWeights::L2) {
                 if let Some(v) = self.solve_pcg(sys, &s) {
                     return Ok(v);
                 }
@@ -168,9 +173,11 @@ impl LumpedSolver {
         Ok(v)
     }
 
-    /// `S` symmetric (surfaces): Jacobi-preconditioned conjugate gradients to a
-    /// relative residual of 1e-12; `None` if they do not get there in 300
-    /// iterations (then the direct solve).
+    /// `S` symmetric (surfaces, L2: a lumped mass plus a step's stiffness):
+    /// Jacobi-preconditioned conjugate gradients to a relative residual of 1e-12;
+    /// `None` if they do not get there in [`PCG_ITERATIONS`] (then the direct
+    /// solve: a long step on a fine mesh, whose iterations would grow faster than
+    /// the factorization's cost).
     fn solve_pcg<const D: usize>(&mut self, sys: &LinearSystem<'_, D>, s: &SchurMatrix) -> Option<Vec<f64>> {
         let p = sys.pattern;
         let (col_ptr, row_idx) = (p.col_ptr(), p.row_idx());
@@ -178,7 +185,7 @@ impl LumpedSolver {
             .map(|j| (col_ptr[j]..col_ptr[j + 1]).find(|&k| row_idx[k] == j).map_or(0.0, |k| s.values[k]))
             .collect();
         let mut v = vec![0.0; p.size()];
-        pcg(|x, y| csc_mul(col_ptr, row_idx, &s.values, x, y), &diagonal, &s.rhs, &mut v, 1e-12, 300)?;
+        pcg(|x, y| csc_mul(col_ptr, row_idx, &s.values, x, y), &diagonal, &s.rhs, &mut v, 1e-12, PCG_ITERATIONS)?;
         self.last = Last::None;
         Some(v)
     }
