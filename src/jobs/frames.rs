@@ -283,15 +283,22 @@ mod tests {
         }
     }
 
-    /// The glb files of frames whose drawing was computed ahead (as a worker does)
-    /// are those computed from the frames alone, byte for byte.
-    #[test]
-    fn a_fill_computed_ahead_draws_the_same() {
+    /// A curvature flow of a 48-gon with a checkpoint every 5 of its 20 steps, and
+    /// its checkpoints.
+    fn short_run() -> (PreparedJob, Kept) {
         let spec = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 48},
           "flow": {"tau": 1e-3, "end_time": 0.02, "tolerance": 0}, "output": {"checkpoint_every": 5}}"#;
         let job = prepare(parse_spec(spec).unwrap(), &Default::default()).unwrap();
         let mut kept = Kept(Vec::new());
         run_prepared(&job, None, &AtomicBool::new(false), &mut kept).unwrap();
+        (job, kept)
+    }
+
+    /// The glb files of frames whose drawing was computed ahead (as a worker does)
+    /// are those computed from the frames alone, byte for byte.
+    #[test]
+    fn a_fill_computed_ahead_draws_the_same() {
+        let (job, kept) = short_run();
         let now: Vec<Frame> = kept.0.iter().map(|c| Frame::of(&job, c)).collect();
         let ahead: Vec<Frame> = now.iter().cloned().map(Frame::with_fill).collect();
         assert!(now.len() > 2 && ahead.iter().all(|f| matches!(f.fill.as_deref(), Some(Some(_)))));
@@ -312,11 +319,7 @@ mod tests {
     /// the glb files of frames drawn ahead or not are the same.
     #[test]
     fn frames_are_drawn_ahead_while_they_fit() {
-        let spec = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 48},
-          "flow": {"tau": 1e-3, "end_time": 0.02, "tolerance": 0}, "output": {"checkpoint_every": 5}}"#;
-        let job = prepare(parse_spec(spec).unwrap(), &Default::default()).unwrap();
-        let mut kept = Kept(Vec::new());
-        run_prepared(&job, None, &AtomicBool::new(false), &mut kept).unwrap();
+        let (job, kept) = short_run();
         let one = glb_bytes(&kept.0[0].mesh);
         let mut maker = FrameMaker { bytes: 0, budget: 2 * one + one / 2 };
         let made: Vec<Frame> = kept.0.iter().map(|c| maker.make(&job, c)).collect();

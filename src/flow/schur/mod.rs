@@ -7,6 +7,7 @@
 mod consistent;
 mod h_minus_1;
 mod lumped;
+mod lumped_iterative;
 
 pub use consistent::ConsistentSolver;
 pub use lumped::LumpedSolver;

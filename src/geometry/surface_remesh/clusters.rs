@@ -372,10 +372,7 @@ mod tests {
     /// about its centroid): no fan closes it without folding, the ears do.
     #[test]
     fn a_comb_shaped_patch_is_closed_by_ears_only_when_asked() {
-        let outline = [[0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [3.0, 3.0], [3.0, 1.0], [2.5, 1.0], [2.5, 3.0]]
-            .into_iter()
-            .chain([[1.5, 3.0], [1.5, 1.0], [1.0, 1.0], [1.0, 3.0], [0.0, 3.0]]);
-        let p: Vec<Point<3>> = outline.map(|[x, y]| Point::<3>::new(x, y, 0.01 * x * y)).collect();
+        let p = super::super::ears::tests::comb(|x, y| 0.01 * x * y);
         let l: Vec<usize> = (0..p.len()).collect();
         let tris = ear_cap(&p, &l, &Point::<3>::z()).unwrap();
         let all: Vec<usize> = (0..tris.len()).collect();

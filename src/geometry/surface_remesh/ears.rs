@@ -67,18 +67,25 @@ fn simple(q: &[[f64; 2]]) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
+
+    /// A counter-clockwise comb of 4 × 3 with two slots of 0.5 × 2 (12 vertices,
+    /// not star-shaped about its centroid), lifted to the height `z(x, y)`.
+    pub(in crate::geometry::surface_remesh) fn comb(z: impl Fn(f64, f64) -> f64) -> Vec<Point<3>> {
+        [[0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [3.0, 3.0], [3.0, 1.0], [2.5, 1.0], [2.5, 3.0]]
+            .into_iter()
+            .chain([[1.5, 3.0], [1.5, 1.0], [1.0, 1.0], [1.0, 3.0], [0.0, 3.0]])
+            .map(|[x, y]| Point::<3>::new(x, y, z(x, y)))
+            .collect()
+    }
 
     /// A comb-shaped loop (not star-shaped about any point near its centroid) on a
     /// bent sheet: the cap covers its projected area, each triangle turned with
     /// the loop; a loop that crosses itself in projection is refused.
     #[test]
     fn a_comb_is_closed_by_ears() {
-        let outline = [[0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [3.0, 3.0], [3.0, 1.0], [2.5, 1.0], [2.5, 3.0]]
-            .into_iter()
-            .chain([[1.5, 3.0], [1.5, 1.0], [1.0, 1.0], [1.0, 3.0], [0.0, 3.0]]);
-        let p: Vec<Point<3>> = outline.map(|[x, y]| Point::<3>::new(x, y, 0.05 * x * x)).collect();
+        let p = comb(|x, _| 0.05 * x * x);
         let l: Vec<usize> = (0..p.len()).collect();
         let s = (0..l.len()).fold(Point::<3>::zeros(), |acc, i| acc + p[i].cross(&p[(i + 1) % l.len()])) * 0.5;
         let tris = ear_cap(&p, &l, &s).expect("the comb is capped");
