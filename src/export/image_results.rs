@@ -47,7 +47,7 @@ pub fn mask_png(image: &Grid, mesh: &MeshData) -> Vec<u8> {
 
 /// mask.nrrd: the 3D mask as uint8 0/1, gzip-encoded NRRD, the size of the volume.
 pub fn mask_nrrd(image: &Grid, mesh: &MeshData) -> Vec<u8> {
-    encode_nrrd_mask(image.dims, &mask(image, mesh))
+    encode_nrrd_mask(image, &mask(image, mesh))
 }
 
 /// overlay.png: the image in gray with the contours in red (2D only).

@@ -9,6 +9,21 @@ pub enum SampleKind {
     F32,
 }
 
+/// Where the samples lie in the space of the file they were read from: sample
+/// `(i, j, k)` is at `origin + (i s₀, j s₁, k s₂)`, axis-aligned. A file that
+/// gives no spacing has unit spacing; one that gives no origin, the origin 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    pub spacing: [f64; 3],
+    pub origin: [f64; 3],
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Placement { spacing: [1.0; 3], origin: [0.0; 3] }
+    }
+}
+
 /// Samples on `dims[0] × dims[1] × dims[2]` points, `x` fastest:
 /// `values[i + n_x (j + n_y k)]`. A 2D grid has `dims[2] = 1` and `dimension = 2`.
 #[derive(Debug, Clone, PartialEq)]
@@ -17,6 +32,8 @@ pub struct Grid {
     pub dims: [usize; 3],
     pub values: Vec<f64>,
     pub kind: SampleKind,
+    /// Where the samples lie in the file's space (written into volume results).
+    pub placement: Placement,
 }
 
 impl Grid {
@@ -24,7 +41,12 @@ impl Grid {
     pub fn new(dimension: usize, dims: [usize; 3], values: Vec<f64>, kind: SampleKind) -> Grid {
         assert_eq!(values.len(), dims[0] * dims[1] * dims[2], "grid size");
         assert!(dimension == 3 || dims[2] == 1, "a 2D grid has one slice");
-        Grid { dimension, dims, values, kind }
+        Grid { dimension, dims, values, kind, placement: Placement::default() }
+    }
+
+    /// This grid placed at `placement`.
+    pub fn placed(self, placement: Placement) -> Grid {
+        Grid { placement, ..self }
     }
 
     /// `L = max(n_x, n_y, n_z)`: one unit of the unit box is `L` samples.

@@ -6,7 +6,7 @@
 //! resampled to cubic voxels of its smallest spacing as the other volume readers do
 //! ([`isotropic`]). Written: uint8 masks, gzip.
 
-use super::grid::{Grid, SampleKind};
+use super::grid::{Grid, Placement, SampleKind};
 use super::limits::ImageLimits;
 use super::volumes::isotropic;
 use super::ImageError;
@@ -129,7 +129,24 @@ pub fn parse_nrrd(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Gri
         return Err(fail(format!("voxel {i} is not a finite number")));
     }
     let spacing = voxel_spacing(get("spacings"), get("space directions")).map_err(fail)?;
-    isotropic(input, Grid::new(3, [sizes[0], sizes[1], sizes[2]], values, kind), spacing, limits)
+    let origin = match get("space origin") {
+        Some(text) => space_origin(text).map_err(fail)?,
+        None => [0.0; 3],
+    };
+    let grid = Grid::new(3, [sizes[0], sizes[1], sizes[2]], values, kind);
+    isotropic(input, grid.placed(Placement { spacing, origin }), spacing, limits)
+}
+
+/// `space origin: (x,y,z)`.
+fn space_origin(text: &str) -> Result<[f64; 3], String> {
+    let inner = text.trim().trim_start_matches('(').trim_end_matches(')');
+    let parts: Result<Vec<f64>, _> = inner.split(',').map(|c| c.trim().parse::<f64>()).collect();
+    match parts.as_deref() {
+        Ok(&[x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) => Ok([x, y, z]),
+        _ => {
+            Err(format!("has a malformed NRRD `space origin` {text:?}: three finite numbers in parentheses are needed"))
+        }
+    }
 }
 
 /// The spacing of the three axes: from `spacings: a b c`, else from `space
@@ -163,23 +180,27 @@ fn voxel_spacing(spacings: Option<&str>, directions: Option<&str>) -> Result<[f6
     Ok([1.0; 3])
 }
 
-/// A 0/1 uint8 mask of `dims` as a gzip NRRD file.
-pub fn encode_nrrd_mask(dims: [usize; 3], mask: &[bool]) -> Vec<u8> {
+/// A 0/1 uint8 mask on the samples of `grid` as a gzip NRRD file.
+pub fn encode_nrrd_mask(grid: &Grid, mask: &[bool]) -> Vec<u8> {
     let raw: Vec<u8> = mask.iter().map(|&m| m as u8).collect();
-    encode_gzip_nrrd(dims, "mask", "uint8", &raw)
+    encode_gzip_nrrd(grid, "mask", "uint8", &raw)
 }
 
-/// A label volume as uint16 (little endian), gzip-encoded NRRD of size `dims`.
-pub fn encode_nrrd_labels(dims: [usize; 3], labels: &[u16]) -> Vec<u8> {
+/// A label volume on the samples of `grid` as uint16 (little endian), gzip NRRD.
+pub fn encode_nrrd_labels(grid: &Grid, labels: &[u16]) -> Vec<u8> {
     let raw: Vec<u8> = labels.iter().flat_map(|l| l.to_le_bytes()).collect();
-    encode_gzip_nrrd(dims, "labels", "uint16\nendian: little", &raw)
+    encode_gzip_nrrd(grid, "labels", "uint16\nendian: little", &raw)
 }
 
-/// The header of a gzip NRRD of `dims` samples of `ty`, then `raw` compressed.
-fn encode_gzip_nrrd(dims: [usize; 3], what: &str, ty: &str, raw: &[u8]) -> Vec<u8> {
+/// The header of a gzip NRRD of `grid`'s samples (sizes, and its placement as
+/// `space directions` and `space origin`) of `ty`, then `raw` compressed.
+fn encode_gzip_nrrd(grid: &Grid, what: &str, ty: &str, raw: &[u8]) -> Vec<u8> {
+    let (dims, Placement { spacing: s, origin: o }) = (grid.dims, grid.placement);
     let mut out = format!(
-        "NRRD0004\n# shapeflow segmentation {what}\ntype: {ty}\ndimension: 3\nsizes: {} {} {}\nencoding: gzip\n\n",
-        dims[0], dims[1], dims[2]
+        "NRRD0004\n# shapeflow segmentation {what}\ntype: {ty}\ndimension: 3\nsizes: {} {} {}\n\
+         space dimension: 3\nspace directions: ({},0,0) (0,{},0) (0,0,{})\nspace origin: ({},{},{})\n\
+         encoding: gzip\n\n",
+        dims[0], dims[1], dims[2], s[0], s[1], s[2], o[0], o[1], o[2]
     )
     .into_bytes();
     let mut gz = GzEncoder::new(Vec::new(), flate2::Compression::fast());
@@ -207,7 +228,7 @@ mod tests {
         assert_eq!(g.dims, [4, 5, 6]);
         assert_eq!(g.values[119], 119.0);
         let mask: Vec<bool> = (0..120).map(|i| i % 3 == 0).collect();
-        let m = parse_nrrd("m", &encode_nrrd_mask([4, 5, 6], &mask), &ImageLimits::default()).unwrap();
+        let m = parse_nrrd("m", &encode_nrrd_mask(&g, &mask), &ImageLimits::default()).unwrap();
         assert_eq!(m.values.iter().filter(|&&v| v == 1.0).count(), 40);
         assert_eq!(m.kind, SampleKind::U8);
     }
@@ -227,6 +248,33 @@ mod tests {
         file.extend((0..64).map(|i| if i < 32 { 0u8 } else { 200 }));
         let g = parse_nrrd("image", &file, &ImageLimits::default()).unwrap();
         assert_eq!(g.dims, [4, 4, 8]);
+        // the new samples are half a new voxel in from the old volume's edge
+        assert_eq!(g.placement, Placement { spacing: [1.0; 3], origin: [0.0, 0.0, -0.5] });
+    }
+
+    /// A result written on a resampled volume lies where the input did: its
+    /// placement (the input's origin, moved to the new samples) reads back.
+    #[test]
+    fn results_carry_the_placement_of_their_volume() {
+        let mut file = b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 4\nspace dimension: 3\n\
+            space directions: (0.5,0,0) (0,0.5,0) (0,0,1.5)\nspace origin: (10,-20,30.25)\nencoding: raw\n\n"
+            .to_vec();
+        file.extend((0..64).map(|i| if i < 32 { 0u8 } else { 200 }));
+        let g = parse_nrrd("image", &file, &ImageLimits::default()).unwrap();
+        assert_eq!(g.dims, [4, 4, 12]);
+        assert_eq!(g.placement, Placement { spacing: [0.5; 3], origin: [10.0, -20.0, 29.75] });
+        let labels: Vec<u16> = (0..g.len()).map(|i| (i % 7) as u16).collect();
+        for bytes in [encode_nrrd_mask(&g, &vec![true; g.len()]), encode_nrrd_labels(&g, &labels)] {
+            let back = parse_nrrd("result", &bytes, &ImageLimits::default()).unwrap();
+            assert_eq!((back.dims, back.placement), (g.dims, g.placement));
+        }
+        let e = parse_nrrd(
+            "image",
+            &String::from_utf8_lossy(&file).replace("30.25)", "x)").into_bytes(),
+            &ImageLimits::default(),
+        )
+        .unwrap_err();
+        assert!(e.message.contains("space origin"), "{e}");
     }
 
     #[test]

@@ -109,7 +109,7 @@ impl<'a> StateResults<'a> {
             "overlay.png" => overlay_png(img, &self.shown.mesh),
             "mask.nrrd" => mask_nrrd(img, self.found()),
             "labels.png" => labels_png(img, &self.objects(img).0),
-            "labels.nrrd" => encode_nrrd_labels(img.dims, &self.objects(img).0),
+            "labels.nrrd" => encode_nrrd_labels(img, &self.objects(img).0),
             "objects.csv" => objects_csv(img.dimension, &self.objects(img).1).into_bytes(),
             _ => return None,
         };

@@ -36,7 +36,8 @@ fn two_overlapping_balls_are_two_objects() {
 /// A NIfTI-1 volume (gzip, float32) with slices twice as far apart as its pixels:
 /// resampled to cubic voxels (40³), two overlapping balls of radius 8 and centres
 /// 13 apart are two objects with the union's volume; the same volume as a
-/// multi-page TIFF stack of 16-bit pages gives the same objects.
+/// multi-page TIFF stack of 16-bit pages gives the same objects. Both report where
+/// the resampled grid lies.
 #[test]
 fn an_anisotropic_nifti_volume_and_a_tiff_stack() {
     let (n, nz) = (40usize, 20usize);
@@ -77,6 +78,11 @@ fn an_anisotropic_nifti_volume_and_a_tiff_stack() {
         let job = prepare(parse_spec(DEFAULTS).unwrap(), &inputs).unwrap();
         let img = job.image.as_deref().unwrap();
         assert_eq!(img.dims, [40, 40, 40], "{what}");
+        // the results' grid lies where the input's samples did: its first voxel
+        // half a new voxel in from the input's edge
+        let setup = job.segmentation.as_ref().unwrap();
+        assert_eq!((setup.voxel_spacing, setup.voxel_origin), (Some([1.0; 3]), Some([0.0, 0.0, -0.5])), "{what}");
+        assert_eq!(img.placement, shapeflow::imaging::Placement { spacing: [1.0; 3], origin: [0.0, 0.0, -0.5] });
         let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
         let (_, rows) = objects(img, &result_state(&job, &out.last).mesh);
         let volume: f64 = rows.iter().map(|r| r.size).sum();

@@ -13,16 +13,19 @@ mod tiff_stack;
 pub use nifti::{decode_nifti, is_nifti};
 pub use tiff_stack::{decode_tiff_stack, is_tiff, tiff_pages};
 
-use super::grid::Grid;
+use super::grid::{Grid, Placement};
 use super::limits::ImageLimits;
 use super::ImageError;
 
-/// `grid` resampled (trilinear) to cubic voxels of its smallest spacing when its
-/// spacings differ by more than 1 %; unchanged otherwise.
+/// `grid`, whose first sample is at `grid.placement.origin`, with voxel
+/// `spacing`: resampled (trilinear) to cubic voxels of its smallest spacing when its
+/// spacings differ by more than 1 %, placed where the new samples lie (the first
+/// half a new voxel in from the old volume's edge); only placed otherwise.
 pub fn isotropic(input: &str, grid: Grid, spacing: [f64; 3], limits: &ImageLimits) -> Result<Grid, ImageError> {
+    let origin = grid.placement.origin;
     let h = spacing.iter().copied().fold(f64::INFINITY, f64::min);
     if spacing.iter().all(|&s| s <= 1.01 * h) {
-        return Ok(grid);
+        return Ok(grid.placed(Placement { spacing, origin }));
     }
     let dims: [usize; 3] = std::array::from_fn(|a| ((grid.dims[a] as f64 * spacing[a] / h).round() as usize).max(1));
     limits.check(input, &dims).map_err(|e| {
@@ -53,7 +56,8 @@ pub fn isotropic(input: &str, grid: Grid, spacing: [f64; 3], limits: &ImageLimit
             }
         }
     }
-    Ok(Grid::new(3, dims, values, grid.kind))
+    let origin = std::array::from_fn(|a| origin[a] + 0.5 * (h - spacing[a]));
+    Ok(Grid::new(3, dims, values, grid.kind).placed(Placement { spacing: [h; 3], origin }))
 }
 
 #[cfg(test)]

@@ -75,6 +75,12 @@ pub struct SegmentationSetup {
     pub lambda_out: f64,
     pub means: MeansKind,
     pub merge: bool,
+    /// Volumes: the voxel spacing of the results' grid (cubic after an anisotropic
+    /// input's resampling) and where its first voxel lies, in the input file's
+    /// units and space (NRRD's `space origin`; 0 for NIfTI and TIFF stacks), as
+    /// mask.nrrd and labels.nrrd record them. `None` for 2D images.
+    pub voxel_spacing: Option<[f64; 3]>,
+    pub voxel_origin: Option<[f64; 3]>,
 }
 
 /// What [`prepare_segmentation`] builds.
@@ -144,6 +150,8 @@ pub(super) fn prepare_segmentation(
         lambda_out,
         means,
         merge,
+        voxel_spacing: (d == 3).then_some(grid.placement.spacing),
+        voxel_origin: (d == 3).then_some(grid.placement.origin),
     };
     // the converged contours of separate objects are split where the flow brought
     // out a neck (curves; surfaces keep the initial shape's objects)
