@@ -4,10 +4,11 @@
 //! measured first on idle workers (wall time from POST to `successful`, or to the
 //! `status` event, minus the engine time of the same job run in-process, and minus
 //! what the CLI computes for it: the run, each checkpoint's fields, the result
-//! files); and the latency of a claim with 100,000 finished jobs in the table.
+//! files), then the same on a job ten times longer with as many checkpoints; and
+//! the latency of a claim with 100,000 finished jobs in the table.
 //! On a temporary SQLite file, or on PostgreSQL when `SHAPEFLOW_BENCH_DATABASE` is
 //! a `postgres://` URL (an empty database: the bench fills it).
-//! `cargo bench --bench service` (`-- short`: the short job only).
+//! `cargo bench --bench service` (`-- short`: the two overhead tables only).
 
 use shapeflow::jobs::{parse_spec, prepare, result_files, run_prepared, run_with_frames};
 use shapeflow::service::store::{self, ClaimPolicy, JobStatus};
@@ -25,9 +26,65 @@ const BUSY: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape
 /// Runs of the short job (the engine's time varies by a third from run to run on
 /// this machine; the medians of 11 are stable to a few per cent).
 const RUNS: usize = 11;
-/// A short job (about fifty milliseconds of engine time).
+/// A short job (about twenty milliseconds of engine time on this host).
 const SHORT: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 256},
   "flow": {"tau": 1e-4, "end_time": 0.1, "max_iterations": 2000, "tolerance": 0}, "output": {"checkpoint_every": 100}}"#;
+
+/// The short job run ten times longer, with as many checkpoints.
+const LONGER: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 256},
+  "flow": {"tau": 1e-5, "end_time": 0.1, "max_iterations": 20000, "tolerance": 0}, "output": {"checkpoint_every": 1000}}"#;
+
+/// The engine's time on `spec` in-process, the CLI's work, and the service's from
+/// POST to the end (polled, and told by the event stream): medians of `runs`,
+/// printed as a table headed `what`.
+fn overhead(addr: SocketAddr, spec: &str, runs: usize, what: &str) {
+    let job = prepare(parse_spec(spec).unwrap(), &Default::default()).unwrap();
+    let mut engine = Vec::new();
+    let mut whole = Vec::new();
+    let mut service_wall = Vec::new();
+    let mut streamed = Vec::new();
+    for _ in 0..runs {
+        let t = Instant::now();
+        run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
+        engine.push(t.elapsed().as_secs_f64() * 1e3);
+        // what the CLI computes for the same job: the run, each checkpoint's
+        // frame (on a second thread while the run goes on), the result files
+        let t = Instant::now();
+        let (result, frames) = run_with_frames(&job, None, &AtomicBool::new(false), &mut ());
+        result.unwrap();
+        std::hint::black_box(result_files(&job, &frames));
+        whole.push(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
+        let id = id_of(&http(addr, "POST", "/v1/jobs", Some(spec)).1);
+        loop {
+            let (_, body) = http(addr, "GET", &format!("/v1/jobs/{id}"), None);
+            if body.contains("\"successful\"") {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        service_wall.push(t.elapsed().as_secs_f64() * 1e3);
+        // the same, told by the job's event stream instead of polling
+        let t = Instant::now();
+        let id = id_of(&http(addr, "POST", "/v1/jobs", Some(spec)).1);
+        until_status_event(addr, &id);
+        streamed.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    let (e, w) = (percentile(&mut engine, 0.5), percentile(&mut service_wall, 0.5));
+    let sse = percentile(&mut streamed, 0.5);
+    let c = percentile(&mut whole, 0.5);
+    println!();
+    println!("| {what} | median of {runs} |");
+    println!("|---|---|");
+    println!("| engine in-process | {e:.1} ms |");
+    println!("| service: POST → successful (polled every ms) | {w:.1} ms |");
+    println!("| overhead | {:.1} ms ({:.0} %) |", w - e, 100.0 * (w - e) / e);
+    println!("| service: POST → status event on the job's SSE stream | {sse:.1} ms |");
+    println!("| overhead | {:.1} ms ({:.0} %) |", sse - e, 100.0 * (sse - e) / e);
+    println!("| in-process as the CLI: run, checkpoint fields, result files | {c:.1} ms |");
+    println!("| service overhead beyond that, polled | {:.1} ms ({:.0} %) |", w - c, 100.0 * (w - c) / c);
+    println!("| service overhead beyond that, SSE | {:.1} ms ({:.0} %) |", sse - c, 100.0 * (sse - c) / c);
+}
 
 fn http(addr: SocketAddr, method: &str, path: &str, body: Option<&str>) -> (u16, String) {
     let mut s = TcpStream::connect(addr).unwrap();
@@ -75,54 +132,12 @@ fn main() {
     let app = service.router();
     rt.spawn(async move { axum::serve(listener, app).await.unwrap() });
 
-    // overhead on a short job, first, with idle workers and an empty database
-    let job = prepare(parse_spec(SHORT).unwrap(), &Default::default()).unwrap();
-    let mut engine = Vec::new();
-    let mut whole = Vec::new();
-    let mut service_wall = Vec::new();
-    let mut streamed = Vec::new();
-    for _ in 0..RUNS {
-        let t = Instant::now();
-        run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
-        engine.push(t.elapsed().as_secs_f64() * 1e3);
-        // what the CLI computes for the same job: the run, each checkpoint's
-        // frame (on a second thread while the run goes on), the result files
-        let t = Instant::now();
-        let (result, frames) = run_with_frames(&job, None, &AtomicBool::new(false), &mut ());
-        result.unwrap();
-        std::hint::black_box(result_files(&job, &frames));
-        whole.push(t.elapsed().as_secs_f64() * 1e3);
-        let t = Instant::now();
-        let id = id_of(&http(addr, "POST", "/v1/jobs", Some(SHORT)).1);
-        loop {
-            let (_, body) = http(addr, "GET", &format!("/v1/jobs/{id}"), None);
-            if body.contains("\"successful\"") {
-                break;
-            }
-            std::thread::sleep(Duration::from_millis(1));
-        }
-        service_wall.push(t.elapsed().as_secs_f64() * 1e3);
-        // the same, told by the job's event stream instead of polling
-        let t = Instant::now();
-        let id = id_of(&http(addr, "POST", "/v1/jobs", Some(SHORT)).1);
-        until_status_event(addr, &id);
-        streamed.push(t.elapsed().as_secs_f64() * 1e3);
-    }
-    let (e, w) = (percentile(&mut engine, 0.5), percentile(&mut service_wall, 0.5));
-    let sse = percentile(&mut streamed, 0.5);
-    let c = percentile(&mut whole, 0.5);
-    println!();
-    println!("| short job (1000 iterations, 256 vertices, checkpoints every 100) | median of {RUNS} |");
-    println!("|---|---|");
-    println!("| engine in-process | {e:.1} ms |");
-    println!("| service: POST → successful (polled every ms) | {w:.1} ms |");
-    println!("| overhead | {:.1} ms ({:.0} %) |", w - e, 100.0 * (w - e) / e);
-    println!("| service: POST → status event on the job's SSE stream | {sse:.1} ms |");
-    println!("| overhead | {:.1} ms ({:.0} %) |", sse - e, 100.0 * (sse - e) / e);
-    println!("| in-process as the CLI: run, checkpoint fields, result files | {c:.1} ms |");
-    println!("| service overhead beyond that, polled | {:.1} ms ({:.0} %) |", w - c, 100.0 * (w - c) / c);
-    println!("| service overhead beyond that, SSE | {:.1} ms ({:.0} %) |", sse - c, 100.0 * (sse - c) / c);
-    // `-- short`: only the short job (the overhead), without the load after it
+    // overhead on a short job, first, with idle workers and an empty database;
+    // then on a job ten times longer with as many checkpoints (the fixed costs of
+    // a job's life against a longer run)
+    overhead(addr, SHORT, RUNS, "short job (1000 iterations, 256 vertices, checkpoints every 100)");
+    overhead(addr, LONGER, 5, "longer job (10,000 iterations, 256 vertices, checkpoints every 1000)");
+    // `-- short`: only the overhead tables, without the load after them
     if !std::env::args().any(|a| a == "short") {
         under_load(addr);
     }
