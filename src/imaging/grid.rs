@@ -10,17 +10,36 @@ pub enum SampleKind {
 }
 
 /// Where the samples lie in the space of the file they were read from: sample
-/// `(i, j, k)` is at `origin + (i s₀, j s₁, k s₂)`, axis-aligned. A file that
-/// gives no spacing has unit spacing; one that gives no origin, the origin 0.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// `(i, j, k)` is at `origin + i axes[0] + j axes[1] + k axes[2]`, in the space
+/// named `space` (NRRD's names; a NIfTI file's RAS coordinates are turned into
+/// `left-posterior-superior`, as ITK and 3D Slicer read them), or in an unnamed
+/// space. A file that gives no placement has unit axes and the origin 0.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Placement {
-    pub spacing: [f64; 3],
+    pub axes: [[f64; 3]; 3],
     pub origin: [f64; 3],
+    pub space: Option<String>,
 }
 
 impl Default for Placement {
     fn default() -> Self {
-        Placement { spacing: [1.0; 3], origin: [0.0; 3] }
+        Placement::aligned([1.0; 3], [0.0; 3])
+    }
+}
+
+impl Placement {
+    /// Axes along the coordinate axes, `spacing` apart, from `origin`, unnamed.
+    pub fn aligned(spacing: [f64; 3], origin: [f64; 3]) -> Placement {
+        let mut axes = [[0.0; 3]; 3];
+        for a in 0..3 {
+            axes[a][a] = spacing[a];
+        }
+        Placement { axes, origin, space: None }
+    }
+
+    /// The distance between neighbouring samples along each axis.
+    pub fn spacing(&self) -> [f64; 3] {
+        self.axes.map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt())
     }
 }
 

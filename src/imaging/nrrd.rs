@@ -128,13 +128,14 @@ pub fn parse_nrrd(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Gri
     if let Some(i) = values.iter().position(|v| !v.is_finite()) {
         return Err(fail(format!("voxel {i} is not a finite number")));
     }
-    let spacing = voxel_spacing(get("spacings"), get("space directions")).map_err(fail)?;
+    let axes = voxel_axes(get("spacings"), get("space directions")).map_err(fail)?;
     let origin = match get("space origin") {
         Some(text) => space_origin(text).map_err(fail)?,
         None => [0.0; 3],
     };
+    let space = get("space").map(|name| name.to_ascii_lowercase());
     let grid = Grid::new(3, [sizes[0], sizes[1], sizes[2]], values, kind);
-    isotropic(input, grid.placed(Placement { spacing, origin }), spacing, limits)
+    isotropic(input, grid.placed(Placement { axes, origin, space }), limits)
 }
 
 /// `space origin: (x,y,z)`.
@@ -149,35 +150,42 @@ fn space_origin(text: &str) -> Result<[f64; 3], String> {
     }
 }
 
-/// The spacing of the three axes: from `spacings: a b c`, else from `space
-/// directions: (x,y,z) (x,y,z) (x,y,z)` (each vector's length), else 1; "nan"
-/// (an axis without spacing) counts as 1.
-fn voxel_spacing(spacings: Option<&str>, directions: Option<&str>) -> Result<[f64; 3], String> {
-    let checked = |values: Vec<f64>, field: &str| -> Result<[f64; 3], String> {
-        let values: Vec<f64> = values.into_iter().map(|v| if v.is_nan() { 1.0 } else { v }).collect();
-        match values[..] {
-            [a, b, c] if [a, b, c].iter().all(|v| v.is_finite() && *v > 0.0) => Ok([a, b, c]),
-            _ => Err(format!("has NRRD `{field}` {values:?}: three positive numbers are needed")),
-        }
-    };
-    if let Some(text) = spacings {
-        let values: Result<Vec<f64>, _> = text.split_whitespace().map(str::parse::<f64>).collect();
-        return checked(values.map_err(|_| format!("has a non-numeric NRRD `spacings` {text:?}"))?, "spacings");
-    }
+/// The step of each axis in space: `space directions: (x,y,z) (x,y,z) (x,y,z)`,
+/// else `spacings: a b c` along the coordinate axes ("nan", an axis without
+/// spacing, counts as 1), else unit steps.
+fn voxel_axes(spacings: Option<&str>, directions: Option<&str>) -> Result<[[f64; 3]; 3], String> {
     if let Some(text) = directions {
-        let mut lengths = Vec::new();
+        let mut axes = Vec::new();
         for vector in text.split_whitespace() {
             if vector == "none" {
                 continue;
             }
             let inner = vector.trim_start_matches('(').trim_end_matches(')');
             let parts: Result<Vec<f64>, _> = inner.split(',').map(|c| c.trim().parse::<f64>()).collect();
-            let parts = parts.map_err(|_| format!("has a malformed NRRD `space directions` vector {vector:?}"))?;
-            lengths.push(parts.iter().map(|c| c * c).sum::<f64>().sqrt());
+            match parts.as_deref() {
+                Ok(&[x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) && x * x + y * y + z * z > 0.0 => {
+                    axes.push([x, y, z])
+                }
+                _ => return Err(format!("has a malformed NRRD `space directions` vector {vector:?}")),
+            }
         }
-        return checked(lengths, "space directions");
+        return match axes[..] {
+            [u, v, w] => Ok([u, v, w]),
+            _ => Err(format!("has NRRD `space directions` {text:?}: three vectors are needed")),
+        };
     }
-    Ok([1.0; 3])
+    if let Some(text) = spacings {
+        let values: Result<Vec<f64>, _> = text.split_whitespace().map(str::parse::<f64>).collect();
+        let values = values.map_err(|_| format!("has a non-numeric NRRD `spacings` {text:?}"))?;
+        let values: Vec<f64> = values.into_iter().map(|v| if v.is_nan() { 1.0 } else { v }).collect();
+        return match values[..] {
+            [a, b, c] if [a, b, c].iter().all(|v| v.is_finite() && *v > 0.0) => {
+                Ok(Placement::aligned([a, b, c], [0.0; 3]).axes)
+            }
+            _ => Err(format!("has NRRD `spacings` {values:?}: three positive numbers are needed")),
+        };
+    }
+    Ok(Placement::default().axes)
 }
 
 /// A 0/1 uint8 mask on the samples of `grid` as a gzip NRRD file.
@@ -195,12 +203,22 @@ pub fn encode_nrrd_labels(grid: &Grid, labels: &[u16]) -> Vec<u8> {
 /// The header of a gzip NRRD of `grid`'s samples (sizes, and its placement as
 /// `space directions` and `space origin`) of `ty`, then `raw` compressed.
 fn encode_gzip_nrrd(grid: &Grid, what: &str, ty: &str, raw: &[u8]) -> Vec<u8> {
-    let (dims, Placement { spacing: s, origin: o }) = (grid.dims, grid.placement);
+    let (dims, p) = (grid.dims, &grid.placement);
+    let space = match &p.space {
+        Some(name) => format!("space: {name}"),
+        None => "space dimension: 3".to_string(),
+    };
+    let vector = |v: &[f64; 3]| format!("({},{},{})", v[0], v[1], v[2]);
     let mut out = format!(
-        "NRRD0004\n# shapeflow segmentation {what}\ntype: {ty}\ndimension: 3\nsizes: {} {} {}\n\
-         space dimension: 3\nspace directions: ({},0,0) (0,{},0) (0,0,{})\nspace origin: ({},{},{})\n\
-         encoding: gzip\n\n",
-        dims[0], dims[1], dims[2], s[0], s[1], s[2], o[0], o[1], o[2]
+        "NRRD0004\n# shapeflow segmentation {what}\ntype: {ty}\ndimension: 3\nsizes: {} {} {}\n{space}\n\
+         space directions: {} {} {}\nspace origin: {}\nencoding: gzip\n\n",
+        dims[0],
+        dims[1],
+        dims[2],
+        vector(&p.axes[0]),
+        vector(&p.axes[1]),
+        vector(&p.axes[2]),
+        vector(&p.origin)
     )
     .into_bytes();
     let mut gz = GzEncoder::new(Vec::new(), flate2::Compression::fast());
@@ -235,6 +253,7 @@ mod tests {
 
     #[test]
     fn spacings_are_read_and_anisotropic_volumes_resampled() {
+        let voxel_spacing = |s, d| voxel_axes(s, d).map(|axes| Placement { axes, ..Default::default() }.spacing());
         assert_eq!(voxel_spacing(Some("1 2 0.5"), None).unwrap(), [1.0, 2.0, 0.5]);
         assert_eq!(voxel_spacing(None, Some("(0.5,0,0) (0,0.5,0) (0,0,3)")).unwrap(), [0.5, 0.5, 3.0]);
         assert_eq!(voxel_spacing(Some("nan nan nan"), None).unwrap(), [1.0; 3]);
@@ -242,6 +261,7 @@ mod tests {
         assert!(voxel_spacing(Some("1 -2 1"), None).unwrap_err().contains("spacings"));
         assert!(voxel_spacing(Some("1 x 1"), None).unwrap_err().contains("non-numeric"));
         assert!(voxel_spacing(None, Some("(1,0,0) (0,1,0)")).unwrap_err().contains("space directions"));
+        assert!(voxel_spacing(None, Some("(1,0,0) (0,0,0) (0,0,1)")).unwrap_err().contains("(0,0,0)"));
         // a 4×4×4 volume with slices twice as far apart: 4×4×8 cubic voxels
         let mut file =
             b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 4\nspacings: 1 1 2\nencoding: raw\n\n".to_vec();
@@ -249,31 +269,34 @@ mod tests {
         let g = parse_nrrd("image", &file, &ImageLimits::default()).unwrap();
         assert_eq!(g.dims, [4, 4, 8]);
         // the new samples are half a new voxel in from the old volume's edge
-        assert_eq!(g.placement, Placement { spacing: [1.0; 3], origin: [0.0, 0.0, -0.5] });
+        assert_eq!(g.placement, Placement::aligned([1.0; 3], [0.0, 0.0, -0.5]));
     }
 
     /// A result written on a resampled volume lies where the input did: its
-    /// placement (the input's origin, moved to the new samples) reads back.
+    /// placement (the input's axes shortened to the new spacing, its origin moved
+    /// to the new first sample, its space) reads back.
     #[test]
     fn results_carry_the_placement_of_their_volume() {
-        let mut file = b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 4\nspace dimension: 3\n\
-            space directions: (0.5,0,0) (0,0.5,0) (0,0,1.5)\nspace origin: (10,-20,30.25)\nencoding: raw\n\n"
+        // axes turned a quarter about z, slices three times as far apart as pixels
+        let mut file = b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 4\nspace: left-posterior-superior\n\
+            space directions: (0,0.5,0) (-0.5,0,0) (0,0,1.5)\nspace origin: (10,-20,30.25)\nencoding: raw\n\n"
             .to_vec();
         file.extend((0..64).map(|i| if i < 32 { 0u8 } else { 200 }));
         let g = parse_nrrd("image", &file, &ImageLimits::default()).unwrap();
         assert_eq!(g.dims, [4, 4, 12]);
-        assert_eq!(g.placement, Placement { spacing: [0.5; 3], origin: [10.0, -20.0, 29.75] });
+        let expected = Placement {
+            axes: [[0.0, 0.5, 0.0], [-0.5, 0.0, 0.0], [0.0, 0.0, 0.5]],
+            origin: [10.0, -20.0, 29.75],
+            space: Some("left-posterior-superior".into()),
+        };
+        assert_eq!(g.placement, expected);
         let labels: Vec<u16> = (0..g.len()).map(|i| (i % 7) as u16).collect();
         for bytes in [encode_nrrd_mask(&g, &vec![true; g.len()]), encode_nrrd_labels(&g, &labels)] {
             let back = parse_nrrd("result", &bytes, &ImageLimits::default()).unwrap();
-            assert_eq!((back.dims, back.placement), (g.dims, g.placement));
+            assert_eq!((back.dims, &back.placement), (g.dims, &g.placement));
         }
-        let e = parse_nrrd(
-            "image",
-            &String::from_utf8_lossy(&file).replace("30.25)", "x)").into_bytes(),
-            &ImageLimits::default(),
-        )
-        .unwrap_err();
+        let text = String::from_utf8_lossy(&file).into_owned();
+        let e = parse_nrrd("image", text.replace("30.25)", "x)").as_bytes(), &ImageLimits::default()).unwrap_err();
         assert!(e.message.contains("space origin"), "{e}");
     }
 

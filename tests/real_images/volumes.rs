@@ -82,7 +82,7 @@ fn an_anisotropic_nifti_volume_and_a_tiff_stack() {
         // half a new voxel in from the input's edge
         let setup = job.segmentation.as_ref().unwrap();
         assert_eq!((setup.voxel_spacing, setup.voxel_origin), (Some([1.0; 3]), Some([0.0, 0.0, -0.5])), "{what}");
-        assert_eq!(img.placement, shapeflow::imaging::Placement { spacing: [1.0; 3], origin: [0.0, 0.0, -0.5] });
+        assert_eq!(img.placement.axes, shapeflow::imaging::Placement::aligned([1.0; 3], [0.0; 3]).axes, "{what}");
         let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
         let (_, rows) = objects(img, &result_state(&job, &out.last).mesh);
         let volume: f64 = rows.iter().map(|r| r.size).sum();

@@ -17,15 +17,15 @@ use super::grid::{Grid, Placement};
 use super::limits::ImageLimits;
 use super::ImageError;
 
-/// `grid`, whose first sample is at `grid.placement.origin`, with voxel
-/// `spacing`: resampled (trilinear) to cubic voxels of its smallest spacing when its
-/// spacings differ by more than 1 %, placed where the new samples lie (the first
-/// half a new voxel in from the old volume's edge); only placed otherwise.
-pub fn isotropic(input: &str, grid: Grid, spacing: [f64; 3], limits: &ImageLimits) -> Result<Grid, ImageError> {
-    let origin = grid.placement.origin;
+/// `grid` resampled (trilinear) to cubic voxels of its smallest spacing (its
+/// placement's) when its spacings differ by more than 1 %, placed where the new
+/// samples lie: the axes shortened to that spacing, the first sample half a new
+/// voxel in from the old volume's edge. Unchanged otherwise.
+pub fn isotropic(input: &str, grid: Grid, limits: &ImageLimits) -> Result<Grid, ImageError> {
+    let spacing = grid.placement.spacing();
     let h = spacing.iter().copied().fold(f64::INFINITY, f64::min);
     if spacing.iter().all(|&s| s <= 1.01 * h) {
-        return Ok(grid.placed(Placement { spacing, origin }));
+        return Ok(grid);
     }
     let dims: [usize; 3] = std::array::from_fn(|a| ((grid.dims[a] as f64 * spacing[a] / h).round() as usize).max(1));
     limits.check(input, &dims).map_err(|e| {
@@ -56,8 +56,17 @@ pub fn isotropic(input: &str, grid: Grid, spacing: [f64; 3], limits: &ImageLimit
             }
         }
     }
-    let origin = std::array::from_fn(|a| origin[a] + 0.5 * (h - spacing[a]));
-    Ok(Grid::new(3, dims, values, grid.kind).placed(Placement { spacing: [h; 3], origin }))
+    // sample i lies at the old index (i + ½) h/s − ½ along each axis
+    let old = &grid.placement;
+    let mut placed = Placement { axes: old.axes, origin: old.origin, space: old.space.clone() };
+    for a in 0..3 {
+        let shift = 0.5 * h / spacing[a] - 0.5;
+        for c in 0..3 {
+            placed.axes[a][c] *= h / spacing[a];
+            placed.origin[c] += shift * old.axes[a][c];
+        }
+    }
+    Ok(Grid::new(3, dims, values, grid.kind).placed(placed))
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! the spacing of `pixdim`.
 
 use super::isotropic;
-use crate::imaging::grid::{Grid, SampleKind};
+use crate::imaging::grid::{Grid, Placement, SampleKind};
 use crate::imaging::limits::ImageLimits;
 use crate::imaging::ImageError;
 use std::io::Read;
@@ -144,13 +144,94 @@ pub fn decode_nifti(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<G
         2 => SampleKind::U16,
         _ => SampleKind::F32,
     };
-    let spacing: [f64; 3] = std::array::from_fn(|a| {
-        let s = (f32_at(80 + 4 * a) as f64).abs();
+    let pixdim: [f64; 4] = std::array::from_fn(|k| f32_at(76 + 4 * k) as f64);
+    let qform = [i16_at(252) as f64, f32_at(256) as f64, f32_at(260) as f64, f32_at(264) as f64];
+    let offset = [f32_at(268) as f64, f32_at(272) as f64, f32_at(276) as f64];
+    let srows: [[f64; 4]; 3] = std::array::from_fn(|r| std::array::from_fn(|c| f32_at(280 + 16 * r + 4 * c) as f64));
+    let sform = (i16_at(254) > 0).then_some(srows);
+    let placement = placement(pixdim, qform, offset, sform);
+    isotropic(input, Grid::new(3, dims, values, kind).placed(placement), limits)
+}
+
+/// Where a NIfTI-1 file's voxels lie: by its `sform` (`srow_*`) when
+/// `sform_code > 0`, else by its `qform` (`[qform_code, b, c, d]`, the quaternion's
+/// rotation of the voxel steps `pixdim`, `qfac = pixdim[0]` flipping the third,
+/// from `qoffset`) when `qform_code > 0`, in RAS coordinates turned into
+/// `left-posterior-superior`; else along the coordinate axes, `pixdim` apart, in no
+/// named space (NIfTI's method 1). A non-finite or degenerate transform falls back
+/// to the last.
+fn placement(pixdim: [f64; 4], qform: [f64; 4], offset: [f64; 3], sform: Option<[[f64; 4]; 3]>) -> Placement {
+    let steps: [f64; 3] = std::array::from_fn(|a| {
+        let s = pixdim[a + 1].abs();
         if s.is_finite() && s > 0.0 {
             s
         } else {
             1.0
         }
     });
-    isotropic(input, Grid::new(3, dims, values, kind), spacing, limits)
+    // columns of the RAS transform, and its origin
+    let ras: Option<([[f64; 3]; 3], [f64; 3])> = if let Some(rows) = sform {
+        Some((std::array::from_fn(|a| std::array::from_fn(|c| rows[c][a])), std::array::from_fn(|c| rows[c][3])))
+    } else if qform[0] > 0.0 {
+        let [_, b, c, d] = qform;
+        let a = (1.0 - (b * b + c * c + d * d)).max(0.0).sqrt();
+        let r = [
+            [a * a + b * b - c * c - d * d, 2.0 * (b * c - a * d), 2.0 * (b * d + a * c)],
+            [2.0 * (b * c + a * d), a * a + c * c - b * b - d * d, 2.0 * (c * d - a * b)],
+            [2.0 * (b * d - a * c), 2.0 * (c * d + a * b), a * a + d * d - b * b - c * c],
+        ];
+        let qfac = if pixdim[0] < 0.0 { -1.0 } else { 1.0 };
+        let scale = [steps[0], steps[1], steps[2] * qfac];
+        Some((std::array::from_fn(|k| std::array::from_fn(|row| r[row][k] * scale[k])), offset))
+    } else {
+        None
+    };
+    let aligned = || Placement::aligned(steps, [0.0; 3]);
+    let Some((axes, origin)) = ras else { return aligned() };
+    let lps = |v: [f64; 3]| [-v[0], -v[1], v[2]];
+    let placed = Placement { axes: axes.map(lps), origin: lps(origin), space: Some("left-posterior-superior".into()) };
+    let finite = placed.axes.iter().flatten().chain(&placed.origin).all(|v| v.is_finite());
+    let volume = {
+        let [u, v, w] = placed.axes;
+        u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0])
+    };
+    let least = placed.spacing().iter().copied().fold(f64::INFINITY, f64::min);
+    if finite && volume.abs() > 1e-6 * least.powi(3) && least > 0.0 {
+        placed
+    } else {
+        aligned()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A quarter turn about z by the quaternion, `qfac` −1, then an `sform` that
+    /// takes precedence, and a degenerate one that falls back to `pixdim`: in
+    /// left-posterior-superior coordinates (RAS with x and y negated).
+    #[test]
+    fn the_transform_is_read_from_sform_or_qform() {
+        let d = std::f64::consts::FRAC_1_SQRT_2;
+        let q = placement([-1.0, 2.0, 3.0, 4.0], [1.0, 0.0, 0.0, d], [10.0, 20.0, 30.0], None);
+        let close = |a: &Placement, axes: [[f64; 3]; 3], origin: [f64; 3]| {
+            let near = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(p, q)| (p - q).abs() < 1e-6);
+            near(a.axes.as_flattened(), axes.as_flattened()) && near(&a.origin, &origin)
+        };
+        // RAS columns (0,2,0), (−3,0,0), (0,0,−4) from (10,20,30)
+        assert!(close(&q, [[0.0, -2.0, 0.0], [3.0, 0.0, 0.0], [0.0, 0.0, -4.0]], [-10.0, -20.0, 30.0]), "{q:?}");
+        assert_eq!(q.space.as_deref(), Some("left-posterior-superior"));
+        assert!(close(
+            &Placement::aligned(q.spacing(), [0.0; 3]),
+            Placement::aligned([2.0, 3.0, 4.0], [0.0; 3]).axes,
+            [0.0; 3]
+        ));
+        let rows = [[0.0, 0.0, 1.5, -7.0], [1.0, 0.0, 0.0, 8.0], [0.0, 1.0, 0.0, 9.0]];
+        let s = placement([1.0, 2.0, 3.0, 4.0], [1.0, 0.0, 0.0, d], [10.0, 20.0, 30.0], Some(rows));
+        assert!(close(&s, [[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.5, 0.0, 0.0]], [7.0, -8.0, 9.0]), "{s:?}");
+        let flat = placement([1.0, 2.0, 3.0, 4.0], [0.0; 4], [10.0, 20.0, 30.0], Some([[0.0; 4]; 3]));
+        assert_eq!(flat, Placement::aligned([2.0, 3.0, 4.0], [0.0; 3]));
+        // no transform: NIfTI's method 1, along the axes in no named space
+        assert_eq!(placement([1.0, 2.0, 3.0, 4.0], [0.0; 4], [1.0; 3], None), flat);
+    }
 }

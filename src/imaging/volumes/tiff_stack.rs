@@ -2,6 +2,7 @@
 //! spacing of ImageJ's `spacing=` and the X resolution.
 
 use super::isotropic;
+use crate::imaging::grid::Placement;
 use crate::imaging::grid::{Grid, SampleKind};
 use crate::imaging::limits::ImageLimits;
 use crate::imaging::ImageError;
@@ -93,7 +94,7 @@ pub fn decode_tiff_stack(input: &str, bytes: &[u8], limits: &ImageLimits) -> Res
     }
     limits.check(input, &[dims[0], dims[1], page])?;
     let grid = Grid::new(3, [dims[0], dims[1], page], values, kind);
-    isotropic(input, grid, [xy_spacing, xy_spacing, z_spacing], limits)
+    isotropic(input, grid.placed(Placement::aligned([xy_spacing, xy_spacing, z_spacing], [0.0; 3])), limits)
 }
 
 /// A `key=value` number of an ImageJ image description.

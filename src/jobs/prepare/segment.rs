@@ -77,8 +77,9 @@ pub struct SegmentationSetup {
     pub merge: bool,
     /// Volumes: the voxel spacing of the results' grid (cubic after an anisotropic
     /// input's resampling) and where its first voxel lies, in the input file's
-    /// units and space (NRRD's `space origin`; 0 for NIfTI and TIFF stacks), as
-    /// mask.nrrd and labels.nrrd record them. `None` for 2D images.
+    /// units and space (NRRD's `space origin`, NIfTI's transform in
+    /// left-posterior-superior coordinates; 0 for TIFF stacks), as mask.nrrd and
+    /// labels.nrrd record them with the axes' directions. `None` for 2D images.
     pub voxel_spacing: Option<[f64; 3]>,
     pub voxel_origin: Option<[f64; 3]>,
 }
@@ -150,7 +151,7 @@ pub(super) fn prepare_segmentation(
         lambda_out,
         means,
         merge,
-        voxel_spacing: (d == 3).then_some(grid.placement.spacing),
+        voxel_spacing: (d == 3).then(|| grid.placement.spacing()),
         voxel_origin: (d == 3).then_some(grid.placement.origin),
     };
     // the converged contours of separate objects are split where the flow brought
