@@ -4,7 +4,7 @@
 A ball of known centre and radius in physical space, sampled on a rotated,
 anisotropic grid with an origin, is written as NIfTI-1 (qform and sform) and as
 NRRD (left-posterior-superior); the CLI segments each at defaults, and
-SimpleITK reads mask.nrrd back. Checked: the mask's voxel size, the physical
+SimpleITK reads mask.nrrd and mask.nii.gz back. Checked: the mask's voxel size, the physical
 centroid of its voxels against the ball's centre (within half a voxel), its
 volume against the ball's (within 3 %), and the input's first voxel centre
 against the mask's grid, half a new voxel in.
@@ -26,6 +26,26 @@ import SimpleITK as sitk
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 BINARY = ROOT / "target" / "release" / "shapeflow"
 SPEC = '{"problem": {"type": "segmentation", "image": "input:image"}}'
+
+
+def check(mask, what, centre, radius, spacing, origin):
+    """Prints the checks of one mask read by SimpleITK; returns the failures."""
+    m = sitk.GetArrayFromImage(mask) > 0
+    voxel = mask.GetSpacing()
+    centroid = np.array(mask.TransformContinuousIndexToPhysicalPoint(np.argwhere(m).mean(0)[::-1].tolist()))
+    volume = m.sum() * np.prod(voxel)
+    exact = 4 / 3 * math.pi * radius**3
+    first = np.array(mask.TransformContinuousIndexToPhysicalPoint((0.0, 0.0, 0.5 * spacing[2] / voxel[2] - 0.5)))
+    checks = {
+        "voxel size": np.allclose(voxel, min(spacing)),
+        "centroid": np.linalg.norm(centroid - centre) < 0.5 * min(spacing),
+        "volume": abs(volume / exact - 1) < 0.03,
+        "first voxel": np.allclose(first, origin, atol=1e-4),
+    }
+    print(f"{what}: voxel {np.round(voxel, 3)}, centroid off by {np.linalg.norm(centroid - centre):.3f}, "
+          f"volume {volume:.0f} of {exact:.0f}, first voxel {np.round(first, 3)} (input {origin}): "
+          + ", ".join(f"{k} {'ok' if v else 'FAILED'}" for k, v in checks.items()))
+    return sum(not v for v in checks.values())
 
 
 def main():
@@ -62,23 +82,8 @@ def main():
                 print(f"{ext}: exit {run.returncode}: {run.stderr.strip()}")
                 failures += 1
                 continue
-            mask = sitk.ReadImage(str(out / "mask.nrrd"))
-            m = sitk.GetArrayFromImage(mask) > 0
-            voxel = mask.GetSpacing()
-            centroid = np.array(mask.TransformContinuousIndexToPhysicalPoint(np.argwhere(m).mean(0)[::-1].tolist()))
-            volume = m.sum() * np.prod(voxel)
-            exact = 4 / 3 * math.pi * radius**3
-            first = np.array(mask.TransformContinuousIndexToPhysicalPoint((0.0, 0.0, 0.5 * spacing[2] / voxel[2] - 0.5)))
-            checks = {
-                "voxel size": np.allclose(voxel, min(spacing)),
-                "centroid": np.linalg.norm(centroid - centre) < 0.5 * min(spacing),
-                "volume": abs(volume / exact - 1) < 0.03,
-                "first voxel": np.allclose(first, origin),
-            }
-            print(f"{ext}: voxel {np.round(voxel, 3)}, centroid off by {np.linalg.norm(centroid - centre):.3f}, "
-                  f"volume {volume:.0f} of {exact:.0f}, first voxel {np.round(first, 3)} (input {origin}): "
-                  + ", ".join(f"{k} {'ok' if v else 'FAILED'}" for k, v in checks.items()))
-            failures += sum(not v for v in checks.values())
+            for result in ["mask.nrrd", "mask.nii.gz"]:
+                failures += check(sitk.ReadImage(str(out / result)), f"{ext} -> {result}", centre, radius, spacing, origin)
     sys.exit(1 if failures else 0)
 
 

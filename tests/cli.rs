@@ -155,7 +155,8 @@ fn run_segments_an_image_and_writes_mask_and_overlay() {
     assert!((p[1].as_f64().unwrap() - (127.5 - v[1].as_f64().unwrap() * 128.0)).abs() < 1e-9);
 }
 
-/// A 3D volume from NRRD: mask.nrrd of the two balls.
+/// A 3D volume from NRRD: mask.nrrd of the two balls, and the same mask and the
+/// labels as NIfTI-1, on the same grid.
 #[test]
 fn run_segments_a_volume_and_writes_an_nrrd_mask() {
     let dir = tempfile::tempdir().unwrap();
@@ -175,4 +176,12 @@ fn run_segments_a_volume_and_writes_an_nrrd_mask() {
     let exact = 2.0 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) - lens;
     // (the balloon force keeps the surface about 0.4 px inside on this small volume)
     assert!((inside / exact - 1.0).abs() < 0.15, "{inside} {exact}");
+    let nifti = |name: &str| {
+        let bytes = std::fs::read(dir.path().join(name)).unwrap();
+        shapeflow::imaging::decode_nifti(name, &bytes, &Default::default()).unwrap()
+    };
+    let (mask, labels) = (nifti("mask.nii.gz"), nifti("labels.nii.gz"));
+    assert_eq!((mask.dims, &mask.values), (grid.dims, &grid.values));
+    assert!(labels.values.iter().zip(&grid.values).all(|(l, m)| (*l > 0.0) == (*m == 1.0)));
+    assert_eq!(mask.placement.spacing(), grid.placement.spacing());
 }

@@ -37,7 +37,9 @@ pub use threshold::{
     background_spread, histogram_mode, noise_level, otsu, percentile, percentiles, smoothed_noise, smoothing_for_noise,
     Normalization, PERCENTILES,
 };
-pub use volumes::{decode_nifti, decode_tiff_stack, is_nifti, is_tiff, isotropic, tiff_pages};
+pub use volumes::{
+    decode_nifti, decode_tiff_stack, encode_nifti_labels, encode_nifti_mask, is_nifti, is_tiff, isotropic, tiff_pages,
+};
 
 /// A bad or unsupported input file; `input` names it (the multipart part or file).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -3,10 +3,12 @@
 
 use super::frames::{Frame, GlbContext};
 use super::PreparedJob;
-use crate::export::{labels_png, mask_nrrd, mask_png, objects, objects_csv, overlay_png, shape_json, ObjectRow};
+use crate::export::{
+    labels_png, mask_nifti, mask_nrrd, mask_png, objects, objects_csv, overlay_png, shape_json, ObjectRow,
+};
 use crate::flow::{Checkpoint, MeshData};
 use crate::geometry::{loop_area, Point};
-use crate::imaging::{encode_nrrd_labels, Grid};
+use crate::imaging::{encode_nifti_labels, encode_nrrd_labels, Grid};
 use crate::problems::refine_to_edges;
 use serde_json::Value;
 use std::cell::OnceCell;
@@ -110,6 +112,8 @@ impl<'a> StateResults<'a> {
             "mask.nrrd" => mask_nrrd(img, self.found()),
             "labels.png" => labels_png(img, &self.objects(img).0),
             "labels.nrrd" => encode_nrrd_labels(img, &self.objects(img).0),
+            "mask.nii.gz" => mask_nifti(img, self.found()),
+            "labels.nii.gz" => encode_nifti_labels(img, &self.objects(img).0),
             "objects.csv" => objects_csv(img.dimension, &self.objects(img).1).into_bytes(),
             _ => return None,
         };
@@ -118,7 +122,8 @@ impl<'a> StateResults<'a> {
 }
 
 /// Names and media types of the image results of a 2D image or a volume: the
-/// mask, the overlay (2D), the label image and the table of objects.
+/// mask, the overlay (2D), the label image (volumes: both as NRRD and as NIfTI-1)
+/// and the table of objects.
 pub fn image_result_names(dimension: usize) -> &'static [(&'static str, &'static str)] {
     if dimension == 2 {
         &[
@@ -131,6 +136,8 @@ pub fn image_result_names(dimension: usize) -> &'static [(&'static str, &'static
         &[
             ("mask.nrrd", "application/octet-stream"),
             ("labels.nrrd", "application/octet-stream"),
+            ("mask.nii.gz", "application/gzip"),
+            ("labels.nii.gz", "application/gzip"),
             ("objects.csv", "text/csv"),
         ]
     }

@@ -8,9 +8,11 @@
 //! the input.
 
 mod nifti;
+mod nifti_out;
 mod tiff_stack;
 
 pub use nifti::{decode_nifti, is_nifti};
+pub use nifti_out::{encode_nifti_labels, encode_nifti_mask};
 pub use tiff_stack::{decode_tiff_stack, is_tiff, tiff_pages};
 
 use super::grid::{Grid, Placement};

@@ -47,6 +47,8 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("GET", "/v1/jobs/{id}/results/mask.nrrd"),
     ("GET", "/v1/jobs/{id}/results/labels.png"),
     ("GET", "/v1/jobs/{id}/results/labels.nrrd"),
+    ("GET", "/v1/jobs/{id}/results/mask.nii.gz"),
+    ("GET", "/v1/jobs/{id}/results/labels.nii.gz"),
     ("GET", "/v1/jobs/{id}/results/objects.csv"),
     ("GET", "/v1/jobs/{id}/checkpoints"),
     ("GET", "/v1/jobs/{id}/checkpoints/{n}.glb"),

@@ -139,8 +139,8 @@ pub(super) async fn shape(State(state): State<AppState>, Path(id): Path<String>)
 }
 
 /// `GET /v1/jobs/{id}/results/mask.png`, `overlay.png`, `labels.png` (2D),
-/// `mask.nrrd`, `labels.nrrd` (3D), `objects.csv`: the segmentation of an ended
-/// image job.
+/// `mask.nrrd`, `labels.nrrd`, `mask.nii.gz`, `labels.nii.gz` (3D), `objects.csv`:
+/// the segmentation of an ended image job.
 pub(super) async fn image_result(
     State(state): State<AppState>,
     Path((id, file)): Path<(String, String)>,
