@@ -15,7 +15,7 @@ pub use nifti::{decode_nifti, is_nifti};
 pub use nifti_out::{encode_nifti_labels, encode_nifti_mask};
 pub use tiff_stack::{decode_tiff_stack, is_tiff, tiff_pages};
 
-use super::grid::{Grid, Placement};
+use super::grid::Grid;
 use super::limits::ImageLimits;
 use super::ImageError;
 
@@ -60,7 +60,7 @@ pub fn isotropic(input: &str, grid: Grid, limits: &ImageLimits) -> Result<Grid, 
     }
     // sample i lies at the old index (i + ½) h/s − ½ along each axis
     let old = &grid.placement;
-    let mut placed = Placement { axes: old.axes, origin: old.origin, space: old.space.clone() };
+    let mut placed = old.clone();
     for a in 0..3 {
         let shift = 0.5 * h / spacing[a] - 0.5;
         for c in 0..3 {
