@@ -1,10 +1,11 @@
 //! NRRD volumes (<http://teem.sourceforge.net/nrrd/format.html>): a text header
 //! (`NRRD000x`, `field: value` lines, a blank line) followed by the attached data.
 //! Read: `dimension: 3`, types uint8/uint16/float32 (any of their NRRD spellings),
-//! `raw` or `gzip` encoding, either endianness; the voxel spacing from `spacings`
-//! or `space directions` (the length of each axis's vector), an anisotropic volume
+//! `raw` or `gzip` encoding, either endianness; the placement from `space`,
+//! `space directions` (or `spacings`) and `space origin`, an anisotropic volume
 //! resampled to cubic voxels of its smallest spacing as the other volume readers do
-//! ([`isotropic`]). Written: uint8 masks, gzip.
+//! ([`isotropic`]). Written: uint8 masks and uint16 labels, gzip, with the grid's
+//! placement.
 
 use super::grid::{Grid, Placement, SampleKind};
 use super::limits::ImageLimits;
