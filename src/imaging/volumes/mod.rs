@@ -128,6 +128,10 @@ mod tests {
         bad[70] = 99;
         assert!(decode_nifti("vol", &bad, &limits).unwrap_err().to_string().contains("datatype 99"));
         assert!(!is_nifti(b"NRRD0004\n"));
+        // a vox_offset of f32::MAX (found by fuzzing: the data's end overflowed)
+        let mut far = b.clone();
+        far[108..112].copy_from_slice(&f32::MAX.to_le_bytes());
+        assert!(decode_nifti("vol", &far, &limits).unwrap_err().to_string().contains("truncated"));
     }
 
     /// A stack of `pages` gray 8-bit pages of 6×5, value `10·page + column`, with

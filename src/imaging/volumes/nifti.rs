@@ -102,7 +102,8 @@ pub fn decode_nifti(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<G
     }
     let n = dims[0] * dims[1] * dims[2];
     let start = offset as usize;
-    let data = b.get(start..start + n * size).ok_or_else(|| {
+    // a vox_offset far beyond the file (up to f32::MAX) must not overflow the end
+    let data = start.checked_add(n * size).and_then(|end| b.get(start..end)).ok_or_else(|| {
         fail(format!("is truncated: {} voxels of {size} bytes from byte {start}, {} bytes in all", n, b.len()))
     })?;
     let value = |c: &[u8]| -> f64 {
