@@ -2,10 +2,11 @@
 //! stacks (one page per slice, the first at the bottom) and NIfTI-1 (`.nii`,
 //! gzip-compressed `.nii.gz`; single file, `n+1`). Voxel spacing is honoured: an
 //! anisotropic volume (ImageJ's `spacing=` and the X resolution of a TIFF stack;
-//! `pixdim` of NIfTI) is resampled by trilinear interpolation to cubic voxels of
-//! its smallest spacing, so that lengths, areas and volumes in the unit box are
-//! physical. The same limits and errors as the other readers: every error names
-//! the input.
+//! the sform, qform or `pixdim` of NIfTI) is resampled by trilinear interpolation
+//! to cubic voxels of its smallest spacing, so that lengths, areas and volumes in
+//! the unit box are physical, and placed where its samples lie. Results are
+//! written back as NIfTI-1 with that placement (`nifti_out`). The same limits and
+//! errors as the other readers: every error names the input.
 
 mod nifti;
 mod nifti_out;

@@ -1,5 +1,5 @@
-//! NIfTI-1 volumes (`.nii`, gzip-compressed `.nii.gz`; single file, `n+1`), with
-//! the spacing of `pixdim`.
+//! NIfTI-1 volumes (`.nii`, gzip-compressed `.nii.gz`; single file, `n+1`), placed
+//! by their `sform` or `qform` (else spaced by `pixdim`).
 
 use super::isotropic;
 use crate::imaging::grid::{Grid, Placement, SampleKind};
