@@ -3,12 +3,10 @@
 
 use super::frames::{Frame, GlbContext};
 use super::PreparedJob;
-use crate::export::{
-    labels_png, mask_nifti, mask_nrrd, mask_png, objects, objects_csv, overlay_png, shape_json, ObjectRow,
-};
+use crate::export::{labels_png, mask, mask_png, objects, objects_csv, overlay_png, shape_json, ObjectRow};
 use crate::flow::{Checkpoint, MeshData};
 use crate::geometry::{loop_area, Point};
-use crate::imaging::{encode_nifti_labels, encode_nrrd_labels, Grid};
+use crate::imaging::{encode_nifti_labels, encode_nifti_mask, encode_nrrd_labels, encode_nrrd_mask, Grid};
 use crate::problems::refine_to_edges;
 use serde_json::Value;
 use std::cell::OnceCell;
@@ -36,22 +34,28 @@ pub fn result_state(job: &PreparedJob, state: &Checkpoint) -> Checkpoint {
 }
 
 /// The result documents and files of one state `shown` (see [`result_state`]),
-/// each computed on request; the objects (label image and table), which several
-/// of them share, once.
+/// each computed on request; the objects (label image and table) and the mask,
+/// which several of them share, once.
 pub struct StateResults<'a> {
     job: &'a PreparedJob,
     shown: &'a Checkpoint,
     objects: OnceCell<(Vec<u16>, Vec<ObjectRow>)>,
+    mask: OnceCell<Vec<bool>>,
     found: OnceCell<MeshData>,
 }
 
 impl<'a> StateResults<'a> {
     pub fn new(job: &'a PreparedJob, shown: &'a Checkpoint) -> Self {
-        StateResults { job, shown, objects: OnceCell::new(), found: OnceCell::new() }
+        StateResults { job, shown, objects: OnceCell::new(), mask: OnceCell::new(), found: OnceCell::new() }
     }
 
     fn objects(&self, image: &Grid) -> &(Vec<u16>, Vec<ObjectRow>) {
         self.objects.get_or_init(|| objects(image, self.found()))
+    }
+
+    /// The mask of a volume, which mask.nrrd and mask.nii.gz share.
+    fn mask(&self, image: &Grid) -> &[bool] {
+        self.mask.get_or_init(|| mask(image, self.found()))
     }
 
     /// The shape the mask, the labels and the objects show: the shown state without
@@ -109,10 +113,10 @@ impl<'a> StateResults<'a> {
         let bytes = match name {
             "mask.png" => mask_png(img, self.found()),
             "overlay.png" => overlay_png(img, &self.shown.mesh),
-            "mask.nrrd" => mask_nrrd(img, self.found()),
+            "mask.nrrd" => encode_nrrd_mask(img, self.mask(img)),
             "labels.png" => labels_png(img, &self.objects(img).0),
             "labels.nrrd" => encode_nrrd_labels(img, &self.objects(img).0),
-            "mask.nii.gz" => mask_nifti(img, self.found()),
+            "mask.nii.gz" => encode_nifti_mask(img, self.mask(img)),
             "labels.nii.gz" => encode_nifti_labels(img, &self.objects(img).0),
             "objects.csv" => objects_csv(img.dimension, &self.objects(img).1).into_bytes(),
             _ => return None,
