@@ -3,7 +3,7 @@
 
 use crate::flow::MeshData;
 use crate::geometry::Point;
-use crate::imaging::{draw_overlay, encode_nrrd_mask, rasterize_curve, rasterize_surface, Grid};
+use crate::imaging::{draw_overlay, rasterize_curve, rasterize_surface, Grid};
 use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageEncoder};
 
@@ -43,11 +43,6 @@ pub fn mask_png(image: &Grid, mesh: &MeshData) -> Vec<u8> {
         }
     }
     png(w, h, &rows, ExtendedColorType::L8)
-}
-
-/// mask.nrrd: the 3D mask as uint8 0/1, gzip-encoded NRRD, the size of the volume.
-pub fn mask_nrrd(image: &Grid, mesh: &MeshData) -> Vec<u8> {
-    encode_nrrd_mask(image, &mask(image, mesh))
 }
 
 /// overlay.png: the image in gray with the contours in red (2D only).

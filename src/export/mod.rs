@@ -16,7 +16,7 @@ pub use energy_csv::energy_csv;
 pub use energy_svg::energy_svg;
 pub use fill::{region_triangles, ribbon, Filled};
 pub use gltf::{evolution_glb, shape_glb, ColorField, GltfFrame, FRAME_SECONDS};
-pub use image_results::{mask, mask_nrrd, mask_png, overlay_png, to_pixel};
+pub use image_results::{mask, mask_png, overlay_png, to_pixel};
 pub use objects::{labels_png, objects, objects_csv, ObjectRow};
 pub use shape_json::shape_json;
 

@@ -41,6 +41,32 @@ impl Placement {
     pub fn spacing(&self) -> [f64; 3] {
         self.axes.map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt())
     }
+
+    /// The axes as the columns of a matrix.
+    pub fn matrix(&self) -> nalgebra::Matrix3<f64> {
+        nalgebra::Matrix3::from_fn(|row, col| self.axes[col][row])
+    }
+
+    /// A placement given in NIfTI's RAS coordinates, in `left-posterior-superior`
+    /// ones (x and y negated), as ITK and 3D Slicer read NIfTI.
+    pub fn from_ras(axes: [[f64; 3]; 3], origin: [f64; 3]) -> Placement {
+        let lps = |v: [f64; 3]| [-v[0], -v[1], v[2]];
+        Placement { axes: axes.map(lps), origin: lps(origin), space: Some("left-posterior-superior".into()) }
+    }
+
+    /// The axes and origin in RAS coordinates, from a space that names its
+    /// directions (left-posterior-superior, left-anterior-superior,
+    /// right-anterior-superior, or their abbreviations); `None` in another space.
+    pub fn to_ras(&self) -> Option<([[f64; 3]; 3], [f64; 3])> {
+        let flip = match self.space.as_deref()? {
+            "left-posterior-superior" | "lps" => [-1.0, -1.0, 1.0],
+            "left-anterior-superior" | "las" => [-1.0, 1.0, 1.0],
+            "right-anterior-superior" | "ras" => [1.0, 1.0, 1.0],
+            _ => return None,
+        };
+        let turn = |v: [f64; 3]| std::array::from_fn(|c| flip[c] * v[c]);
+        Some((self.axes.map(turn), turn(self.origin)))
+    }
 }
 
 /// Samples on `dims[0] × dims[1] × dims[2]` points, `x` fastest:

@@ -139,16 +139,21 @@ pub fn parse_nrrd(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Gri
     isotropic(input, grid.placed(Placement { axes, origin, space }), limits)
 }
 
-/// `space origin: (x,y,z)`.
-fn space_origin(text: &str) -> Result<[f64; 3], String> {
+/// An NRRD vector `(x,y,z)` of finite numbers.
+fn vector(text: &str) -> Option<[f64; 3]> {
     let inner = text.trim().trim_start_matches('(').trim_end_matches(')');
     let parts: Result<Vec<f64>, _> = inner.split(',').map(|c| c.trim().parse::<f64>()).collect();
-    match parts.as_deref() {
-        Ok(&[x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) => Ok([x, y, z]),
-        _ => {
-            Err(format!("has a malformed NRRD `space origin` {text:?}: three finite numbers in parentheses are needed"))
-        }
+    match parts.ok()?[..] {
+        [x, y, z] if [x, y, z].iter().all(|v| v.is_finite()) => Some([x, y, z]),
+        _ => None,
     }
+}
+
+/// `space origin: (x,y,z)`.
+fn space_origin(text: &str) -> Result<[f64; 3], String> {
+    vector(text).ok_or_else(|| {
+        format!("has a malformed NRRD `space origin` {text:?}: three finite numbers in parentheses are needed")
+    })
 }
 
 /// The step of each axis in space: `space directions: (x,y,z) (x,y,z) (x,y,z)`,
@@ -157,17 +162,13 @@ fn space_origin(text: &str) -> Result<[f64; 3], String> {
 fn voxel_axes(spacings: Option<&str>, directions: Option<&str>) -> Result<[[f64; 3]; 3], String> {
     if let Some(text) = directions {
         let mut axes = Vec::new();
-        for vector in text.split_whitespace() {
-            if vector == "none" {
+        for item in text.split_whitespace() {
+            if item == "none" {
                 continue;
             }
-            let inner = vector.trim_start_matches('(').trim_end_matches(')');
-            let parts: Result<Vec<f64>, _> = inner.split(',').map(|c| c.trim().parse::<f64>()).collect();
-            match parts.as_deref() {
-                Ok(&[x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) && x * x + y * y + z * z > 0.0 => {
-                    axes.push([x, y, z])
-                }
-                _ => return Err(format!("has a malformed NRRD `space directions` vector {vector:?}")),
+            match vector(item) {
+                Some(v) if v.iter().any(|&c| c != 0.0) => axes.push(v),
+                _ => return Err(format!("has a malformed NRRD `space directions` vector {item:?}")),
             }
         }
         return match axes[..] {
@@ -209,17 +210,17 @@ fn encode_gzip_nrrd(grid: &Grid, what: &str, ty: &str, raw: &[u8]) -> Vec<u8> {
         Some(name) => format!("space: {name}"),
         None => "space dimension: 3".to_string(),
     };
-    let vector = |v: &[f64; 3]| format!("({},{},{})", v[0], v[1], v[2]);
+    let text = |v: &[f64; 3]| format!("({},{},{})", v[0], v[1], v[2]);
     let mut out = format!(
         "NRRD0004\n# shapeflow segmentation {what}\ntype: {ty}\ndimension: 3\nsizes: {} {} {}\n{space}\n\
          space directions: {} {} {}\nspace origin: {}\nencoding: gzip\n\n",
         dims[0],
         dims[1],
         dims[2],
-        vector(&p.axes[0]),
-        vector(&p.axes[1]),
-        vector(&p.axes[2]),
-        vector(&p.origin)
+        text(&p.axes[0]),
+        text(&p.axes[1]),
+        text(&p.axes[2]),
+        text(&p.origin)
     )
     .into_bytes();
     let mut gz = GzEncoder::new(Vec::new(), flate2::Compression::fast());

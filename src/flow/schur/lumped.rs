@@ -53,7 +53,9 @@ struct TwoRing {
 }
 
 /// Which factorization the last solve used.
+#[derive(Default)]
 pub(super) enum Last {
+    #[default]
     None,
     OneRingCholesky,
     Lu(Box<Lu<usize, f64>>),
@@ -72,6 +74,7 @@ pub(super) enum Last {
 /// Stateful lumped Schur solver: keeps the symbolic factorizations (and numeric
 /// workspaces) for one connectivity. Call [`LumpedSolver::reset`] when the
 /// connectivity changes.
+#[derive(Default)]
 pub struct LumpedSolver {
     pub(super) cycles: Option<Vec<CyclicComponent>>,
     pub(super) chol: Option<SparseCholesky>,
@@ -84,20 +87,6 @@ pub struct LumpedSolver {
     /// ([`LumpedSolver::iterative`]); the direct solve otherwise, whose factor
     /// [`LumpedSolver::apply_last_factor`] applies.
     iterative: bool,
-}
-
-impl Default for LumpedSolver {
-    fn default() -> Self {
-        LumpedSolver {
-            cycles: None,
-            chol: None,
-            chol32: None,
-            lu: None,
-            two_ring: None,
-            last: Last::None,
-            iterative: false,
-        }
-    }
 }
 
 /// Assembled lumped Schur complement: values on a pattern plus right-hand side.

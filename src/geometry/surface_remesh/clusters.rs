@@ -15,7 +15,7 @@
 //! the last component stays).
 
 use super::adjacency::Adjacency;
-use super::ears::ear_cap;
+use super::ears::{ear_cap, folded};
 use super::SurfaceRemeshSettings;
 use crate::geometry::{components, Point};
 
@@ -240,11 +240,7 @@ impl<'a> Patch<'a> {
         let mut caps = Vec::with_capacity(self.loops.len());
         for (l, (c, s)) in self.loops.iter().zip(&loops) {
             let x = c + s.normalize() * height;
-            let folds = (0..l.len()).any(|i| {
-                let (a, b) = (p[l[i]], p[l[(i + 1) % l.len()]]);
-                let m = (b - a).cross(&(x - a));
-                m.norm() <= 1e-12 * s.norm() || m.dot(s) <= 0.0
-            });
+            let folds = (0..l.len()).any(|i| folded(p[l[i]], p[l[(i + 1) % l.len()]], x, s));
             caps.push(match (folds, ears) {
                 (false, _) => Cap::Fan(x, l.clone()),
                 (true, true) => Cap::Ears(ear_cap(p, l, s)?),

@@ -3,34 +3,40 @@
 //! loops that no fan around one vertex closes without folding (a loop that is not
 //! star-shaped seen along its normal).
 
-use crate::geometry::Point;
+use crate::geometry::intersect::cross;
+use crate::geometry::{find_segment_intersections, Point};
+
+/// Whether the triangle `a, b, c` is degenerate or folded against the direction
+/// `s` (its normal `(b − a) × (c − a)` tiny beside `|s|`, or against `s`): the test
+/// of every cap of a cluster's patch, fan or ears.
+pub(super) fn folded(a: Point<3>, b: Point<3>, c: Point<3>, s: &Point<3>) -> bool {
+    let m = (b - a).cross(&(c - a));
+    m.norm() <= 1e-12 * s.norm() || m.dot(s) <= 0.0
+}
 
 /// Triangles over the loop `l` of `p` (each with two consecutive loop vertices in
 /// the loop's direction), if its projection along `s` (its vector area) is a
-/// simple polygon and no triangle is degenerate or folded against `s`; `None`
-/// otherwise.
+/// simple polygon and no triangle is [`folded`]; `None` otherwise.
 pub(super) fn ear_cap(p: &[Point<3>], l: &[usize], s: &Point<3>) -> Option<Vec<[usize; 3]>> {
     let n = s.try_normalize(0.0)?;
     let helper = if n.x.abs() < 0.9 { Point::<3>::x() } else { Point::<3>::y() };
     let e1 = n.cross(&helper).normalize();
     let e2 = n.cross(&e1);
-    let q: Vec<[f64; 2]> = l.iter().map(|&v| [p[v].dot(&e1), p[v].dot(&e2)]).collect();
-    if !simple(&q) {
-        return None;
+    let q: Vec<Point<2>> = l.iter().map(|&v| Point::<2>::new(p[v].dot(&e1), p[v].dot(&e2))).collect();
+    let sides: Vec<[usize; 2]> = (0..q.len()).map(|i| [i, (i + 1) % q.len()]).collect();
+    if !find_segment_intersections(&q, &sides).is_empty() {
+        return None; // the projection crosses itself
     }
-    let cross = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    let turn = |a: usize, b: usize, c: usize| cross(q[b] - q[a], q[c] - q[a]);
     let mut left: Vec<usize> = (0..l.len()).collect();
     let mut triangles = Vec::with_capacity(l.len().saturating_sub(2));
     while left.len() > 3 {
         let m = left.len();
         let ear = (0..m).find(|&k| {
             let (a, b, c) = (left[(k + m - 1) % m], left[k], left[(k + 1) % m]);
-            cross(q[a], q[b], q[c]) > 0.0
+            turn(a, b, c) > 0.0
                 && left.iter().all(|&v| {
-                    v == a || v == b || v == c || {
-                        let x = q[v];
-                        cross(q[a], q[b], x) < 0.0 || cross(q[b], q[c], x) < 0.0 || cross(q[c], q[a], x) < 0.0
-                    }
+                    v == a || v == b || v == c || turn(a, b, v) < 0.0 || turn(b, c, v) < 0.0 || turn(c, a, v) < 0.0
                 })
         })?;
         triangles.push([left[(ear + m - 1) % m], left[ear], left[(ear + 1) % m]]);
@@ -38,32 +44,8 @@ pub(super) fn ear_cap(p: &[Point<3>], l: &[usize], s: &Point<3>) -> Option<Vec<[
     }
     triangles.push([left[0], left[1], left[2]]);
     let triangles: Vec<[usize; 3]> = triangles.into_iter().map(|t| t.map(|k| l[k])).collect();
-    let folds = triangles.iter().any(|t| {
-        let m = (p[t[1]] - p[t[0]]).cross(&(p[t[2]] - p[t[0]]));
-        m.norm() <= 1e-12 * s.norm() || m.dot(s) <= 0.0
-    });
+    let folds = triangles.iter().any(|t| folded(p[t[0]], p[t[1]], p[t[2]], s));
     (!folds).then_some(triangles)
-}
-
-/// Whether the closed polygon `q` has no two non-adjacent sides that meet.
-fn simple(q: &[[f64; 2]]) -> bool {
-    let n = q.len();
-    let orient = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
-        ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).signum()
-    };
-    for i in 0..n {
-        let (a, b) = (q[i], q[(i + 1) % n]);
-        for j in i + 2..n {
-            if (j + 1) % n == i {
-                continue;
-            }
-            let (c, d) = (q[j], q[(j + 1) % n]);
-            if orient(a, b, c) != orient(a, b, d) && orient(c, d, a) != orient(c, d, b) {
-                return false;
-            }
-        }
-    }
-    true
 }
 
 #[cfg(test)]

@@ -189,15 +189,10 @@ fn placement(pixdim: [f64; 4], qform: [f64; 4], offset: [f64; 3], sform: Option<
     };
     let aligned = || Placement::aligned(steps, [0.0; 3]);
     let Some((axes, origin)) = ras else { return aligned() };
-    let lps = |v: [f64; 3]| [-v[0], -v[1], v[2]];
-    let placed = Placement { axes: axes.map(lps), origin: lps(origin), space: Some("left-posterior-superior".into()) };
+    let placed = Placement::from_ras(axes, origin);
     let finite = placed.axes.iter().flatten().chain(&placed.origin).all(|v| v.is_finite());
-    let volume = {
-        let [u, v, w] = placed.axes;
-        u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0])
-    };
     let least = placed.spacing().iter().copied().fold(f64::INFINITY, f64::min);
-    if finite && volume.abs() > 1e-6 * least.powi(3) && least > 0.0 {
+    if finite && least > 0.0 && placed.matrix().determinant().abs() > 1e-6 * least.powi(3) {
         placed
     } else {
         aligned()

@@ -5,6 +5,7 @@
 
 use crate::imaging::grid::{Grid, Placement};
 use flate2::write::GzEncoder;
+use nalgebra::{Rotation3, UnitQuaternion};
 use std::io::Write;
 
 /// A 0/1 uint8 mask on the samples of `grid` as a gzip NIfTI-1 file.
@@ -19,58 +20,19 @@ pub fn encode_nifti_labels(grid: &Grid, labels: &[u16]) -> Vec<u8> {
     encode_gzip_nifti(grid, "shapeflow segmentation labels", 512, &raw)
 }
 
-/// The RAS transform of a placement (columns, origin): from
-/// `left-posterior-superior` and `left-anterior-superior` by flipping x (and y);
-/// `None` in an unnamed or other space.
-fn ras(p: &Placement) -> Option<([[f64; 3]; 3], [f64; 3])> {
-    let flip = match p.space.as_deref()? {
-        "left-posterior-superior" | "lps" => [-1.0, -1.0, 1.0],
-        "left-anterior-superior" | "las" => [-1.0, 1.0, 1.0],
-        "right-anterior-superior" | "ras" => [1.0, 1.0, 1.0],
-        _ => return None,
-    };
-    let turn = |v: [f64; 3]| std::array::from_fn(|c| flip[c] * v[c]);
-    Some((p.axes.map(turn), turn(p.origin)))
-}
-
-/// The quaternion `(b, c, d)` and `qfac` of the rotation part of `axes` (unit
-/// columns; a left-handed set flips its third column, `qfac = −1`), as NIfTI's
-/// `nifti_mat44_to_quatern` computes them for an orthonormal matrix.
+/// The quaternion `(b, c, d)` (with `a ≥ 0`) and `qfac` of the rotation nearest
+/// to the directions of `axes` (a left-handed set flips its third column, `qfac =
+/// −1`), as NIfTI's qform holds them.
 fn quaternion(axes: &[[f64; 3]; 3]) -> ([f64; 3], f64) {
-    let unit = |v: [f64; 3]| {
-        let n = v.iter().map(|c| c * c).sum::<f64>().sqrt();
-        v.map(|c| c / n)
-    };
-    let cols = axes.map(unit);
-    // r[row][col]
-    let mut r: [[f64; 3]; 3] = std::array::from_fn(|row| std::array::from_fn(|col| cols[col][row]));
-    let det = r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1]) - r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0])
-        + r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0]);
-    let qfac = if det < 0.0 { -1.0 } else { 1.0 };
-    for row in r.iter_mut() {
-        row[2] *= qfac;
+    let mut r = Placement { axes: *axes, origin: [0.0; 3], space: None }.matrix();
+    for mut column in r.column_iter_mut() {
+        column.normalize_mut();
     }
-    let a = r[0][0] + r[1][1] + r[2][2] + 1.0;
-    let (a, b, c, d) = if a > 0.5 {
-        let a = 0.5 * a.sqrt();
-        (a, 0.25 * (r[2][1] - r[1][2]) / a, 0.25 * (r[0][2] - r[2][0]) / a, 0.25 * (r[1][0] - r[0][1]) / a)
-    } else {
-        let (xd, yd, zd) =
-            (1.0 + r[0][0] - r[1][1] - r[2][2], 1.0 + r[1][1] - r[0][0] - r[2][2], 1.0 + r[2][2] - r[0][0] - r[1][1]);
-        if xd > 1.0 {
-            let b = 0.5 * xd.sqrt();
-            (0.25 * (r[2][1] - r[1][2]) / b, b, 0.25 * (r[0][1] + r[1][0]) / b, 0.25 * (r[0][2] + r[2][0]) / b)
-        } else if yd > 1.0 {
-            let c = 0.5 * yd.sqrt();
-            (0.25 * (r[0][2] - r[2][0]) / c, 0.25 * (r[0][1] + r[1][0]) / c, c, 0.25 * (r[1][2] + r[2][1]) / c)
-        } else {
-            let d = 0.5 * zd.sqrt();
-            (0.25 * (r[1][0] - r[0][1]) / d, 0.25 * (r[0][2] + r[2][0]) / d, 0.25 * (r[1][2] + r[2][1]) / d, d)
-        }
-    };
-    // the same rotation with a ≥ 0
-    let s = if a < 0.0 { -1.0 } else { 1.0 };
-    ([s * b, s * c, s * d], qfac)
+    let qfac = if r.determinant() < 0.0 { -1.0 } else { 1.0 };
+    r.column_mut(2).scale_mut(qfac);
+    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&r));
+    let sign = if q.w < 0.0 { -1.0 } else { 1.0 };
+    ([sign * q.i, sign * q.j, sign * q.k], qfac)
 }
 
 /// The 348-byte header (and the empty extension) of `grid`'s samples as
@@ -95,7 +57,7 @@ fn encode_gzip_nifti(grid: &Grid, description: &str, datatype: i16, raw: &[u8]) 
     put(112, &1f32.to_le_bytes());
     let text = description.as_bytes();
     put(148, &text[..text.len().min(79)]);
-    if let Some((axes, origin)) = ras(p) {
+    if let Some((axes, origin)) = p.to_ras() {
         let ([b, c, d], qfac) = quaternion(&axes);
         pixdim[0] = qfac as f32;
         put(252, &1i16.to_le_bytes());
