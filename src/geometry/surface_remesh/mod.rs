@@ -123,9 +123,10 @@ fn closed_and_oriented(p: &[Point<3>], tris: &[[usize; 3]], adjacency: &Adjacenc
         return false;
     }
     let forward = |t: &[usize; 3], a: usize, b: usize| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b);
-    let scale: f64 = tris.iter().map(|t| tri_normal(p, t).norm()).sum::<f64>() / tris.len().max(1) as f64;
+    let areas: Vec<f64> = tris.iter().map(|t| tri_normal(p, t).norm()).collect();
+    let scale = areas.iter().sum::<f64>() / tris.len().max(1) as f64;
     edges.iter().all(|e| e.t[1] != usize::MAX && forward(&tris[e.t[0]], e.a, e.b) != forward(&tris[e.t[1]], e.a, e.b))
-        && tris.iter().all(|t| tri_normal(p, t).norm() > 1e-10 * scale)
+        && areas.iter().all(|&a| a > 1e-10 * scale)
 }
 
 #[cfg(test)]

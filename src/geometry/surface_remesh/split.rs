@@ -23,6 +23,8 @@ pub(super) fn split_edges(
     let wide = wide_vertices(p, tris, s.max_angle_deg);
     let mut normals: Option<Vec<Point<3>>> = None;
     let mut mid = vec![usize::MAX; edges.len()];
+    // the triangles with a split edge (the others are kept without a lookup)
+    let mut touched = vec![false; tris.len()];
     let mut count = 0;
     for (k, edge) in edges.iter().enumerate() {
         let (a, b) = (edge.a, edge.b);
@@ -43,6 +45,8 @@ pub(super) fn split_edges(
             let lift = e.dot(&(normals[b] - normals[a])) / 8.0;
             p.push((p[a] + p[b]) * 0.5 + nm * lift);
             mid[k] = p.len() - 1;
+            touched[ts[0]] = true;
+            touched[ts[1]] = true;
             count += 1;
         }
     }
@@ -51,7 +55,11 @@ pub(super) fn split_edges(
     }
     let m = |a: usize, b: usize| adjacency.edge(a, b).map(|k| mid[k]).filter(|&x| x != usize::MAX);
     let mut out = Vec::with_capacity(tris.len() + 3 * count);
-    for &t in tris {
+    for (&t, &touched) in tris.iter().zip(&touched) {
+        if !touched {
+            out.push(t);
+            continue;
+        }
         let ms = [m(t[0], t[1]), m(t[1], t[2]), m(t[2], t[0])];
         match ms.iter().filter(|x| x.is_some()).count() {
             0 => out.push(t),

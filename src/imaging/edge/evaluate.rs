@@ -6,10 +6,10 @@ use crate::imaging::bspline;
 use nalgebra::{SMatrix, SVector};
 
 /// One axis of an evaluation: first tap, local coordinate, whether `u` was clamped.
-struct Axis {
-    i0: isize,
-    t: f64,
-    excess: f64,
+pub(super) struct Axis {
+    pub(super) i0: isize,
+    pub(super) t: f64,
+    pub(super) excess: f64,
 }
 
 impl EdgeField {
@@ -23,7 +23,7 @@ impl EdgeField {
     /// float), the fraction, and what the clamp cut off. Plain comparisons, so that
     /// several points at once run as vectors.
     #[inline(always)]
-    fn grid_coordinate(&self, x: f64, a: usize) -> (f64, f64, f64) {
+    pub(super) fn grid_coordinate(&self, x: f64, a: usize) -> (f64, f64, f64) {
         let n = self.dims[a] as f64;
         let u = x * self.scale - 0.5;
         let uc = if u < -2.0 {
@@ -39,7 +39,7 @@ impl EdgeField {
 
     /// The four sample indices of the taps of `ax` along axis `a`, clamped to the grid.
     #[inline(always)]
-    fn tap_indices(&self, ax: &Axis, a: usize) -> [usize; 4] {
+    pub(super) fn tap_indices(&self, ax: &Axis, a: usize) -> [usize; 4] {
         let n = self.dims[a] as isize;
         std::array::from_fn(|q| (ax.i0 - 1 + q as isize).clamp(0, n - 1) as usize)
     }
@@ -64,7 +64,7 @@ impl EdgeField {
     }
 
     #[inline]
-    fn strides(&self) -> (usize, usize) {
+    pub(super) fn strides(&self) -> (usize, usize) {
         (self.dims[0], self.dims[0] * self.dims[1])
     }
 
