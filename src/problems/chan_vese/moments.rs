@@ -12,12 +12,14 @@ pub(super) type Moments = [f64; 3];
 /// Two-point Gauss rule on `[0, 1]`.
 const GAUSS2: [f64; 2] = [0.211_324_865_405_187_1, 0.788_675_134_594_812_9];
 
-/// The quadrature points of element `e` (corners `p`) with their weights, to
-/// `push`: two Gauss points per pixel of length on segments, the 3-point rule on
-/// sub-triangles of about two pixels on triangles. A point's weight is its share
-/// of `ν₁` times the element's measure (equal within an element).
+/// The quadrature points of the element with corners `p`, with their weights,
+/// into `lanes` for `object`: two Gauss points per pixel of length on segments,
+/// the 3-point rule on sub-triangles of about two pixels on triangles. A point's
+/// weight is its share of `ν₁` times the element's measure (equal within an
+/// element). Plain inlined functions, no closures: they compile into
+/// [`accumulate_moments`]' AVX2 version (a closure would be compiled on its own).
 #[inline(always)]
-fn element_points<const D: usize>(l: f64, p: &[Point<D>; D], mut push: impl FnMut([f64; 3], f64)) {
+fn element_points<const D: usize>(l: f64, p: &[Point<D>; D], lanes: &mut Lanes<'_>, object: usize) {
     if D == 2 {
         let e = p[1] - p[0];
         let m = (e.norm() * l).ceil().clamp(1.0, 4096.0) as usize;
@@ -25,7 +27,7 @@ fn element_points<const D: usize>(l: f64, p: &[Point<D>; D], mut push: impl FnMu
         for s in 0..m {
             for g in GAUSS2 {
                 let x = p[0] + e * ((s as f64 + g) / m as f64);
-                push([x[0], x[1], 0.0], w);
+                lanes.push([x[0], x[1], 0.0], w, object);
             }
         }
     } else {
@@ -34,25 +36,40 @@ fn element_points<const D: usize>(l: f64, p: &[Point<D>; D], mut push: impl FnMu
         let hmax = u.norm().max(v.norm()).max((p[2] - p[1]).norm());
         let m = (hmax * l / 2.0).ceil().clamp(1.0, 256.0) as usize;
         let (step, w) = (1.0 / m as f64, nu1 / (3 * m * m) as f64);
-        let third =
-            [(2.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0), (1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0), (1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0)];
+        let (x0, u, v) = ([p[0][0], p[0][1], p[0][2]], [u[0], u[1], u[2]], [v[0], v[1], v[2]]);
         for i in 0..m {
             for j in 0..m - i {
                 let (s0, t0) = (i as f64 * step, j as f64 * step);
-                let mut tri = |a: (f64, f64), b: (f64, f64), c: (f64, f64)| {
-                    for (wa, wb, wc) in third {
-                        let s = wa * a.0 + wb * b.0 + wc * c.0;
-                        let t = wa * a.1 + wb * b.1 + wc * c.1;
-                        let x = p[0] + u * s + v * t;
-                        push([x[0], x[1], x[2]], w);
-                    }
-                };
-                tri((s0, t0), (s0 + step, t0), (s0, t0 + step));
+                let corners = [(s0, t0), (s0 + step, t0), (s0, t0 + step)];
+                sub_triangle(&x0, &u, &v, corners, w, lanes, object);
                 if i + j + 1 < m {
-                    tri((s0 + step, t0), (s0 + step, t0 + step), (s0, t0 + step));
+                    let corners = [(s0 + step, t0), (s0 + step, t0 + step), (s0, t0 + step)];
+                    sub_triangle(&x0, &u, &v, corners, w, lanes, object);
                 }
             }
         }
+    }
+}
+
+/// The 3-point rule (barycentric `(2/3, 1/6, 1/6)` and permutations) on the
+/// sub-triangle with lattice corners `c` of `x₀ + s u + t v`.
+#[inline(always)]
+fn sub_triangle(
+    x0: &[f64; 3],
+    u: &[f64; 3],
+    v: &[f64; 3],
+    c: [(f64, f64); 3],
+    w: f64,
+    lanes: &mut Lanes<'_>,
+    object: usize,
+) {
+    const THIRD: [[f64; 3]; 3] =
+        [[2.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0], [1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0], [1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0]];
+    for b in THIRD {
+        let s = b[0] * c[0].0 + b[1] * c[1].0 + b[2] * c[2].0;
+        let t = b[0] * c[0].1 + b[1] * c[1].1 + b[2] * c[2].1;
+        let x = [x0[0] + u[0] * s + v[0] * t, x0[1] + u[1] * s + v[1] * t, x0[2] + u[2] * s + v[2] * t];
+        lanes.push(x, w, object);
     }
 }
 
@@ -68,7 +85,7 @@ pub(super) fn accumulate_moments<const D: usize>(
     let l = cv.intensity.scale();
     let mut lanes = Lanes::new(cv, moments);
     for (e, &o) in element_object.iter().enumerate() {
-        element_points(l, &mesh.element_points(e), |x, w| lanes.push(x, w, o));
+        element_points(l, &mesh.element_points(e), &mut lanes, o);
     }
     lanes.finish();
 }
@@ -94,8 +111,8 @@ impl<'a> Lanes<'a> {
     #[inline(always)]
     fn push(&mut self, x: [f64; 3], w: f64, object: usize) {
         let j = self.filled;
-        for k in 0..3 {
-            self.x[k][j] = x[k];
+        for (lane, v) in self.x.iter_mut().zip(x) {
+            lane[j] = v;
         }
         (self.w[j], self.object[j]) = (w, object);
         self.filled += 1;
