@@ -43,23 +43,25 @@ impl Segmentation {
         super::check_image_dimension::<D>(self.field.dimension())
     }
 
-    /// The quadrature points of element `e` (corners `p`) into `batch`, each
-    /// weighted for `∫_e H` and for `∫_e Φ ν₁`.
+    /// `(∫_e H, ∫_e Φ ν₁)` over element `e`.
     #[inline(always)]
-    fn element_points<const D: usize>(&self, p: &[Point<D>; D], batch: &mut Batch<'_>) {
+    fn element_integrals<const D: usize>(&self, p: &[Point<D>; D]) -> (f64, f64) {
         let l = self.field.scale();
+        let f = &*self.field;
         if D == 2 {
             let e = p[1] - p[0];
             let len = e.norm();
             let m = (len * l).ceil().clamp(1.0, 4096.0) as usize;
-            let n = (2 * m) as f64;
-            let (wb, wr) = (len / n, e[1] / n);
+            let mut batch = Batch::new(f);
             for s in 0..m {
                 for g in GAUSS2 {
                     let x = p[0] + e * ((s as f64 + g) / m as f64);
-                    batch.push([x[0], x[1], 0.0], wb, wr);
+                    batch.push([x[0], x[1], 0.0]);
                 }
             }
+            let (sh, sphi, _) = batch.finish();
+            let n = (2 * m) as f64;
+            (len * sh / n, e[1] * sphi / n)
         } else {
             let (u, v) = (p[1] - p[0], p[2] - p[0]);
             let (u3, v3) = (nalgebra::Vector3::new(u[0], u[1], u[2]), nalgebra::Vector3::new(v[0], v[1], v[2]));
@@ -68,116 +70,112 @@ impl Segmentation {
             // sub-triangles of about 2s pixels (`s²` = σ² + 2/3, the variance of the
             // blur behind H: the spline of H is smooth on that scale; 3.4 px at the
             // default σ = 1.5)
-            let cell = 2.0 * crate::problems::blur_variance(&self.field).sqrt();
+            let cell = 2.0 * crate::problems::blur_variance(f).sqrt();
             let m = (hmax * l / cell).ceil().clamp(1.0, 256.0) as usize;
             let step = 1.0 / m as f64;
-            // the m² sub-triangles of the barycentric lattice, 3-point rule on each
-            let n = (3 * m * m) as f64;
-            let (wb, wr) = (area_vec.norm() / n, area_vec[0] / n);
+            let mut batch = Batch::new(f);
             let x0 = [p[0][0], p[0][1], p[0][2]];
             let (u, v) = ([u[0], u[1], u[2]], [v[0], v[1], v[2]]);
+            // the m² sub-triangles of the barycentric lattice, 3-point rule on each
             for i in 0..m {
                 for j in 0..m - i {
                     let (s0, t0) = (i as f64 * step, j as f64 * step);
-                    batch.sub_triangle(&x0, &u, &v, [(s0, t0), (s0 + step, t0), (s0, t0 + step)], wb, wr);
+                    batch.sub_triangle(&x0, &u, &v, (s0, t0), (s0 + step, t0), (s0, t0 + step));
                     if i + j + 1 < m {
-                        let corners = [(s0 + step, t0), (s0 + step, t0 + step), (s0, t0 + step)];
-                        batch.sub_triangle(&x0, &u, &v, corners, wb, wr);
+                        batch.sub_triangle(&x0, &u, &v, (s0 + step, t0), (s0 + step, t0 + step), (s0, t0 + step));
                     }
                 }
             }
+            let (sh, sphi, count) = batch.finish();
+            let n = count as f64;
+            (area_vec.norm() * sh / n, area_vec[0] * sphi / n)
         }
     }
 }
 
-/// Quadrature points of any elements, evaluated four at a time (their grid
-/// coordinates and weights as vectors), each added with its weights to `∫_Γ H`
-/// and `∫_Γ Φ ν₁`; plain inlined methods, so that they compile into
-/// [`integrals`]' AVX2 version (a closure would be compiled on its own).
+/// The quadrature points of an element, evaluated four at a time (their grid
+/// coordinates and weights as vectors) and summed in order; plain inlined methods,
+/// so that they compile into [`integrals`]' AVX2 version (a closure would be
+/// compiled on its own).
 struct Batch<'a> {
     field: &'a EdgeField,
     lanes: [[f64; 4]; 3],
-    wb: [f64; 4],
-    wr: [f64; 4],
     filled: usize,
-    boundary: f64,
-    region: f64,
+    sh: f64,
+    sphi: f64,
+    count: usize,
 }
 
 impl<'a> Batch<'a> {
     #[inline(always)]
     fn new(field: &'a EdgeField) -> Self {
-        Batch { field, lanes: [[0.0; 4]; 3], wb: [0.0; 4], wr: [0.0; 4], filled: 0, boundary: 0.0, region: 0.0 }
+        Batch { field, lanes: [[0.0; 4]; 3], filled: 0, sh: 0.0, sphi: 0.0, count: 0 }
     }
 
-    /// Add the point `x` (its third coordinate unused in 2D) with its weights.
+    /// Add the point `x` (its third coordinate unused in 2D).
     #[inline(always)]
-    fn push(&mut self, x: [f64; 3], wb: f64, wr: f64) {
-        let j = self.filled;
-        for (lane, v) in self.lanes.iter_mut().zip(x) {
-            lane[j] = v;
+    fn push(&mut self, x: [f64; 3]) {
+        for k in 0..3 {
+            self.lanes[k][self.filled] = x[k];
         }
-        (self.wb[j], self.wr[j]) = (wb, wr);
         self.filled += 1;
+        self.count += 1;
         if self.filled == 4 {
-            self.add();
+            let (h, phi) = if self.field.dimension() == 2 {
+                self.field.values_and_antiderivatives_2d(self.lanes[0], self.lanes[1])
+            } else {
+                self.field.values_and_antiderivatives_3d(self.lanes)
+            };
+            for j in 0..4 {
+                self.sh += h[j];
+                self.sphi += phi[j];
+            }
+            self.filled = 0;
         }
-    }
-
-    /// The filled lanes evaluated and added.
-    #[inline(always)]
-    fn add(&mut self) {
-        let (h, phi) = if self.field.dimension() == 2 {
-            self.field.values_and_antiderivatives_2d(self.lanes[0], self.lanes[1])
-        } else {
-            self.field.values_and_antiderivatives_3d(self.lanes)
-        };
-        for j in 0..self.filled {
-            self.boundary += self.wb[j] * h[j];
-            self.region += self.wr[j] * phi[j];
-        }
-        self.filled = 0;
     }
 
     /// The 3-point rule (points at barycentric `(2/3, 1/6, 1/6)` and permutations) on
-    /// the sub-triangle with lattice corners `c` of `x₀ + s u + t v`.
+    /// the sub-triangle with lattice corners `a, b, c` of `x₀ + s u + t v`.
     #[inline(always)]
-    fn sub_triangle(&mut self, x0: &[f64; 3], u: &[f64; 3], v: &[f64; 3], c: [(f64, f64); 3], wb: f64, wr: f64) {
-        for (wa, wbb, wc) in
+    fn sub_triangle(&mut self, x0: &[f64; 3], u: &[f64; 3], v: &[f64; 3], a: (f64, f64), b: (f64, f64), c: (f64, f64)) {
+        for (wa, wb, wc) in
             [(2.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0), (1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0), (1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0)]
         {
-            let s = wa * c[0].0 + wbb * c[1].0 + wc * c[2].0;
-            let t = wa * c[0].1 + wbb * c[1].1 + wc * c[2].1;
-            let x = [x0[0] + u[0] * s + v[0] * t, x0[1] + u[1] * s + v[1] * t, x0[2] + u[2] * s + v[2] * t];
-            self.push(x, wb, wr);
+            let s = wa * a.0 + wb * b.0 + wc * c.0;
+            let t = wa * a.1 + wb * b.1 + wc * c.1;
+            self.push(std::array::from_fn(|k| x0[k] + u[k] * s + v[k] * t));
         }
     }
 
-    /// `(∫_Γ H, ∫_Γ Φ ν₁)`, the last, partly filled lanes (the rest repeat the first
-    /// point) evaluated.
+    /// `(Σ H, Σ Φ, number of points)`.
     #[inline(always)]
-    fn finish(mut self) -> (f64, f64) {
-        if self.filled > 0 {
-            for lane in &mut self.lanes {
-                let first = lane[0];
-                lane[self.filled..].fill(first);
-            }
-            self.add();
+    fn finish(mut self) -> (f64, f64, usize) {
+        for j in 0..self.filled {
+            let [x, y, z] = [self.lanes[0][j], self.lanes[1][j], self.lanes[2][j]];
+            let (h, phi) = if self.field.dimension() == 2 {
+                self.field.value_and_antiderivative(&nalgebra::Vector2::new(x, y))
+            } else {
+                self.field.value_and_antiderivative(&nalgebra::Vector3::new(x, y, z))
+            };
+            self.sh += h;
+            self.sphi += phi;
         }
-        (self.boundary, self.region)
+        (self.sh, self.sphi, self.count)
     }
 }
 
 /// `(∫_Γ H, ∫_Γ Φ ν₁)`, element by element; compiled a second time for AVX2 and
 /// picked at run time (the quadrature is most of a 2D run; rounding to the grid is
-/// a call without SSE4.1).
+/// a call without SSE4.1), with the same numbers.
 #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
 fn integrals<const D: usize>(s: &Segmentation, mesh: &Mesh<D>) -> (f64, f64) {
-    let mut batch = Batch::new(&s.field);
+    let (mut boundary, mut region) = (0.0, 0.0);
     for e in 0..mesh.num_elements() {
-        s.element_points(&mesh.element_points(e), &mut batch);
+        let (b, r) = s.element_integrals(&mesh.element_points(e));
+        boundary += b;
+        region += r;
     }
-    batch.finish()
+    (boundary, region)
 }
 
 /// `H`, `∇H`, `D²H` at every vertex (AVX2 version as for [`integrals`]).
