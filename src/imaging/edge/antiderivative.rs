@@ -1,8 +1,8 @@
 //! The antiderivative `Φ` alone, at four points at a time of several fields on
 //! one grid: what the region integrals of the Chan–Vese model need (`∫_Ω f =
-//! ∫_Γ Φ_f ν₁`). The same sums as [`EdgeField::value_and_antiderivative`] gives
-//! for `Φ`, without the value's where the points lie in the grid (the value
-//! enters `Φ` only through the clamp's excess, outside it).
+//! ∫_Γ Φ_f ν₁`). The same sums as [`EdgeField::value_and_antiderivative`] makes
+//! for `Φ`; the value's own sums only for points beyond the grid along `x`, the
+//! one place where the value enters `Φ` (times the clamp's excess).
 
 use super::evaluate::Axis;
 use super::{EdgeField, PAD};
