@@ -18,7 +18,6 @@ use super::smooth::gaussian_smooth;
 use super::threshold::noise_level;
 use nalgebra::{SMatrix, SVector};
 
-mod antiderivative;
 mod evaluate;
 
 /// Padding (in samples) of the row prefix sums on each side.
@@ -201,5 +200,32 @@ mod tests {
         let lowest = (0..=160).map(|i| f.value(&Vector2::new(0.4 + i as f64 * 1e-3, 0.5))).fold(1.0, f64::min);
         // (the spline between the samples is not below its lowest sample by much)
         assert!(lowest > 0.8 / 401.0 && lowest < 1.25 / 401.0, "k {k}, lowest H {lowest}");
+    }
+
+    /// `Φ` alone equals the `Φ` of [`EdgeField::value_and_antiderivative`] (to
+    /// rounding), inside the grid, on its border and beyond it, in 2D and 3D.
+    #[test]
+    fn equals_the_antiderivative_with_the_value() {
+        let (nx, ny, nz) = (7usize, 5usize, 4usize);
+        let f = |x: usize, y: usize, z: usize| ((x * 7 + y * 3 + z * 5) % 11) as f64 - 2.5;
+        let c2: Vec<f64> = (0..nx * ny).map(|i| f(i % nx, i / nx, 0)).collect();
+        let c3: Vec<f64> = (0..nx * ny * nz).map(|i| f(i % nx, (i / nx) % ny, i / (nx * ny))).collect();
+        let a2 = EdgeField::from_coefficients(2, [nx, ny, 1], c2.clone());
+        let b2 = EdgeField::from_coefficients(2, [nx, ny, 1], c2.iter().map(|v| v * v).collect());
+        let a3 = EdgeField::from_coefficients(3, [nx, ny, nz], c3);
+        let xs = [-0.4, -0.01, 0.0, 0.03, 0.31, 0.5, 0.77, 0.99, 1.0, 1.2, 1.7, 0.13];
+        for chunk in xs.chunks(4) {
+            let px: [f64; 4] = [chunk[0], chunk[1], chunk[2], chunk[3]];
+            let py = [px[1], px[3], px[0], px[2]].map(|v| 0.8 * v - 0.05);
+            let pz = [px[2], px[0], px[3], px[1]].map(|v| 1.1 * v + 0.02);
+            let [p2a, p2b] = EdgeField::antiderivatives([&a2, &b2], [px, py, [0.0; 4]]);
+            let [p3] = EdgeField::antiderivatives([&a3], [px, py, pz]);
+            for j in 0..4 {
+                let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * (1.0 + b.abs());
+                assert!(close(p2a[j], a2.antiderivative(&Vector2::new(px[j], py[j]))));
+                assert!(close(p2b[j], b2.antiderivative(&Vector2::new(px[j], py[j]))));
+                assert!(close(p3[j], a3.antiderivative(&Vector3::new(px[j], py[j], pz[j]))));
+            }
+        }
     }
 }

@@ -5,6 +5,7 @@ use super::isotropic;
 use crate::imaging::grid::{Grid, Placement, SampleKind};
 use crate::imaging::limits::ImageLimits;
 use crate::imaging::ImageError;
+use nalgebra::{Quaternion, UnitQuaternion};
 use std::io::Read;
 
 /// Whether `bytes` are a NIfTI-1 file, plain or gzip-compressed.
@@ -176,14 +177,10 @@ fn placement(pixdim: [f64; 4], qform: [f64; 4], offset: [f64; 3], sform: Option<
     } else if qform[0] > 0.0 {
         let [_, b, c, d] = qform;
         let a = (1.0 - (b * b + c * c + d * d)).max(0.0).sqrt();
-        let r = [
-            [a * a + b * b - c * c - d * d, 2.0 * (b * c - a * d), 2.0 * (b * d + a * c)],
-            [2.0 * (b * c + a * d), a * a + c * c - b * b - d * d, 2.0 * (c * d - a * b)],
-            [2.0 * (b * d - a * c), 2.0 * (c * d + a * b), a * a + d * d - b * b - c * c],
-        ];
+        let r = UnitQuaternion::from_quaternion(Quaternion::new(a, b, c, d)).to_rotation_matrix();
         let qfac = if pixdim[0] < 0.0 { -1.0 } else { 1.0 };
         let scale = [steps[0], steps[1], steps[2] * qfac];
-        Some((std::array::from_fn(|k| std::array::from_fn(|row| r[row][k] * scale[k])), offset))
+        Some((std::array::from_fn(|k| std::array::from_fn(|row| r[(row, k)] * scale[k])), offset))
     } else {
         None
     };
