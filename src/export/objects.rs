@@ -78,6 +78,12 @@ pub fn objects(image: &Grid, mesh: &MeshData) -> (Vec<u16>, Vec<ObjectRow>) {
         let (ka, kb) = (key(&a.2), key(&b.2));
         ka.iter().zip(&kb).map(|(x, y)| x.total_cmp(y)).find(|o| o.is_ne()).unwrap_or(std::cmp::Ordering::Equal)
     });
+    // every object's pixels are found on the positions of the whole mesh, made once
+    let (pos2, pos3): (Vec<Point<2>>, Vec<Point<3>>) = if mesh.dimension == 2 {
+        (mesh.positions.iter().map(|p| Point::<2>::new(p[0], p[1])).collect(), Vec::new())
+    } else {
+        (Vec::new(), mesh.positions.iter().map(|p| Point::<3>::new(p[0], p[1], p[2])).collect())
+    };
     let mut labels = vec![0u16; image.len()];
     let mut rows = Vec::with_capacity(shapes.len());
     for (k, (size, boundary, centroid, elements)) in shapes.into_iter().enumerate() {
@@ -101,14 +107,12 @@ pub fn objects(image: &Grid, mesh: &MeshData) -> (Vec<u16>, Vec<ObjectRow>) {
                 if a < mesh.dimension { ((hi * l - 0.5).ceil() + 1.0).clamp(0.0, n as f64) as usize } else { n };
         }
         let inside = if mesh.dimension == 2 {
-            let pos: Vec<Point<2>> = mesh.positions.iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
             let segs: Vec<[usize; 2]> = elements.iter().map(|&e| [mesh.elements[e][0], mesh.elements[e][1]]).collect();
-            rasterize_curve_window(&pos, &segs, l, [window[0], window[1], window[2], window[3]])
+            rasterize_curve_window(&pos2, &segs, l, [window[0], window[1], window[2], window[3]])
         } else {
-            let pos: Vec<Point<3>> = mesh.positions.iter().map(|p| Point::<3>::new(p[0], p[1], p[2])).collect();
             let tris: Vec<[usize; 3]> =
                 elements.iter().map(|&e| std::array::from_fn(|i| mesh.elements[e][i])).collect();
-            rasterize_surface_window(&pos, &tris, l, window)
+            rasterize_surface_window(&pos3, &tris, l, window)
         };
         let (w, h) = (window[1] - window[0], window[3] - window[2]);
         let (mut sum, mut count) = (0.0, 0usize);
