@@ -1,7 +1,7 @@
 //! The mesh type: vertex positions plus an element list.
 
 use super::{simplex, validate, Point};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// Errors of the validated mesh constructors. Every variant names the offending
 /// vertex, element or edge by its index.
@@ -55,11 +55,33 @@ pub struct Mesh<const D: usize> {
     /// Shared between meshes of one connectivity ([`Mesh::with_positions`] is what
     /// a flow does at every trial step and every managed step).
     elements: Arc<[[usize; D]]>,
+    /// The component labels of this connectivity, computed when first asked for
+    /// and shared with the element list.
+    components: Components,
     /// Curves only: the period `L` in `x` of a curve on the cylinder `R/LZ × R`.
     /// Positions are then representatives modulo `L`, and a segment `[a, b]` runs
     /// from `X_a` to the image of `X_b` nearest to it, `X_b + L·round((x_a − x_b)/L) e_x`
     /// (segments are shorter than `L/2` in `x`). See [`Mesh::new_periodic`].
     period: Option<f64>,
+}
+
+/// [`Mesh::component_labels`] of one connectivity, made once for all the meshes
+/// that share its element list (a flow's trial steps and managed steps between
+/// two changes of connectivity). A cache, not part of the mesh's value: any two
+/// compare equal.
+#[derive(Clone, Default)]
+struct Components(Arc<OnceLock<(Vec<usize>, usize)>>);
+
+impl PartialEq for Components {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl std::fmt::Debug for Components {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Components")
+    }
 }
 
 /// Closed curves in the plane.
@@ -76,14 +98,14 @@ impl<const D: usize> Mesh<D> {
     /// area/volume must be positive (outward orientation).
     pub fn new(positions: Vec<Point<D>>, elements: Vec<[usize; D]>) -> Result<Self, MeshError> {
         validate::validate(&positions, &elements)?;
-        Ok(Mesh { positions, elements: elements.into(), period: None })
+        Ok(Mesh { positions, elements: elements.into(), components: Components::default(), period: None })
     }
 
     /// A mesh produced by the remeshing kernels, whose connectivity is valid by
     /// construction; only debug builds re-check it.
     pub(crate) fn from_trusted_parts(positions: Vec<Point<D>>, elements: Vec<[usize; D]>) -> Self {
         debug_assert!(elements.iter().all(|e| e.iter().all(|&v| v < positions.len())));
-        Mesh { positions, elements: elements.into(), period: None }
+        Mesh { positions, elements: elements.into(), components: Components::default(), period: None }
     }
 
     /// The period `L` in `x` of a periodic curve mesh, `None` for ordinary meshes.
@@ -102,7 +124,7 @@ impl<const D: usize> Mesh<D> {
     /// Panics if the number of positions changes.
     pub fn with_positions(&self, positions: Vec<Point<D>>) -> Self {
         assert_eq!(positions.len(), self.positions.len());
-        Mesh { positions, elements: self.elements.clone(), period: self.period }
+        Mesh { positions, elements: self.elements.clone(), components: self.components.clone(), period: self.period }
     }
 
     /// Replace the positions in place (same count).
@@ -152,9 +174,10 @@ impl<const D: usize> Mesh<D> {
         self.component_labels().1
     }
 
-    /// Component label of every vertex and the number of components.
+    /// Component label of every vertex and the number of components (made once
+    /// per connectivity).
     pub fn component_labels(&self) -> (Vec<usize>, usize) {
-        components(self.positions.len(), &self.elements)
+        self.components.0.get_or_init(|| components(self.positions.len(), &self.elements)).clone()
     }
 }
 
@@ -178,7 +201,8 @@ impl Mesh<2> {
         if !(period.is_finite() && period > 0.0) {
             return Err(MeshError::BadPeriod { period });
         }
-        let mesh = Mesh { positions, elements: elements.into(), period: Some(period) };
+        let mesh =
+            Mesh { positions, elements: elements.into(), components: Components::default(), period: Some(period) };
         validate::validate_periodic(&mesh)?;
         Ok(mesh)
     }
@@ -186,7 +210,7 @@ impl Mesh<2> {
     /// A periodic curve from the remeshing kernels (valid by construction).
     pub(crate) fn periodic_trusted(positions: Vec<Point<2>>, elements: Vec<[usize; 2]>, period: f64) -> Self {
         debug_assert!(elements.iter().all(|e| e.iter().all(|&v| v < positions.len())));
-        Mesh { positions, elements: elements.into(), period: Some(period) }
+        Mesh { positions, elements: elements.into(), components: Components::default(), period: Some(period) }
     }
 
     /// Components as lifted polylines: each cycle of [`Mesh::cycles`] with every
@@ -304,4 +328,27 @@ pub fn components<const K: usize>(n: usize, elements: &[[usize; K]]) -> (Vec<usi
         out[v] = label[r];
     }
     (out, count)
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::geometry::{circle, union, Point};
+
+    /// The labels are made once per connectivity: a mesh moved by
+    /// `with_positions` shares them, a new connectivity makes its own; the cache
+    /// does not enter a mesh's value.
+    #[test]
+    fn component_labels_follow_the_connectivity() {
+        let two = union(&[circle([0.0, 0.0], 1.0, 12).unwrap(), circle([3.0, 0.0], 1.0, 8).unwrap()]).unwrap();
+        let fresh = two.with_positions(two.positions().to_vec());
+        assert_eq!(two.component_labels(), fresh.component_labels());
+        assert!(std::ptr::eq(two.components.0.get().unwrap(), fresh.components.0.get().unwrap()));
+        assert_eq!(two.num_components(), 2);
+        let moved = two.with_positions(two.positions().iter().map(|p| p + Point::<2>::new(0.5, 0.0)).collect());
+        assert_eq!(moved, moved.with_positions(moved.positions().to_vec()));
+        assert_ne!(moved, two);
+        let one = circle([0.0, 0.0], 1.0, 20).unwrap();
+        assert_eq!(one.component_labels(), (vec![0; 20], 1));
+        assert_eq!(one, circle([0.0, 0.0], 1.0, 20).unwrap().with_positions(one.positions().to_vec()));
+    }
 }
