@@ -111,8 +111,8 @@ fn edge_midpoints<const D: usize>(l: f64, mesh: &Mesh<D>, element_object: &[usiz
     for (e, &o) in element_object.iter().enumerate() {
         let p = mesh.element_points(e);
         let (u, v) = (p[1] - p[0], p[2] - p[0]);
-        let hmax = u.norm().max(v.norm()).max((p[2] - p[1]).norm());
-        if hmax * l <= 2.0 {
+        let longest = u.norm_squared().max(v.norm_squared()).max((p[2] - p[1]).norm_squared());
+        if longest * l * l <= 4.0 {
             weight.push((u[1] * v[2] - u[2] * v[1]) / 6.0);
         } else {
             weight.push(0.0);
@@ -129,34 +129,25 @@ fn edge_midpoints<const D: usize>(l: f64, mesh: &Mesh<D>, element_object: &[usiz
     for v in 0..x.len() {
         start[v + 1] += start[v];
     }
+    // each triangle at each of its corners, with the corners after and before it
     let mut fill = start.clone();
-    let mut star = vec![0usize; 3 * tris.len()];
+    let mut star = vec![[0usize; 3]; 3 * tris.len()];
     for (e, t) in tris.iter().enumerate() {
-        for &v in t {
-            star[fill[v]] = e;
+        for k in 0..3 {
+            let v = t[k];
+            star[fill[v]] = [e, t[(k + 1) % 3], t[(k + 2) % 3]];
             fill[v] += 1;
         }
     }
     // the edge from `a` to the next corner `b > a` of each triangle of the star,
     // with the triangle where `b` comes before `a`
-    let next = |e: usize, a: usize| {
-        let t = &tris[e];
-        if t[0] == a {
-            (t[1], t[2])
-        } else if t[1] == a {
-            (t[2], t[0])
-        } else {
-            (t[0], t[1])
-        }
-    };
     for a in 0..x.len() {
         let around = &star[start[a]..start[a + 1]];
-        for &e in around {
-            let b = next(e, a).0;
+        for &[e, b, _] in around {
             if b < a {
                 continue;
             }
-            let across = around.iter().find(|&&f| next(f, a).1 == b).map_or(0.0, |&f| weight[f]);
+            let across = around.iter().find(|f| f[2] == b).map_or(0.0, |f| weight[f[0]]);
             let w = weight[e] + across;
             if w != 0.0 {
                 let m = [0.5 * (x[a][0] + x[b][0]), 0.5 * (x[a][1] + x[b][1]), 0.5 * (x[a][2] + x[b][2])];
