@@ -73,12 +73,13 @@ pub struct SurfaceEdge {
     pub t: [usize; 2],
 }
 
-/// All edges, sorted by `(a, b)`, built in `O(n)` through per-vertex buckets.
-pub fn surface_edges(n: usize, tris: &[[usize; 3]]) -> Vec<SurfaceEdge> {
+/// All edges, sorted by `(a, b)`, built in `O(n)` through per-vertex buckets
+/// (`K = 3`: a generic length only so that meshes of any `D` can pass theirs).
+pub fn surface_edges<const K: usize>(n: usize, tris: &[[usize; K]]) -> Vec<SurfaceEdge> {
     let mut start = vec![0usize; n + 1];
     for t in tris {
-        for e in 0..3 {
-            start[t[e].min(t[(e + 1) % 3]) + 1] += 1;
+        for e in 0..K {
+            start[t[e].min(t[(e + 1) % K]) + 1] += 1;
         }
     }
     for v in 0..n {
@@ -87,8 +88,8 @@ pub fn surface_edges(n: usize, tris: &[[usize; 3]]) -> Vec<SurfaceEdge> {
     let mut fill = start.clone();
     let mut slot = vec![(0usize, 0usize); start[n]];
     for (k, t) in tris.iter().enumerate() {
-        for e in 0..3 {
-            let (a, b) = (t[e].min(t[(e + 1) % 3]), t[e].max(t[(e + 1) % 3]));
+        for e in 0..K {
+            let (a, b) = (t[e].min(t[(e + 1) % K]), t[e].max(t[(e + 1) % K]));
             slot[fill[a]] = (b, k);
             fill[a] += 1;
         }

@@ -4,7 +4,7 @@
 //! across elements.
 
 use super::ChanVese;
-use crate::geometry::{Mesh, Point};
+use crate::geometry::{surface_edges, Mesh, Point};
 use crate::imaging::EdgeField;
 
 /// `(∫ I, ∫ Q, |Ω|)` of one object.
@@ -98,11 +98,9 @@ pub(super) fn accumulate_moments<const D: usize>(
 
 /// Surfaces: on a triangle of at most two voxels across, the edge-midpoint rule
 /// (`|T|/3` at each edge's midpoint; degree 2, as the interior 3-point rule) with
-/// each edge's midpoint evaluated once for the two triangles beside it, half the
-/// points of a rule per triangle. A larger triangle takes [`element_points`]'
-/// sub-triangles. The triangle across an edge is found in the star of its lower
-/// vertex (the surface is closed and manifold: every edge has one triangle on
-/// each side).
+/// each edge's midpoint evaluated once for the triangles beside it
+/// ([`surface_edges`]), half the points of a rule per triangle. A larger triangle
+/// takes [`element_points`]' sub-triangles.
 #[inline(always)]
 fn edge_midpoints<const D: usize>(l: f64, mesh: &Mesh<D>, element_object: &[usize], lanes: &mut Lanes<'_>) {
     let (x, tris) = (mesh.positions(), mesh.elements());
@@ -119,40 +117,12 @@ fn edge_midpoints<const D: usize>(l: f64, mesh: &Mesh<D>, element_object: &[usiz
             element_points(l, &p, lanes, o);
         }
     }
-    // the triangles around each vertex
-    let mut start = vec![0usize; x.len() + 1];
-    for t in tris {
-        for &v in t {
-            start[v + 1] += 1;
-        }
-    }
-    for v in 0..x.len() {
-        start[v + 1] += start[v];
-    }
-    // each triangle at each of its corners, with the corners after and before it
-    let mut fill = start.clone();
-    let mut star = vec![[0usize; 3]; 3 * tris.len()];
-    for (e, t) in tris.iter().enumerate() {
-        for k in 0..3 {
-            let v = t[k];
-            star[fill[v]] = [e, t[(k + 1) % 3], t[(k + 2) % 3]];
-            fill[v] += 1;
-        }
-    }
-    // the edge from `a` to the next corner `b > a` of each triangle of the star,
-    // with the triangle where `b` comes before `a`
-    for a in 0..x.len() {
-        let around = &star[start[a]..start[a + 1]];
-        for &[e, b, _] in around {
-            if b < a {
-                continue;
-            }
-            let across = around.iter().find(|f| f[2] == b).map_or(0.0, |f| weight[f[0]]);
-            let w = weight[e] + across;
-            if w != 0.0 {
-                let m = [0.5 * (x[a][0] + x[b][0]), 0.5 * (x[a][1] + x[b][1]), 0.5 * (x[a][2] + x[b][2])];
-                lanes.push(m, w, element_object[e]);
-            }
+    for edge in surface_edges(x.len(), tris) {
+        let [t, across] = edge.t;
+        let w = weight[t] + if across == usize::MAX { 0.0 } else { weight[across] };
+        if w != 0.0 {
+            let (a, b) = (x[edge.a], x[edge.b]);
+            lanes.push([0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])], w, element_object[t]);
         }
     }
 }
