@@ -18,6 +18,7 @@ use super::smooth::gaussian_smooth;
 use super::threshold::noise_level;
 use nalgebra::{SMatrix, SVector};
 
+mod antiderivative;
 mod evaluate;
 
 /// Padding (in samples) of the row prefix sums on each side.
