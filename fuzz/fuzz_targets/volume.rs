@@ -1,4 +1,4 @@
-//! NIfTI-1 and multi-page TIFF volumes (3D segmentation inputs), small limits.
+//! NIfTI-1, NIfTI-2 and multi-page TIFF volumes (3D segmentation inputs), small limits.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 use shapeflow::imaging::{decode_nifti, decode_tiff_stack, ImageLimits};

@@ -1,6 +1,6 @@
 //! Volumes in the formats microscopy and medical imaging use: multi-page TIFF
-//! stacks (one page per slice, the first at the bottom) and NIfTI-1 (`.nii`,
-//! gzip-compressed `.nii.gz`; single file, `n+1`). Voxel spacing is honoured: an
+//! stacks (one page per slice, the first at the bottom) and NIfTI-1 or NIfTI-2
+//! (`.nii`, gzip-compressed `.nii.gz`; single file, `n+1` or `n+2`). Voxel spacing is honoured: an
 //! anisotropic volume (ImageJ's `spacing=` and the X resolution of a TIFF stack;
 //! the sform, qform or `pixdim` of NIfTI) is resampled by trilinear interpolation
 //! to cubic voxels of its smallest spacing, so that lengths, areas and volumes in

@@ -1,35 +1,37 @@
-//! NIfTI-1 volumes (`.nii`, gzip-compressed `.nii.gz`; single file, `n+1`), placed
-//! by their `sform` or `qform` (else spaced by `pixdim`).
+//! NIfTI volumes (`.nii`, gzip-compressed `.nii.gz`; single file, NIfTI-1 `n+1`
+//! or NIfTI-2 `n+2`), placed by their `sform` or `qform` (else spaced by `pixdim`).
+
+mod header;
 
 use super::isotropic;
 use crate::imaging::grid::{Grid, Placement, SampleKind};
 use crate::imaging::limits::ImageLimits;
 use crate::imaging::ImageError;
+use header::{NIFTI1, NIFTI2};
 use nalgebra::{Quaternion, UnitQuaternion};
 use std::io::Read;
 
-/// Whether `bytes` are a NIfTI-1 file, plain or gzip-compressed.
+/// Whether `bytes`, plain or gzip-compressed, begin with a NIfTI-1 or NIfTI-2
+/// header (`sizeof_hdr` 348 or 540 in either byte order): [`decode_nifti`] reads
+/// the single-file ones and says what is wrong with the others (a `.hdr` of a
+/// `.hdr`/`.img` pair).
 pub fn is_nifti(bytes: &[u8]) -> bool {
     if bytes.starts_with(&[0x1f, 0x8b]) {
-        let mut head = Vec::with_capacity(348);
-        let ok = flate2::read::GzDecoder::new(bytes).take(348).read_to_end(&mut head).is_ok();
-        return ok && nifti_magic(&head);
+        let mut head = Vec::with_capacity(4);
+        let ok = flate2::read::GzDecoder::new(bytes).take(4).read_to_end(&mut head).is_ok();
+        return ok && header::is_header(&head);
     }
-    nifti_magic(bytes)
+    header::is_header(bytes)
 }
 
-fn nifti_magic(b: &[u8]) -> bool {
-    b.len() >= 348 && &b[344..348] == b"n+1\0"
-}
-
-/// A NIfTI-1 volume (`n+1`, either byte order, gzip or not; 3D, or 4D with one
-/// time point), scaled by `scl_slope`/`scl_inter`.
+/// A NIfTI-1 or NIfTI-2 volume (either byte order, gzip or not; 3D, or 4D with
+/// one time point), scaled by `scl_slope`/`scl_inter`.
 pub fn decode_nifti(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Grid, ImageError> {
     let fail = |m: String| ImageError::new(input, m);
     let raw;
     let b: &[u8] = if bytes.starts_with(&[0x1f, 0x8b]) {
         // at most the largest volume allowed, in 8-byte samples, plus the header
-        let cap = (limits.max_voxels as u64).saturating_mul(8) + 352 + 1;
+        let cap = (limits.max_voxels as u64).saturating_mul(8) + NIFTI2 as u64 + 4 + 1;
         let mut out = Vec::new();
         flate2::read::GzDecoder::new(bytes)
             .take(cap)
@@ -43,34 +45,10 @@ pub fn decode_nifti(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<G
     } else {
         bytes
     };
-    if b.len() < 348 {
-        return Err(fail(format!("is {} bytes, shorter than a NIfTI-1 header (348)", b.len())));
-    }
-    let little = i32::from_le_bytes(b[0..4].try_into().unwrap()) == 348;
-    if !little && i32::from_be_bytes(b[0..4].try_into().unwrap()) != 348 {
-        return Err(fail("is not NIfTI-1 (sizeof_hdr is not 348)".into()));
-    }
-    if !nifti_magic(b) {
-        return Err(fail("is not a single-file NIfTI-1 (`n+1` magic); .hdr/.img pairs are not read".into()));
-    }
-    let i16_at = |o: usize| {
-        let a = [b[o], b[o + 1]];
-        if little {
-            i16::from_le_bytes(a)
-        } else {
-            i16::from_be_bytes(a)
-        }
-    };
-    let f32_at = |o: usize| {
-        let a = [b[o], b[o + 1], b[o + 2], b[o + 3]];
-        if little {
-            f32::from_le_bytes(a)
-        } else {
-            f32::from_be_bytes(a)
-        }
-    };
-    let ndim = i16_at(40);
-    let dim: Vec<i16> = (1..=7).map(|k| i16_at(40 + 2 * k)).collect();
+    let h = header::parse(b).map_err(fail)?;
+    let little = h.little;
+    let ndim = h.dim[0];
+    let dim = &h.dim[1..];
     if !(2..=4).contains(&ndim) || (ndim == 4 && dim[3] != 1) {
         return Err(fail(format!(
             "has {ndim} dimensions (sizes {:?}); a 3D volume is needed",
@@ -80,9 +58,10 @@ pub fn decode_nifti(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<G
     if dim[..3].iter().any(|&n| n < 1) {
         return Err(fail(format!("has sizes {:?}", &dim[..3])));
     }
-    let dims = [dim[0] as usize, dim[1] as usize, if ndim >= 3 { dim[2] as usize } else { 1 }];
+    let size_of = |n: i64| usize::try_from(n).unwrap_or(usize::MAX);
+    let dims = [size_of(dim[0]), size_of(dim[1]), if ndim >= 3 { size_of(dim[2]) } else { 1 }];
     limits.check(input, &dims)?;
-    let (datatype, bitpix) = (i16_at(70), i16_at(72));
+    let (datatype, bitpix) = (h.datatype, h.bitpix);
     let size = match datatype {
         2 | 256 => 1,
         4 | 512 => 2,
@@ -97,13 +76,15 @@ pub fn decode_nifti(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<G
     if bitpix as usize != 8 * size {
         return Err(fail(format!("has bitpix {bitpix} for datatype {datatype}")));
     }
-    let offset = f32_at(108);
-    if !(offset.is_finite() && offset >= 348.0) {
+    let least = if h.version == 1 { NIFTI1 } else { NIFTI2 } as f64;
+    let offset = h.vox_offset;
+    if !(offset.is_finite() && offset >= least) {
         return Err(fail(format!("has vox_offset {offset}")));
     }
     let n = dims[0] * dims[1] * dims[2];
-    let start = offset as usize;
-    // a vox_offset far beyond the file (up to f32::MAX) must not overflow the end
+    // a vox_offset far beyond the file (up to f32::MAX or i64::MAX) must not
+    // overflow the end
+    let start = offset.min(usize::MAX as f64) as usize;
     let data = start.checked_add(n * size).and_then(|end| b.get(start..end)).ok_or_else(|| {
         fail(format!("is truncated: {} voxels of {size} bytes from byte {start}, {} bytes in all", n, b.len()))
     })?;
@@ -125,7 +106,7 @@ pub fn decode_nifti(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<G
             _ => num!(f64, 8),
         }
     };
-    let (slope, inter) = (f32_at(112) as f64, f32_at(116) as f64);
+    let (slope, inter) = (h.scl_slope, h.scl_inter);
     let scale = |v: f64| {
         if slope.is_finite() && slope != 0.0 {
             v * slope + if inter.is_finite() { inter } else { 0.0 }
@@ -146,16 +127,14 @@ pub fn decode_nifti(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<G
         2 => SampleKind::U16,
         _ => SampleKind::F32,
     };
-    let pixdim: [f64; 4] = std::array::from_fn(|k| f32_at(76 + 4 * k) as f64);
-    let qform = [i16_at(252) as f64, f32_at(256) as f64, f32_at(260) as f64, f32_at(264) as f64];
-    let offset = [f32_at(268) as f64, f32_at(272) as f64, f32_at(276) as f64];
-    let srows: [[f64; 4]; 3] = std::array::from_fn(|r| std::array::from_fn(|c| f32_at(280 + 16 * r + 4 * c) as f64));
-    let sform = (i16_at(254) > 0).then_some(srows);
-    let placement = placement(pixdim, qform, offset, sform);
+    let [b, c, d] = h.quatern;
+    let qform = [h.qform_code as f64, b, c, d];
+    let sform = (h.sform_code > 0).then_some(h.srow);
+    let placement = placement(h.pixdim, qform, h.qoffset, sform);
     isotropic(input, Grid::new(3, dims, values, kind).placed(placement), limits)
 }
 
-/// Where a NIfTI-1 file's voxels lie: by its `sform` (`srow_*`) when
+/// Where a NIfTI file's voxels lie: by its `sform` (`srow_*`) when
 /// `sform_code > 0`, else by its `qform` (`[qform_code, b, c, d]`, the quaternion's
 /// rotation of the voxel steps `pixdim`, `qfac = pixdim[0]` flipping the third,
 /// from `qoffset`) when `qform_code > 0`, in RAS coordinates turned into
@@ -199,6 +178,63 @@ fn placement(pixdim: [f64; 4], qform: [f64; 4], offset: [f64; 3], sform: Option<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The same volume written by nibabel as NIfTI-1, gzip NIfTI-2 and big-endian
+    /// float32 NIfTI-2 (`scripts/make_nifti_samples.py`): the same grid and
+    /// placement from all three.
+    #[test]
+    fn nifti1_and_nifti2_files_of_nibabel_read_alike() {
+        let limits = ImageLimits::default();
+        let read = |bytes: &[u8]| {
+            assert!(is_nifti(bytes));
+            decode_nifti("v", bytes, &limits).unwrap()
+        };
+        let one = read(include_bytes!("../../../../tests/data/ramp_nifti1.nii"));
+        // voxel steps 2, 3, 4 (along RAS y, −x and z by the sform): resampled to
+        // cubic voxels of 2, the linear ramp i + 10 j + 100 k kept
+        assert_eq!(one.dims, [7, 8, 8]);
+        // new sample n at old index (n + ½)·2/step − ½, clamped to the old grid
+        let old = |n: usize, step: f64, last: f64| ((n as f64 + 0.5) * 2.0 / step - 0.5).clamp(0.0, last);
+        for (i, j, k) in [(0, 0, 0), (6, 7, 7), (3, 2, 1), (5, 4, 6)] {
+            let want = i as f64 + 10.0 * old(j, 3.0, 4.0) + 100.0 * old(k, 4.0, 3.0);
+            assert!((one.values[one.index(i, j, k)] - want).abs() < 1e-9, "{i} {j} {k}");
+        }
+        assert_eq!(one.placement.space.as_deref(), Some("left-posterior-superior"));
+        for two in [
+            read(include_bytes!("../../../../tests/data/ramp_nifti2.nii.gz")),
+            read(include_bytes!("../../../../tests/data/ramp_nifti2_be.nii")),
+        ] {
+            assert_eq!((two.dims, &two.values), (one.dims, &one.values));
+            assert_eq!(two.placement, one.placement);
+        }
+    }
+
+    /// NIfTI-2 headers that are cut short, of another layout or pointing past the
+    /// file: errors naming the input.
+    #[test]
+    fn broken_nifti2_headers_are_refused() {
+        let limits = ImageLimits::default();
+        let b = include_bytes!("../../../../tests/data/ramp_nifti2_be.nii");
+        let error = |bytes: &[u8]| decode_nifti("vol", bytes, &limits).unwrap_err().to_string();
+        let e = error(&b[..500]);
+        assert!(e.contains("`vol`") && e.contains("shorter than a NIfTI-2 header (540)"), "{e}");
+        let e = error(&b[..900]);
+        assert!(e.contains("truncated"), "{e}");
+        let mut pair = b.to_vec();
+        pair[4..8].copy_from_slice(b"ni2\0");
+        assert!(is_nifti(&pair));
+        assert!(error(&pair).contains(".hdr/.img pairs are not read"));
+        let mut far = b.to_vec();
+        far[168..176].copy_from_slice(&i64::MAX.to_be_bytes());
+        assert!(error(&far).contains("truncated"));
+        let mut negative = b.to_vec();
+        negative[168..176].copy_from_slice(&(-8i64).to_be_bytes());
+        assert!(error(&negative).contains("vox_offset -8"));
+        let mut huge = b.to_vec();
+        huge[24..32].copy_from_slice(&(1i64 << 40).to_be_bytes());
+        assert!(error(&huge).contains("limit"), "{}", error(&huge));
+        assert!(error(&[0u8; 600]).contains("is not NIfTI"));
+    }
 
     /// A quarter turn about z by the quaternion, `qfac` −1, then an `sform` that
     /// takes precedence, and a degenerate one that falls back to `pixdim`: in
