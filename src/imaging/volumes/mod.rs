@@ -1,7 +1,10 @@
 //! Volumes in the formats microscopy and medical imaging use: multi-page TIFF
-//! stacks (one page per slice, the first at the bottom) and NIfTI-1 or NIfTI-2
+//! stacks (one page per slice, the first at the bottom; OME-TIFF and ImageJ
+//! descriptions read for their spacing and refused when they hold several
+//! channels or time points, `tiff_meta`) and NIfTI-1 or NIfTI-2
 //! (`.nii`, gzip-compressed `.nii.gz`; single file, `n+1` or `n+2`). Voxel spacing is honoured: an
-//! anisotropic volume (ImageJ's `spacing=` and the X resolution of a TIFF stack;
+//! anisotropic volume (OME-XML's physical sizes, or ImageJ's `spacing=` and the X
+//! resolution, of a TIFF stack;
 //! the sform, qform or `pixdim` of NIfTI) is resampled by trilinear interpolation
 //! to cubic voxels of its smallest spacing, so that lengths, areas and volumes in
 //! the unit box are physical, and placed where its samples lie. Results are
@@ -10,6 +13,7 @@
 
 mod nifti;
 mod nifti_out;
+mod tiff_meta;
 mod tiff_stack;
 
 pub use nifti::{decode_nifti, is_nifti};
@@ -181,6 +185,30 @@ mod tests {
         let planar = include_bytes!("../../../tests/data/planar_rgb_stack.tif");
         let e = decode_tiff_stack("stack", planar, &limits).unwrap_err().to_string();
         assert!(e.contains("`stack`") && e.contains("plane by plane"), "{e}");
+    }
+
+    /// Stacks written by tifffile (`scripts/make_volume_samples.py`): an OME-TIFF's
+    /// physical sizes (x, y 0.5 µm; z 1500 nm) give 3 slices per page; stacks of
+    /// two channels, by OME-XML or as an ImageJ hyperstack, are refused with their
+    /// layout named, not read as six slices.
+    #[test]
+    fn ome_and_imagej_stacks() {
+        let limits = ImageLimits::default();
+        let ome = include_bytes!("../../../tests/data/ome_stack.ome.tif");
+        assert_eq!(tiff_pages(ome, 10), 4);
+        let g = decode_tiff_stack("stack", ome, &limits).unwrap();
+        assert_eq!(g.dims, [6, 5, 12]);
+        assert_eq!(g.placement.spacing(), [0.5, 0.5, 0.5]);
+        // value 10 z + x of page z (rows flipped: any row), the ramp kept in z
+        assert_eq!(g.values[g.index(4, 0, 1)], 4.0);
+        assert_eq!(g.values[g.index(2, 3, 10)], 10.0 * ((10.5 / 3.0) - 0.5) + 2.0);
+        for (file, source) in [
+            (&include_bytes!("../../../tests/data/ome_channels.ome.tif")[..], "OME"),
+            (&include_bytes!("../../../tests/data/imagej_channels.tif")[..], "ImageJ"),
+        ] {
+            let e = decode_tiff_stack("two", file, &limits).unwrap_err().to_string();
+            assert!(e.contains("`two`") && e.contains("2 channels") && e.contains(source), "{e}");
+        }
     }
 
     /// Slices 2 apart with pixels 1 apart: resampled to twice the slices, a linear

@@ -1,7 +1,9 @@
 //! Multi-page TIFF stacks (one page per slice, the first at the bottom), with the
-//! spacing of ImageJ's `spacing=` and the X resolution.
+//! spacing of their OME-XML or ImageJ description and the X resolution
+//! ([`super::tiff_meta`]).
 
 use super::isotropic;
+use super::tiff_meta::StackMeta;
 use crate::imaging::grid::Placement;
 use crate::imaging::grid::{Grid, SampleKind};
 use crate::imaging::limits::ImageLimits;
@@ -42,7 +44,15 @@ pub fn decode_tiff_stack(input: &str, bytes: &[u8], limits: &ImageLimits) -> Res
         Ok(v) => v.into_f64().ok().filter(|r| r.is_finite() && *r > 0.0).map_or(1.0, |r| 1.0 / r),
         Err(_) => 1.0,
     };
-    let z_spacing = imagej_value(&description, "spacing").unwrap_or(xy_spacing);
+    let meta = StackMeta::parse(&description).map_err(&fail)?;
+    if let Some(several) = meta.as_ref().and_then(StackMeta::several) {
+        return Err(fail(several));
+    }
+    let declared = meta.as_ref().map_or([None; 3], |m| m.spacing);
+    // OME's physical sizes where it gives them, else the X resolution; z by
+    // ImageJ's `spacing=` or OME's PhysicalSizeZ, else as x
+    let (x_spacing, y_spacing) = (declared[0].unwrap_or(xy_spacing), declared[1].or(declared[0]).unwrap_or(xy_spacing));
+    let z_spacing = declared[2].unwrap_or(x_spacing);
     let (mut values, mut dims) = (Vec::new(), [0usize; 2]);
     let mut kind;
     let mut page = 0usize;
@@ -92,18 +102,17 @@ pub fn decode_tiff_stack(input: &str, bytes: &[u8], limits: &ImageLimits) -> Res
         }
         d.next_image().map_err(|e| fail(format!("page {page}: {e}")))?;
     }
+    if let Some((planes, source)) = meta.as_ref().and_then(|m| Some((m.planes?, m.source))) {
+        if planes != page {
+            return Err(fail(format!(
+                "holds {page} pages where its {source} metadata describes {planes} planes (a stack split over \
+                 several files is not read)"
+            )));
+        }
+    }
     limits.check(input, &[dims[0], dims[1], page])?;
     let grid = Grid::new(3, [dims[0], dims[1], page], values, kind);
-    isotropic(input, grid.placed(Placement::aligned([xy_spacing, xy_spacing, z_spacing], [0.0; 3])), limits)
-}
-
-/// A `key=value` number of an ImageJ image description.
-fn imagej_value(description: &str, key: &str) -> Option<f64> {
-    description
-        .lines()
-        .find_map(|l| l.strip_prefix(key).and_then(|r| r.strip_prefix('=')))
-        .and_then(|v| v.trim().parse().ok())
-        .filter(|v: &f64| v.is_finite() && *v > 0.0)
+    isotropic(input, grid.placed(Placement::aligned([x_spacing, y_spacing, z_spacing], [0.0; 3])), limits)
 }
 
 /// The samples of one page as `f64`, and their kind.

@@ -180,7 +180,7 @@ mod tests {
     use super::*;
 
     /// The same volume written by nibabel as NIfTI-1, gzip NIfTI-2 and big-endian
-    /// float32 NIfTI-2 (`scripts/make_nifti_samples.py`): the same grid and
+    /// float32 NIfTI-2 (`scripts/make_volume_samples.py`): the same grid and
     /// placement from all three.
     #[test]
     fn nifti1_and_nifti2_files_of_nibabel_read_alike() {
