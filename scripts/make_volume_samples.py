@@ -11,9 +11,10 @@ TIFF independent of ours). Usage: python3 scripts/make_volume_samples.py
   placement for all three.
 - ome_stack.ome.tif: 4 slices of 5×6 uint8, value 10 z + x, OME-XML with
   PhysicalSizeX/Y 0.5 µm and PhysicalSizeZ 1500 nm (1.5 µm).
-- ome_channels.ome.tif and imagej_channels.tif: 3 slices of 5×6 in 2 channels
-  (OME-XML SizeC 2; ImageJ hyperstack channels=2): each must be refused, never
-  read as 6 slices.
+- ome_channels.ome.tif and imagej_channels.tif: 4 slices of 5×6 in 2 channels
+  (the second 255 − v of the first; OME-XML SizeC 2, ImageJ hyperstack
+  channels=2): without a channel chosen each must be refused, never
+  read as 8 slices; with `problem.channel` the chosen channel is read.
 """
 import pathlib
 
@@ -41,7 +42,7 @@ z, y, x = np.meshgrid(np.arange(4), np.arange(5), np.arange(6), indexing="ij")
 stack = (10 * z + x).astype(np.uint8)
 tifffile.imwrite(OUT / "ome_stack.ome.tif", stack, ome=True, metadata={
     "axes": "ZYX", "PhysicalSizeX": 0.5, "PhysicalSizeY": 0.5, "PhysicalSizeZ": 1500.0, "PhysicalSizeZUnit": "nm"})
-two = np.stack([stack[:3], 255 - stack[:3]], axis=1)  # Z, C, Y, X
+two = np.stack([stack, 255 - stack], axis=1)  # Z, C, Y, X
 tifffile.imwrite(OUT / "ome_channels.ome.tif", two, ome=True, metadata={"axes": "ZCYX"})
 tifffile.imwrite(OUT / "imagej_channels.tif", two, imagej=True, metadata={"axes": "ZCYX"})
 for name in ["ome_stack.ome.tif", "ome_channels.ome.tif", "imagej_channels.tif"]:

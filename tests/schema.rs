@@ -194,6 +194,8 @@ fn the_schema_bounds_and_rules_are_the_parser_ones() {
         (with(&segmentation, "/problem/lambda", json!(-1.0)), false, "problem.lambda"),
         (with(&segmentation, "/problem/lambda_final", json!(-1.0)), false, "problem.lambda_final"),
         (with(&segmentation, "/problem/epsilon", json!(0.0)), false, "problem.epsilon"),
+        (with(&segmentation, "/problem/channel", json!(256)), false, "problem.channel"),
+        (with(&segmentation, "/problem/channel", json!(0)), true, ""),
         (with(&curve, "/output", json!({"checkpoint_every": 0})), false, "output.checkpoint_every"),
         (with(&curve, "/output", json!({"checkpoint_every": 1})), true, ""),
         // rules between fields that the schema states: only segmentation may leave

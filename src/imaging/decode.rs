@@ -15,9 +15,33 @@ fn luminance(r: f64, g: f64, b: f64) -> f64 {
     0.2126 * r + 0.7152 * g + 0.0722 * b
 }
 
-/// Decode a 2D image (PNG, JPEG or TIFF) named `input`. Rows are flipped so that
-/// `j = 0` is the bottom row.
+/// Decode a 2D image (PNG, JPEG or TIFF) named `input`, colour reduced to its
+/// luminance. Rows are flipped so that `j = 0` is the bottom row.
 pub fn decode_image(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Grid, ImageError> {
+    decode_image_channel(input, bytes, limits, None)
+}
+
+/// The samples of one pixel as the image holds them (gray; gray, alpha; red,
+/// green, blue; red, green, blue, alpha): component `channel`, or without one
+/// the gray value or the colour's luminance.
+#[inline]
+fn pixel_value(s: &[f64], channel: Option<usize>) -> f64 {
+    match channel {
+        Some(c) => s[c],
+        None if s.len() >= 3 => luminance(s[0], s[1], s[2]),
+        None => s[0],
+    }
+}
+
+/// As [`decode_image`], with the image's component `channel` (0-based, in the
+/// order gray, alpha or red, green, blue, alpha) instead of its luminance when
+/// given.
+pub fn decode_image_channel(
+    input: &str,
+    bytes: &[u8],
+    limits: &ImageLimits,
+    channel: Option<usize>,
+) -> Result<Grid, ImageError> {
     let fail = |m: String| ImageError::new(input, m);
     if bytes.is_empty() {
         return Err(fail("is empty".into()));
@@ -36,27 +60,33 @@ pub fn decode_image(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<G
     limits.check(input, &[w as usize, h as usize])?;
     let img = reader(bytes)?.decode().map_err(|e| fail(format!("is corrupt: {e}")))?;
     let (w, h) = (img.width() as usize, img.height() as usize);
+    let components = img.color().channel_count() as usize;
+    if let Some(c) = channel.filter(|&c| c >= components) {
+        return Err(ImageError::channel(
+            input,
+            format!(
+                "has {components} channel{} (0 to {}); channel {c} was asked for",
+                if components == 1 { "" } else { "s" },
+                components - 1
+            ),
+        ));
+    }
+    macro_rules! pick {
+        ($b:expr) => {
+            $b.pixels().map(|p| pixel_value(&p.0.map(|v| v as f64), channel)).collect()
+        };
+    }
     let (values, kind): (Vec<f64>, SampleKind) = match img {
-        DynamicImage::ImageLuma8(b) => (b.pixels().map(|p| p.0[0] as f64).collect(), SampleKind::U8),
-        DynamicImage::ImageLumaA8(b) => (b.pixels().map(|p| p.0[0] as f64).collect(), SampleKind::U8),
-        DynamicImage::ImageLuma16(b) => (b.pixels().map(|p| p.0[0] as f64).collect(), SampleKind::U16),
-        DynamicImage::ImageLumaA16(b) => (b.pixels().map(|p| p.0[0] as f64).collect(), SampleKind::U16),
-        DynamicImage::ImageRgb8(b) => {
-            (b.pixels().map(|p| luminance(p.0[0] as f64, p.0[1] as f64, p.0[2] as f64)).collect(), SampleKind::U8)
-        }
-        DynamicImage::ImageRgba8(b) => {
-            (b.pixels().map(|p| luminance(p.0[0] as f64, p.0[1] as f64, p.0[2] as f64)).collect(), SampleKind::U8)
-        }
-        DynamicImage::ImageRgb16(b) => {
-            (b.pixels().map(|p| luminance(p.0[0] as f64, p.0[1] as f64, p.0[2] as f64)).collect(), SampleKind::U16)
-        }
-        DynamicImage::ImageRgba16(b) => {
-            (b.pixels().map(|p| luminance(p.0[0] as f64, p.0[1] as f64, p.0[2] as f64)).collect(), SampleKind::U16)
-        }
-        other => (
-            other.to_rgb32f().pixels().map(|p| luminance(p.0[0] as f64, p.0[1] as f64, p.0[2] as f64)).collect(),
-            SampleKind::F32,
-        ),
+        DynamicImage::ImageLuma8(b) => (pick!(b), SampleKind::U8),
+        DynamicImage::ImageLumaA8(b) => (pick!(b), SampleKind::U8),
+        DynamicImage::ImageLuma16(b) => (pick!(b), SampleKind::U16),
+        DynamicImage::ImageLumaA16(b) => (pick!(b), SampleKind::U16),
+        DynamicImage::ImageRgb8(b) => (pick!(b), SampleKind::U8),
+        DynamicImage::ImageRgba8(b) => (pick!(b), SampleKind::U8),
+        DynamicImage::ImageRgb16(b) => (pick!(b), SampleKind::U16),
+        DynamicImage::ImageRgba16(b) => (pick!(b), SampleKind::U16),
+        DynamicImage::ImageRgba32F(b) => (pick!(b), SampleKind::F32),
+        other => (pick!(other.to_rgb32f()), SampleKind::F32),
     };
     if let Some(i) = values.iter().position(|v| !v.is_finite()) {
         return Err(fail(format!("pixel {} of row {} is not a finite number", i % w, i / w)));
@@ -78,7 +108,11 @@ pub fn decode_volume(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<
 }
 
 /// A volume from a stack of 2D slices (`z` = slice index), all of one size.
-pub fn decode_slices(slices: &[(&str, &[u8])], limits: &ImageLimits) -> Result<Grid, ImageError> {
+pub fn decode_slices(
+    slices: &[(&str, &[u8])],
+    limits: &ImageLimits,
+    channel: Option<usize>,
+) -> Result<Grid, ImageError> {
     let Some(((first, _), _)) = slices.split_first() else {
         return Err(ImageError::new("(slices)", "a slice stack needs at least one slice"));
     };
@@ -87,7 +121,7 @@ pub fn decode_slices(slices: &[(&str, &[u8])], limits: &ImageLimits) -> Result<G
     let mut dims = [0, 0];
     let mut kind = SampleKind::U8;
     for (k, (name, bytes)) in slices.iter().enumerate() {
-        let g = decode_image(name, bytes, &relaxed)?;
+        let g = decode_image_channel(name, bytes, &relaxed, channel)?;
         if k == 0 {
             dims = [g.dims[0], g.dims[1]];
             kind = g.kind;

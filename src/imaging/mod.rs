@@ -26,7 +26,7 @@ mod volumes;
 
 pub use background::quadratic_background;
 pub use contrast::{contrast_scale, noise_gradient};
-pub use decode::{decode_image, decode_slices, decode_volume};
+pub use decode::{decode_image, decode_image_channel, decode_slices, decode_volume};
 pub use edge::{EdgeField, EdgeSample};
 pub use grid::{Grid, Placement, SampleKind};
 pub use limits::ImageLimits;
@@ -38,7 +38,8 @@ pub use threshold::{
     Normalization, PERCENTILES,
 };
 pub use volumes::{
-    decode_nifti, decode_tiff_stack, encode_nifti_labels, encode_nifti_mask, is_nifti, is_tiff, isotropic, tiff_pages,
+    decode_nifti, decode_tiff_stack, decode_tiff_stack_channel, encode_nifti_labels, encode_nifti_mask, is_nifti,
+    is_tiff, isotropic, tiff_pages,
 };
 
 /// A bad or unsupported input file; `input` names it (the multipart part or file).
@@ -47,10 +48,17 @@ pub use volumes::{
 pub struct ImageError {
     pub input: String,
     pub message: String,
+    /// The file is fine, but not the channel asked of it (or it needs one).
+    pub channel: bool,
 }
 
 impl ImageError {
     pub fn new(input: &str, message: impl Into<String>) -> Self {
-        ImageError { input: input.to_string(), message: message.into() }
+        ImageError { input: input.to_string(), message: message.into(), channel: false }
+    }
+
+    /// An error of the channel asked of the file `input`.
+    pub fn channel(input: &str, message: impl Into<String>) -> Self {
+        ImageError { channel: true, ..ImageError::new(input, message) }
     }
 }

@@ -191,6 +191,43 @@ fn bad_images_give_errors_naming_the_input() {
     assert!(e.contains("input `c`") && e.contains("16×16"), "{e}");
 }
 
+/// `problem.channel`: a stack of two channels needs one, a channel the file does
+/// not have is named, and the chosen one is read (tests/data/imagej_channels.tif:
+/// channel 0 is `10 z + x`, channel 1 its complement).
+#[test]
+fn channels_are_chosen_with_problem_channel() {
+    let stack = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/imagej_channels.tif")).unwrap();
+    let with = |channel: &str| format!(r#"{{"problem": {{"type": "segmentation", "image": "input:s"{channel}}}}}"#);
+    let e = image_error(&with(""), &[("s", stack.clone())]);
+    assert!(e.starts_with("problem.channel: input `s`: is a stack of 2 channels") && e.contains("(0 to 1)"), "{e}");
+    let e = image_error(&with(r#", "channel": 2"#), &[("s", stack.clone())]);
+    assert!(e.starts_with("problem.channel:") && e.contains("channel 2 was asked for"), "{e}");
+    let e = image_error(&with(r#", "channel": 1"#), &[("s", gray_png(16, 16, &(0..=255).collect::<Vec<u8>>()))]);
+    assert!(e.starts_with("problem.channel: input `s`: has 1 channel (0 to 0)"), "{e}");
+    let limits = shapeflow::imaging::ImageLimits::default();
+    for (c, value) in [(0, 10.0 * 2.0 + 3.0), (1, 255.0 - (10.0 * 2.0 + 3.0))] {
+        let g = shapeflow::imaging::decode_tiff_stack_channel("s", &stack, &limits, Some(c)).unwrap();
+        assert_eq!(g.dims, [6, 5, 4]);
+        assert_eq!(g.values[g.index(3, 1, 2)], value);
+    }
+    // a colour image: the blue component instead of the luminance
+    let mut rgb = Vec::new();
+    let pixels: Vec<u8> = (0..64).flat_map(|i| [200, 100, i as u8 * 3]).collect();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut rgb),
+        &pixels,
+        8,
+        8,
+        image::ExtendedColorType::Rgb8,
+    )
+    .unwrap();
+    let blue = shapeflow::imaging::decode_image_channel("c", &rgb, &limits, Some(2)).unwrap();
+    // row 7 of the file is the grid's row 0
+    assert_eq!(blue.values[blue.index(5, 0, 0)], (7 * 8 + 5) as f64 * 3.0);
+    let e = shapeflow::imaging::decode_image_channel("c", &rgb, &limits, Some(3)).unwrap_err();
+    assert!(e.channel && e.to_string().contains("has 3 channels (0 to 2)"), "{e}");
+}
+
 fn p2(x: f64, y: f64) -> Point<2> {
     Point::<2>::new(x, y)
 }

@@ -18,7 +18,7 @@ mod tiff_stack;
 
 pub use nifti::{decode_nifti, is_nifti};
 pub use nifti_out::{encode_nifti_labels, encode_nifti_mask};
-pub use tiff_stack::{decode_tiff_stack, is_tiff, tiff_pages};
+pub use tiff_stack::{decode_tiff_stack, decode_tiff_stack_channel, is_tiff, tiff_pages};
 
 use super::grid::Grid;
 use super::limits::ImageLimits;
@@ -190,7 +190,7 @@ mod tests {
     /// Stacks written by tifffile (`scripts/make_volume_samples.py`): an OME-TIFF's
     /// physical sizes (x, y 0.5 µm; z 1500 nm) give 3 slices per page; stacks of
     /// two channels, by OME-XML or as an ImageJ hyperstack, are refused with their
-    /// layout named, not read as six slices.
+    /// layout named, not read as eight slices; with a channel chosen, its four.
     #[test]
     fn ome_and_imagej_stacks() {
         let limits = ImageLimits::default();
@@ -206,8 +206,13 @@ mod tests {
             (&include_bytes!("../../../tests/data/ome_channels.ome.tif")[..], "OME"),
             (&include_bytes!("../../../tests/data/imagej_channels.tif")[..], "ImageJ"),
         ] {
-            let e = decode_tiff_stack("two", file, &limits).unwrap_err().to_string();
+            let e = decode_tiff_stack("two", file, &limits).unwrap_err();
+            assert!(e.channel, "{e}");
+            let e = e.to_string();
             assert!(e.contains("`two`") && e.contains("2 channels") && e.contains(source), "{e}");
+            let second = decode_tiff_stack_channel("two", file, &limits, Some(1)).unwrap();
+            assert_eq!(second.dims, [6, 5, 4]);
+            assert_eq!(second.values[second.index(4, 2, 3)], 255.0 - 34.0);
         }
     }
 

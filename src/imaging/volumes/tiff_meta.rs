@@ -2,8 +2,10 @@
 //! spacing: ImageJ's `key=value` lines (`channels=`, `slices=`, `frames=`,
 //! `spacing=`) or OME-XML's `Pixels` element (`SizeC`, `SizeZ`, `SizeT`,
 //! `PhysicalSize{X,Y,Z}` with their units, the `SamplesPerPixel` of its first
-//! `Channel`). A volume is one channel at one time point: a stack of several is
-//! refused with its layout named, never read as slices.
+//! `Channel`). A volume is one channel at one time point: of a stack of several
+//! channels the one asked for is read (`problem.channel`); a stack of several
+//! time points, or of several channels without a choice, is refused with its
+//! layout named, never read as slices.
 
 use quick_xml::events::Event;
 use quick_xml::XmlVersion;
@@ -14,6 +16,10 @@ pub(super) struct StackMeta {
     /// Channels stored as separate pages (colour interleaved within a page is one).
     pub channels: usize,
     pub frames: usize,
+    /// Consecutive pages of one channel: the pages of the dimensions stored
+    /// faster than the channel's (ImageJ: 1, channels fastest; OME: by its
+    /// `DimensionOrder`).
+    pub channel_stride: usize,
     /// The pages the metadata accounts for, when it says.
     pub planes: Option<usize>,
     /// Voxel steps along x, y and z, each when given (OME: in micrometres).
@@ -35,18 +41,32 @@ impl StackMeta {
         Ok(None)
     }
 
-    /// The message for a stack of several channels or time points, if it is one.
-    pub(super) fn several(&self) -> Option<String> {
+    /// What keeps this stack from being read as the volume of `channel` (or of
+    /// its only channel), if anything: several time points, or several channels
+    /// and none chosen.
+    pub(super) fn refusal(&self, channel: Option<usize>) -> Option<String> {
         let count = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
-        (self.channels > 1 || self.frames > 1).then(|| {
-            format!(
-                "is a stack of {} at {} ({} metadata); a volume is one channel at one time point: save the \
-                 channel to segment, at one time point, as its own stack",
-                count(self.channels, "channel"),
-                count(self.frames, "time point"),
-                self.source
-            )
-        })
+        let layout = format!(
+            "is a stack of {} at {} ({} metadata)",
+            count(self.channels, "channel"),
+            count(self.frames, "time point"),
+            self.source
+        );
+        if self.frames > 1 {
+            return Some(format!("{layout}; a volume is one time point: save the one to segment as its own stack"));
+        }
+        match channel {
+            None if self.channels > 1 => Some(format!(
+                "{layout}; choose the channel to segment with `problem.channel` (0 to {})",
+                self.channels - 1
+            )),
+            _ => None,
+        }
+    }
+
+    /// The channel that page `page` belongs to.
+    pub(super) fn channel_of(&self, page: usize) -> usize {
+        (page / self.channel_stride.max(1)) % self.channels.max(1)
     }
 }
 
@@ -63,6 +83,7 @@ fn imagej(text: &str) -> StackMeta {
     StackMeta {
         channels: count("channels"),
         frames: count("frames"),
+        channel_stride: 1,
         planes: value("images").map(|v| v as usize),
         spacing: [None, None, value("spacing")],
         source: "ImageJ",
@@ -130,9 +151,14 @@ fn ome(text: &str) -> Result<StackMeta, String> {
     };
     let channels = size("SizeC").div_ceil(samples_per_pixel.max(1));
     let (slices, frames) = (size("SizeZ"), size("SizeT"));
+    // the dimensions stored faster than C, from `XY` + the order of Z, C and T
+    let order = get("DimensionOrder").unwrap_or("XYCZT");
+    let faster = order.get(2..).and_then(|o| o.split_once('C')).map_or("", |(before, _)| before);
+    let channel_stride = faster.chars().map(|d| if d == 'Z' { slices } else { frames }).product();
     Ok(StackMeta {
         channels,
         frames,
+        channel_stride,
         planes: Some(slices * channels * frames),
         spacing: [length("X")?, length("Y")?, length("Z")?],
         source: "OME",
@@ -149,9 +175,12 @@ mod tests {
         let m = m.unwrap().unwrap();
         assert_eq!((m.channels, m.frames, m.planes), (2, 1, Some(60)));
         assert_eq!(m.spacing, [None, None, Some(0.25)]);
-        assert!(m.several().unwrap().contains("2 channels at 1 time point (ImageJ"));
+        let e = m.refusal(None).unwrap();
+        assert!(e.contains("2 channels at 1 time point (ImageJ") && e.contains("`problem.channel` (0 to 1)"), "{e}");
+        assert_eq!(m.refusal(Some(1)), None);
+        assert_eq!((m.channel_of(0), m.channel_of(1), m.channel_of(2)), (0, 1, 0));
         let one = StackMeta::parse("ImageJ=1.11a\nimages=4\nspacing=2\n").unwrap().unwrap();
-        assert_eq!(one.several(), None);
+        assert_eq!(one.refusal(None), None);
         assert_eq!(StackMeta::parse("made by a scanner").unwrap(), None);
     }
 
@@ -161,7 +190,7 @@ mod tests {
     fn ome_pixels() {
         let xml = |attrs: &str, spp: usize| {
             format!(
-                r#"<?xml version="1.0"?><OME xmlns="http://www.openmicroscopy.org/Schemas/OME/2016-06"><Image ID="Image:0"><Pixels ID="Pixels:0" DimensionOrder="XYCZT" Type="uint8" SizeX="6" SizeY="5" {attrs}><Channel ID="Channel:0:0" SamplesPerPixel="{spp}"/><TiffData/></Pixels></Image></OME>"#
+                r#"<?xml version="1.0"?><OME xmlns="http://www.openmicroscopy.org/Schemas/OME/2016-06"><Image ID="Image:0"><Pixels ID="Pixels:0" Type="uint8" SizeX="6" SizeY="5" {attrs}><Channel ID="Channel:0:0" SamplesPerPixel="{spp}"/><TiffData/></Pixels></Image></OME>"#
             )
         };
         let m = StackMeta::parse(&xml(
@@ -175,7 +204,11 @@ mod tests {
         let rgb = StackMeta::parse(&xml(r#"SizeC="3" SizeZ="4" SizeT="1""#, 3)).unwrap().unwrap();
         assert_eq!((rgb.channels, rgb.planes, rgb.spacing), (1, Some(4), [None; 3]));
         let series = StackMeta::parse(&xml(r#"SizeC="1" SizeZ="4" SizeT="5""#, 1)).unwrap().unwrap();
-        assert!(series.several().unwrap().contains("1 channel at 5 time points (OME"));
+        assert!(series.refusal(Some(0)).unwrap().contains("1 channel at 5 time points (OME"));
+        // channels stored after the slices: 4 pages of channel 0, then of channel 1
+        let zfirst = StackMeta::parse(&xml(r#"SizeC="2" SizeZ="4" SizeT="1" DimensionOrder="XYZCT""#, 1));
+        let zfirst = zfirst.unwrap().unwrap();
+        assert_eq!((zfirst.channel_stride, zfirst.channel_of(3), zfirst.channel_of(4)), (4, 0, 1));
         let e = StackMeta::parse(&xml(r#"SizeZ="4" PhysicalSizeZ="2" PhysicalSizeZUnit="furlong""#, 1));
         assert!(e.unwrap_err().contains("PhysicalSizeZUnit \"furlong\""));
         assert!(StackMeta::parse("<OME><Image><Pixels SizeZ=\"4").is_err());

@@ -31,6 +31,24 @@ pub fn tiff_pages(bytes: &[u8], cap: usize) -> usize {
 /// A multi-page TIFF as a volume (gray, or colour reduced to luminance; 8, 16 or
 /// 32-bit integer or float samples).
 pub fn decode_tiff_stack(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Grid, ImageError> {
+    decode_tiff_stack_channel(input, bytes, limits, None)
+}
+
+/// The number of channels, and which was asked for, as a message.
+fn no_such_channel(channels: usize, c: usize) -> String {
+    let s = if channels == 1 { "" } else { "s" };
+    format!("has {channels} channel{s} (0 to {}); channel {c} was asked for", channels - 1)
+}
+
+/// As [`decode_tiff_stack`], with channel `channel` (0-based) when given: the
+/// pages of that channel in a stack of several (OME-XML, ImageJ hyperstack), else
+/// that component of colour interleaved in each page instead of its luminance.
+pub fn decode_tiff_stack_channel(
+    input: &str,
+    bytes: &[u8],
+    limits: &ImageLimits,
+    channel: Option<usize>,
+) -> Result<Grid, ImageError> {
     let fail = |m: String| ImageError::new(input, m);
     let mut limits_tiff = tiff::decoder::Limits::default();
     limits_tiff.decoding_buffer_size = limits.max_voxels.saturating_mul(16);
@@ -45,27 +63,44 @@ pub fn decode_tiff_stack(input: &str, bytes: &[u8], limits: &ImageLimits) -> Res
         Err(_) => 1.0,
     };
     let meta = StackMeta::parse(&description).map_err(&fail)?;
-    if let Some(several) = meta.as_ref().and_then(StackMeta::several) {
-        return Err(fail(several));
+    if let Some(m) = &meta {
+        if let Some(refusal) = m.refusal(channel) {
+            // several time points are the file's layout, several channels need a choice
+            return Err(if m.frames > 1 { fail(refusal) } else { ImageError::channel(input, refusal) });
+        }
     }
+    // a channel of several stored as pages, or else a component of each page
+    let pages_of = meta.as_ref().filter(|m| m.channels > 1).zip(channel);
+    if let Some((m, c)) = pages_of.filter(|(m, c)| *c >= m.channels) {
+        return Err(ImageError::channel(input, no_such_channel(m.channels, c)));
+    }
+    let component = if pages_of.is_some() { None } else { channel };
     let declared = meta.as_ref().map_or([None; 3], |m| m.spacing);
     // OME's physical sizes where it gives them, else the X resolution; z by
     // ImageJ's `spacing=` or OME's PhysicalSizeZ, else as x
     let (x_spacing, y_spacing) = (declared[0].unwrap_or(xy_spacing), declared[1].or(declared[0]).unwrap_or(xy_spacing));
     let z_spacing = declared[2].unwrap_or(x_spacing);
     let (mut values, mut dims) = (Vec::new(), [0usize; 2]);
-    let mut kind;
-    let mut page = 0usize;
+    let mut kind = None;
+    let (mut page, mut slices) = (0usize, 0usize);
     loop {
+        if pages_of.is_some_and(|(m, c)| m.channel_of(page) != c) {
+            page += 1;
+            if !d.more_images() {
+                break;
+            }
+            d.next_image().map_err(|e| fail(format!("page {page}: {e}")))?;
+            continue;
+        }
         let (w, h) = d.dimensions().map_err(|e| fail(format!("page {page}: {e}")))?;
         let (w, h) = (w as usize, h as usize);
-        if page == 0 {
+        if slices == 0 {
             dims = [w, h];
             limits.check(input, &[w, h])?;
         } else if [w, h] != dims {
-            return Err(fail(format!("page {page} is {w}×{h}, but page 0 is {}×{}", dims[0], dims[1])));
+            return Err(fail(format!("page {page} is {w}×{h}, but the first is {}×{}", dims[0], dims[1])));
         }
-        if (page + 1).saturating_mul(w * h) > limits.max_voxels {
+        if (slices + 1).saturating_mul(w * h) > limits.max_voxels {
             return Err(fail(format!("has more than {} voxels, the limit", limits.max_voxels)));
         }
         let channels = match d.colortype().map_err(|e| fail(format!("page {page}: {e}")))? {
@@ -75,6 +110,9 @@ pub fn decode_tiff_stack(input: &str, bytes: &[u8], limits: &ImageLimits) -> Res
             tiff::ColorType::RGBA(_) => 4,
             other => return Err(fail(format!("page {page}: unsupported colour type {other:?}"))),
         };
+        if let Some(c) = component.filter(|&c| c >= channels) {
+            return Err(ImageError::channel(input, format!("page {page} {}", no_such_channel(channels, c))));
+        }
         // the tiff crate reads the first plane only of colour stored plane by plane
         let planar = matches!(d.get_tag_u32(tiff::tags::Tag::PlanarConfiguration), Ok(2));
         if planar && channels > 1 {
@@ -85,18 +123,24 @@ pub fn decode_tiff_stack(input: &str, bytes: &[u8], limits: &ImageLimits) -> Res
         }
         let (samples, k) = samples(d.read_image().map_err(|e| fail(format!("page {page}: {e}")))?)
             .ok_or_else(|| fail(format!("page {page}: unsupported sample type")))?;
-        kind = k;
+        kind = Some(k);
         if samples.len() != w * h * channels {
             return Err(fail(format!("page {page}: {} samples for {w}×{h}×{channels}", samples.len())));
         }
-        // rows flipped (j = 0 at the bottom, as 2D images); colour to luminance
+        // rows flipped (j = 0 at the bottom, as 2D images); colour to luminance,
+        // or the component asked for
         for j in (0..h).rev() {
             for i in 0..w {
                 let s = &samples[(i + w * j) * channels..][..channels];
-                values.push(if channels >= 3 { 0.2126 * s[0] + 0.7152 * s[1] + 0.0722 * s[2] } else { s[0] });
+                values.push(match component {
+                    Some(c) => s[c],
+                    None if channels >= 3 => 0.2126 * s[0] + 0.7152 * s[1] + 0.0722 * s[2],
+                    None => s[0],
+                });
             }
         }
         page += 1;
+        slices += 1;
         if !d.more_images() {
             break;
         }
@@ -110,8 +154,9 @@ pub fn decode_tiff_stack(input: &str, bytes: &[u8], limits: &ImageLimits) -> Res
             )));
         }
     }
-    limits.check(input, &[dims[0], dims[1], page])?;
-    let grid = Grid::new(3, [dims[0], dims[1], page], values, kind);
+    let Some(kind) = kind else { return Err(fail(format!("holds no page of channel {}", channel.unwrap_or(0)))) };
+    limits.check(input, &[dims[0], dims[1], slices])?;
+    let grid = Grid::new(3, [dims[0], dims[1], slices], values, kind);
     isotropic(input, grid.placed(Placement::aligned([x_spacing, y_spacing, z_spacing], [0.0; 3])), limits)
 }
 

@@ -1,8 +1,8 @@
 //! The uploaded inputs a spec names as `"input:NAME"`: lookup and image decoding.
 
 use crate::imaging::{
-    decode_image, decode_nifti, decode_slices, decode_tiff_stack, decode_volume, is_nifti, is_tiff, tiff_pages, Grid,
-    ImageLimits,
+    decode_image_channel, decode_nifti, decode_slices, decode_tiff_stack_channel, decode_volume, is_nifti, is_tiff,
+    tiff_pages, Grid, ImageError, ImageLimits,
 };
 use crate::jobs::spec::{ImageSource, SpecError};
 use std::collections::HashMap;
@@ -21,22 +21,36 @@ pub(super) fn input<'a>(
         .ok_or_else(|| SpecError::new(field, format!("no input named {key:?} was supplied")))
 }
 
-/// Decode the image of a segmentation job: 2D raster, NRRD volume or slice stack.
-pub(super) fn load_image(source: &ImageSource, inputs: &HashMap<String, Vec<u8>>) -> Result<Grid, SpecError> {
+/// Decode the image of a segmentation job: 2D raster, NRRD, NIfTI or TIFF volume,
+/// or slice stack; `channel` as `problem.channel`.
+pub(super) fn load_image(
+    source: &ImageSource,
+    channel: Option<u32>,
+    inputs: &HashMap<String, Vec<u8>>,
+) -> Result<Grid, SpecError> {
     let limits = ImageLimits::default();
+    let channel = channel.map(|c| c as usize);
+    let field =
+        |e: ImageError| SpecError::new(if e.channel { "problem.channel" } else { "problem.image" }, e.to_string());
     match source {
         ImageSource::One(name) => {
             let (key, bytes) = input("problem.image", name, inputs)?;
-            let grid = if bytes.starts_with(b"NRRD") {
-                decode_volume(key, bytes, &limits)
-            } else if is_nifti(bytes) {
-                decode_nifti(key, bytes, &limits)
-            } else if is_tiff(bytes) && tiff_pages(bytes, 2) > 1 {
-                decode_tiff_stack(key, bytes, &limits)
-            } else {
-                decode_image(key, bytes, &limits)
+            let single = |decoded: Result<Grid, ImageError>| match channel {
+                Some(c) if c > 0 => {
+                    Err(ImageError::channel(key, format!("is a volume of one channel; channel {c} was asked for")))
+                }
+                _ => decoded,
             };
-            grid.map_err(|e| SpecError::new("problem.image", e.to_string()))
+            let grid = if bytes.starts_with(b"NRRD") {
+                single(decode_volume(key, bytes, &limits))
+            } else if is_nifti(bytes) {
+                single(decode_nifti(key, bytes, &limits))
+            } else if is_tiff(bytes) && tiff_pages(bytes, 2) > 1 {
+                decode_tiff_stack_channel(key, bytes, &limits, channel)
+            } else {
+                decode_image_channel(key, bytes, &limits, channel)
+            };
+            grid.map_err(field)
         }
         ImageSource::Slices(names) => {
             let slices = names
@@ -44,7 +58,7 @@ pub(super) fn load_image(source: &ImageSource, inputs: &HashMap<String, Vec<u8>>
                 .enumerate()
                 .map(|(k, n)| input(&format!("problem.image[{k}]"), n, inputs))
                 .collect::<Result<Vec<_>, _>>()?;
-            decode_slices(&slices, &limits).map_err(|e| SpecError::new("problem.image", e.to_string()))
+            decode_slices(&slices, &limits, channel).map_err(field)
         }
     }
 }

@@ -13,7 +13,7 @@ use crate::geometry::AnyMesh;
 use crate::imaging::labels::territories;
 use crate::imaging::{EdgeField, Grid};
 use crate::jobs::necks::NeckSplit;
-use crate::jobs::spec::bounds::{MIN_SIZE, WEIGHT};
+use crate::jobs::spec::bounds::{CHANNEL, MIN_SIZE, WEIGHT};
 use crate::jobs::spec::{
     BackgroundModel, InitialSpec, InscribedShape, MeansKind, Polarity, SeedsShape, SegmentationModel, SegmentationSpec,
     SpecError, ThresholdShape,
@@ -101,7 +101,10 @@ pub(super) fn prepare_segmentation(
     initial: Option<&InitialSpec>,
     inputs: &HashMap<String, Vec<u8>>,
 ) -> Result<PreparedSegmentation, SpecError> {
-    let grid = load_image(&spec.image, inputs)?;
+    if let Some(c) = spec.channel {
+        CHANNEL.check("problem.channel", c)?;
+    }
+    let grid = load_image(&spec.image, spec.channel, inputs)?;
     let model = spec.model.unwrap_or(SegmentationModel::ChanVese);
     let pre = preprocess(spec, &grid, model)?;
     let d = grid.dimension;

@@ -37,6 +37,8 @@ pub const TORUS_RESOLUTION: Bound<usize> = Bound { min: 3, max: 4096 };
 pub const MAX_ITERATIONS: Bound<usize> = Bound { min: 1, max: 100_000_000 };
 /// `mesh.sweeps`: regularization sweeps per step.
 pub const SWEEPS: Bound<usize> = Bound { min: 0, max: 1000 };
+/// `problem.channel` of segmentation.
+pub const CHANNEL: Bound<u32> = Bound { min: 0, max: 255 };
 /// `mesh.max_angle` (degrees).
 pub const MAX_ANGLE: Bound<f64> = Bound { min: 90.0, max: 179.0 };
 /// `problem.sigma` and `problem.data_sigma` of a segmentation (pixels).

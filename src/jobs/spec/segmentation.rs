@@ -1,7 +1,7 @@
 //! `problem` of type `segmentation`: the image, the model and the automatic
 //! choices a user may override, with their documented defaults.
 
-use super::bounds::{LEVEL, MIN_SIZE, PERCENTILE, SIGMA, WEIGHT};
+use super::bounds::{CHANNEL, LEVEL, MIN_SIZE, PERCENTILE, SIGMA, WEIGHT};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -20,6 +20,14 @@ pub struct SegmentationSpec {
     /// `"input:NAME"` (PNG/JPEG/TIFF → 2D, NRRD → 3D) or a list of them (a stack
     /// of 2D slices → 3D, first slice at the bottom).
     pub image: ImageSource,
+    /// (Addition) the channel to segment, from 0: that component of a colour
+    /// image (red, green, blue, alpha; or gray, alpha) instead of its luminance,
+    /// or that channel of a TIFF stack of several (OME-TIFF, ImageJ hyperstack);
+    /// NRRD and NIfTI volumes have channel 0 only. Default: the luminance, and a
+    /// stack of several channels is refused.
+    #[serde(default)]
+    #[schemars(range(min = CHANNEL.min, max = CHANNEL.max))]
+    pub channel: Option<u32>,
     /// Gaussian smoothing in pixels of the image the threshold and the edge
     /// indicator see; default from the image's noise level (1–4 pixels; at least
     /// 1.5 for the geodesic model).
