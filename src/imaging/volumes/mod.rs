@@ -214,6 +214,28 @@ mod tests {
             assert_eq!(second.dims, [6, 5, 4]);
             assert_eq!(second.values[second.index(4, 2, 3)], 255.0 - 34.0);
         }
+        // a 2D image of three channels stored as pages: one page each, a 2D grid
+        use tiff::encoder::{colortype::Gray8, TiffEncoder};
+        let mut out = Cursor::new(Vec::new());
+        let mut enc = TiffEncoder::new(&mut out).unwrap();
+        for c in 0..3u8 {
+            let mut image = enc.new_image::<Gray8>(6, 5).unwrap();
+            let description = "ImageJ=1.54f\nimages=3\nchannels=3\nmode=composite\n";
+            image.encoder().write_tag(tiff::tags::Tag::ImageDescription, description).unwrap();
+            image.write_data(&[40 * c + 1; 30]).unwrap();
+        }
+        let flat = out.into_inner();
+        let g = decode_tiff_stack_channel("rgb", &flat, &limits, Some(2)).unwrap();
+        assert_eq!((g.dimension, g.dims), (2, [6, 5, 1]));
+        assert!(g.values.iter().all(|&v| v == 81.0));
+        // three pages without a description: a volume too thin, and why it is one
+        let mut out = Cursor::new(Vec::new());
+        let mut enc = TiffEncoder::new(&mut out).unwrap();
+        for c in 0..3u8 {
+            enc.write_image::<Gray8>(6, 5, &[c; 30]).unwrap();
+        }
+        let e = decode_tiff_stack("p", &out.into_inner(), &limits).unwrap_err().to_string();
+        assert!(e.contains("at least 4") && e.contains("a slice per page"), "{e}");
     }
 
     /// Slices 2 apart with pixels 1 apart: resampled to twice the slices, a linear

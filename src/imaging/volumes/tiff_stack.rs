@@ -41,8 +41,9 @@ fn no_such_channel(channels: usize, c: usize) -> String {
 }
 
 /// As [`decode_tiff_stack`], with channel `channel` (0-based) when given: the
-/// pages of that channel in a stack of several (OME-XML, ImageJ hyperstack), else
-/// that component of colour interleaved in each page instead of its luminance.
+/// pages of that channel in a stack of several (OME-XML, ImageJ hyperstack; a 2D
+/// image when the channel has one page), else that component of colour
+/// interleaved in each page instead of its luminance.
 pub fn decode_tiff_stack_channel(
     input: &str,
     bytes: &[u8],
@@ -155,7 +156,21 @@ pub fn decode_tiff_stack_channel(
         }
     }
     let Some(kind) = kind else { return Err(fail(format!("holds no page of channel {}", channel.unwrap_or(0)))) };
-    limits.check(input, &[dims[0], dims[1], slices])?;
+    if slices == 1 && pages_of.is_some() {
+        // one page of the channel chosen: a 2D image of several channels
+        return Ok(Grid::new(2, [dims[0], dims[1], 1], values, kind));
+    }
+    limits.check(input, &[dims[0], dims[1], slices]).map_err(|e| match &meta {
+        None if slices < limits.min_side => ImageError::new(
+            input,
+            format!(
+                "{} (a TIFF of several pages is read as a volume, a slice per page; channels stored as pages \
+                 need the OME or ImageJ description that says so)",
+                e.message
+            ),
+        ),
+        _ => e,
+    })?;
     let grid = Grid::new(3, [dims[0], dims[1], slices], values, kind);
     isotropic(input, grid.placed(Placement::aligned([x_spacing, y_spacing, z_spacing], [0.0; 3])), limits)
 }
