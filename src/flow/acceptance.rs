@@ -162,6 +162,16 @@ pub(super) fn tangled<const D: usize>(old: &Mesh<D>, new: &Mesh<D>) -> Option<us
     })
 }
 
+/// The first element of `mesh` of no measure (below [`degenerate_measure`] of its
+/// extent, or not finite), if any: a state the flow cannot assemble.
+pub(super) fn degenerate<const D: usize>(mesh: &Mesh<D>) -> Option<usize> {
+    let tiny = degenerate_measure(mesh.positions());
+    (0..mesh.num_elements()).find(|&e| {
+        let m = mesh.element_geometry(e).0;
+        !(m > tiny) || !m.is_finite()
+    })
+}
+
 /// At debug level, the tangled element `e` of a trial step: its measure before
 /// and after, the cosine of its turn and its edge lengths (the diagnosis of a
 /// run that ends at `tau_min` on tangling).

@@ -49,6 +49,18 @@ impl<const D: usize> Flow<'_, D> {
         if !energy.is_finite() {
             return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration });
         }
+        if let Some(e) = super::acceptance::degenerate(&mesh) {
+            // management, with the constraints after it, left an element of no
+            // measure (a surface's triangle with its three corners moved onto one
+            // edge of a segmentation's image box): the next step could not be
+            // assembled, so the accepted mesh is kept this time
+            tracing::debug!(
+                iteration = self.iteration,
+                element = e,
+                "management left a degenerate element; not applied"
+            );
+            return Ok(None);
+        }
         self.mesh = mesh;
         if remeshed {
             self.pattern = Pattern::new(self.mesh.num_vertices(), self.mesh.elements());
@@ -124,6 +136,33 @@ mod tests {
             assert_eq!(flow.energy(), flow.mesh().boundary_measure());
         }
         assert!(flow.mesh().positions().iter().filter(|p| p[1] == 0.0).count() > 4);
+    }
+
+    /// A management pass that moves vertex 1 onto vertex 0: a segment of no length.
+    struct Collapsing;
+
+    impl MeshManager<2> for Collapsing {
+        fn manage(&mut self, mesh: &Mesh<2>) -> Result<Managed<2>, crate::flow::FlowError> {
+            let mut x = mesh.positions().to_vec();
+            x[1] = x[0];
+            Ok(Managed::Moved(mesh.with_positions(x)))
+        }
+    }
+
+    /// A management pass that leaves an element of no measure is not applied: the
+    /// accepted step's mesh is kept, and the flow goes on from it (the next step
+    /// could not be assembled on the degenerate one).
+    #[test]
+    fn a_management_pass_leaving_a_degenerate_element_is_not_applied() {
+        let mut problem = AboveTheLine;
+        let settings = FlowSettings { tau: 1e-4, ..FlowSettings::default() };
+        let mut flow = above_the_line(&mut problem, 0.5, settings, Box::new(Collapsing));
+        for _ in 0..3 {
+            assert!(flow.step().unwrap().accepted);
+            let x = flow.mesh().positions();
+            assert!((x[1] - x[0]).norm() > 0.01);
+            assert_eq!(flow.energy(), flow.mesh().boundary_measure());
+        }
     }
 
     /// A management pass that splits every segment in two.
