@@ -154,12 +154,13 @@ fn ome(text: &str) -> Result<StackMeta, String> {
     // the dimensions stored faster than C, from `XY` + the order of Z, C and T
     let order = get("DimensionOrder").unwrap_or("XYCZT");
     let faster = order.get(2..).and_then(|o| o.split_once('C')).map_or("", |(before, _)| before);
-    let channel_stride = faster.chars().map(|d| if d == 'Z' { slices } else { frames }).product();
+    // (sizes as written, however large: saturated, never overflowed)
+    let channel_stride = faster.chars().fold(1usize, |p, d| p.saturating_mul(if d == 'Z' { slices } else { frames }));
     Ok(StackMeta {
         channels,
         frames,
         channel_stride,
-        planes: Some(slices * channels * frames),
+        planes: Some(slices.saturating_mul(channels).saturating_mul(frames)),
         spacing: [length("X")?, length("Y")?, length("Z")?],
         source: "OME",
     })
@@ -209,6 +210,11 @@ mod tests {
         let zfirst = StackMeta::parse(&xml(r#"SizeC="2" SizeZ="4" SizeT="1" DimensionOrder="XYZCT""#, 1));
         let zfirst = zfirst.unwrap().unwrap();
         assert_eq!((zfirst.channel_stride, zfirst.channel_of(3), zfirst.channel_of(4)), (4, 0, 1));
+        // sizes beyond any file (found by fuzzing: their product overflowed)
+        let huge = StackMeta::parse(&xml(r#"SizeC="2" SizeZ="1e30" SizeT="9e18" DimensionOrder="XYZTC""#, 1));
+        let huge = huge.unwrap().unwrap();
+        assert_eq!((huge.channel_stride, huge.planes), (usize::MAX, Some(usize::MAX)));
+        assert!(huge.refusal(Some(0)).is_some());
         let e = StackMeta::parse(&xml(r#"SizeZ="4" PhysicalSizeZ="2" PhysicalSizeZUnit="furlong""#, 1));
         assert!(e.unwrap_err().contains("PhysicalSizeZUnit \"furlong\""));
         assert!(StackMeta::parse("<OME><Image><Pixels SizeZ=\"4").is_err());
