@@ -4,5 +4,7 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let _ = shapeflow::imaging::decode_image("in", data, &shapeflow::imaging::ImageLimits::default());
+    let limits = shapeflow::imaging::ImageLimits::default();
+    let _ = shapeflow::imaging::decode_image("in", data, &limits);
+    let _ = shapeflow::imaging::decode_image_channel("in", data, &limits, Some(2));
 });
