@@ -202,6 +202,11 @@ fn channels_are_chosen_with_problem_channel() {
     assert!(e.starts_with("problem.channel: input `s`: is a stack of 2 channels") && e.contains("(0 to 1)"), "{e}");
     let e = image_error(&with(r#", "channel": 2"#), &[("s", stack.clone())]);
     assert!(e.starts_with("problem.channel:") && e.contains("channel 2 was asked for"), "{e}");
+    let nifti = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/ramp_nifti1.nii")).unwrap();
+    let e = image_error(&with(r#", "channel": 1"#), &[("s", nifti.clone())]);
+    assert!(e.starts_with("problem.channel: input `s`: is a volume of one channel"), "{e}");
+    let e = image_error(&with(r#", "channel": 1"#), &[("s", nifti[..400].to_vec())]);
+    assert!(e.starts_with("problem.image: input `s`:") && e.contains("truncated"), "{e}");
     let e = image_error(&with(r#", "channel": 1"#), &[("s", gray_png(16, 16, &(0..=255).collect::<Vec<u8>>()))]);
     assert!(e.starts_with("problem.channel: input `s`: has 1 channel (0 to 0)"), "{e}");
     let limits = shapeflow::imaging::ImageLimits::default();

@@ -35,11 +35,14 @@ pub(super) fn load_image(
     match source {
         ImageSource::One(name) => {
             let (key, bytes) = input("problem.image", name, inputs)?;
-            let single = |decoded: Result<Grid, ImageError>| match channel {
-                Some(c) if c > 0 => {
-                    Err(ImageError::channel(key, format!("is a volume of one channel; channel {c} was asked for")))
-                }
-                _ => decoded,
+            // NRRD and NIfTI volumes: a broken file is named first, then the channel
+            let single = |decoded: Result<Grid, ImageError>| {
+                decoded.and_then(|grid| match channel {
+                    Some(c) if c > 0 => {
+                        Err(ImageError::channel(key, format!("is a volume of one channel; channel {c} was asked for")))
+                    }
+                    _ => Ok(grid),
+                })
             };
             let grid = if bytes.starts_with(b"NRRD") {
                 single(decode_volume(key, bytes, &limits))
