@@ -25,12 +25,18 @@ pub fn decode_image(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<G
 /// green, blue; red, green, blue, alpha): component `channel`, or without one
 /// the gray value or the colour's luminance.
 #[inline]
-fn pixel_value(s: &[f64], channel: Option<usize>) -> f64 {
+pub(super) fn pixel_value(s: &[f64], channel: Option<usize>) -> f64 {
     match channel {
         Some(c) => s[c],
         None if s.len() >= 3 => luminance(s[0], s[1], s[2]),
         None => s[0],
     }
+}
+
+/// The message for channel `c` of a file of `channels` channels, which it lacks.
+pub(super) fn no_such_channel(channels: usize, c: usize) -> String {
+    let s = if channels == 1 { "" } else { "s" };
+    format!("has {channels} channel{s} (0 to {}); channel {c} was asked for", channels - 1)
 }
 
 /// As [`decode_image`], with the image's component `channel` (0-based, in the
@@ -62,14 +68,7 @@ pub fn decode_image_channel(
     let (w, h) = (img.width() as usize, img.height() as usize);
     let components = img.color().channel_count() as usize;
     if let Some(c) = channel.filter(|&c| c >= components) {
-        return Err(ImageError::channel(
-            input,
-            format!(
-                "has {components} channel{} (0 to {}); channel {c} was asked for",
-                if components == 1 { "" } else { "s" },
-                components - 1
-            ),
-        ));
+        return Err(ImageError::channel(input, no_such_channel(components, c)));
     }
     macro_rules! pick {
         ($b:expr) => {

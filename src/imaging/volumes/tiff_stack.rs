@@ -4,6 +4,7 @@
 
 use super::isotropic;
 use super::tiff_meta::StackMeta;
+use crate::imaging::decode::{no_such_channel, pixel_value};
 use crate::imaging::grid::Placement;
 use crate::imaging::grid::{Grid, SampleKind};
 use crate::imaging::limits::ImageLimits;
@@ -32,12 +33,6 @@ pub fn tiff_pages(bytes: &[u8], cap: usize) -> usize {
 /// 32-bit integer or float samples).
 pub fn decode_tiff_stack(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Grid, ImageError> {
     decode_tiff_stack_channel(input, bytes, limits, None)
-}
-
-/// The number of channels, and which was asked for, as a message.
-fn no_such_channel(channels: usize, c: usize) -> String {
-    let s = if channels == 1 { "" } else { "s" };
-    format!("has {channels} channel{s} (0 to {}); channel {c} was asked for", channels - 1)
 }
 
 /// As [`decode_tiff_stack`], with channel `channel` (0-based) when given: the
@@ -133,11 +128,7 @@ pub fn decode_tiff_stack_channel(
         for j in (0..h).rev() {
             for i in 0..w {
                 let s = &samples[(i + w * j) * channels..][..channels];
-                values.push(match component {
-                    Some(c) => s[c],
-                    None if channels >= 3 => 0.2126 * s[0] + 0.7152 * s[1] + 0.0722 * s[2],
-                    None => s[0],
-                });
+                values.push(pixel_value(s, component));
             }
         }
         page += 1;
