@@ -106,11 +106,12 @@ export function showJob(main, id) {
         }
         slider.max = String(Math.max(frames.length - 1, 0));
         slider.disabled = play.disabled = frames.length < 2;
+        // the list first: drawing the newest frame waits for its download
+        await showFiles(manifest);
         if (frames.length && following) {
           slider.value = slider.max;
           await showFrame(frames.length - 1);
         }
-        await showFiles(manifest);
       } catch (e) {
         if (e.status !== 401) say(`Could not read the results: ${e.message}`);
       }
