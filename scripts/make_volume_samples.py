@@ -15,6 +15,13 @@ TIFF independent of ours). Usage: python3 scripts/make_volume_samples.py
   (the second 255 − v of the first; OME-XML SizeC 2, ImageJ hyperstack
   channels=2): without a channel chosen each must be refused, never
   read as 8 slices; with `problem.channel` the chosen channel is read.
+- ome_series.ome.tif and imagej_series.tif: the same 4 slices at 3 time points,
+  value 10 z + x + 60 t in channel 0 and 255 minus that in channel 1 (axes TZCYX):
+  without a channel and a time point each must be refused; with both, that
+  channel's 4 slices of that time point are read.
+- series_nifti1.nii.gz: the ramp of ramp_nifti1.nii at 3 time points, plus
+  1000 t at time point t (4D, int16): refused without `problem.time_point`, read
+  at the one chosen.
 """
 import pathlib
 
@@ -45,6 +52,17 @@ tifffile.imwrite(OUT / "ome_stack.ome.tif", stack, ome=True, metadata={
 two = np.stack([stack, 255 - stack], axis=1)  # Z, C, Y, X
 tifffile.imwrite(OUT / "ome_channels.ome.tif", two, ome=True, metadata={"axes": "ZCYX"})
 tifffile.imwrite(OUT / "imagej_channels.tif", two, imagej=True, metadata={"axes": "ZCYX"})
-for name in ["ome_stack.ome.tif", "ome_channels.ome.tif", "imagej_channels.tif"]:
+series = np.stack([stack + 60 * t for t in range(3)])  # T, Z, Y, X
+series = np.stack([series, 255 - series], axis=2)  # T, Z, C, Y, X
+tifffile.imwrite(OUT / "ome_series.ome.tif", series, ome=True, metadata={"axes": "TZCYX"})
+tifffile.imwrite(OUT / "imagej_series.tif", series, imagej=True, metadata={"axes": "TZCYX"})
+frames = np.stack([data + 1000 * t for t in range(3)], axis=-1).astype(np.int16)
+image = nib.Nifti1Image(frames, affine)
+image.header.set_qform(affine, code=1)
+image.header.set_sform(affine, code=1)
+image.to_filename(OUT / "series_nifti1.nii.gz")
+assert np.array_equal(nib.load(OUT / "series_nifti1.nii.gz").get_fdata()[..., 2], data + 2000)
+for name in ["ome_stack.ome.tif", "ome_channels.ome.tif", "imagej_channels.tif", "ome_series.ome.tif",
+             "imagej_series.tif"]:
     with tifffile.TiffFile(OUT / name) as t:
         print(name, len(t.pages), t.pages[0].description[:200].replace("\n", " "))

@@ -196,6 +196,9 @@ fn the_schema_bounds_and_rules_are_the_parser_ones() {
         (with(&segmentation, "/problem/epsilon", json!(0.0)), false, "problem.epsilon"),
         (with(&segmentation, "/problem/channel", json!(256)), false, "problem.channel"),
         (with(&segmentation, "/problem/channel", json!(0)), true, ""),
+        (with(&segmentation, "/problem/time_point", json!(-1)), false, "problem.time_point"),
+        (with(&segmentation, "/problem/time_point", json!(1_000_001)), false, "problem.time_point"),
+        (with(&segmentation, "/problem/time_point", json!(0)), true, ""),
         (with(&curve, "/output", json!({"checkpoint_every": 0})), false, "output.checkpoint_every"),
         (with(&curve, "/output", json!({"checkpoint_every": 1})), true, ""),
         // rules between fields that the schema states: only segmentation may leave

@@ -1,5 +1,5 @@
-//! Images as sampled scalar fields: decoding (PNG, JPEG, TIFF; NRRD, NIfTI-1 and
-//! multi-page TIFF volumes, slice stacks), Gaussian smoothing, the edge indicator `H = 1/(1 + |∇I|²)` of
+//! Images as sampled scalar fields: decoding (PNG, JPEG, TIFF; NRRD, NIfTI and
+//! multi-page TIFF volumes, one channel and time point of them, slice stacks), Gaussian smoothing, the edge indicator `H = 1/(1 + |∇I|²)` of
 //! geodesic active contours with a C² interpolant, and rasterization of shapes into
 //! masks. Pure functions over bytes and arrays; nothing here touches files.
 //!
@@ -38,9 +38,30 @@ pub use threshold::{
     Normalization, PERCENTILES,
 };
 pub use volumes::{
-    decode_nifti, decode_tiff_stack, decode_tiff_stack_channel, encode_nifti_labels, encode_nifti_mask, is_nifti,
-    is_tiff, isotropic, tiff_pages,
+    decode_nifti, decode_nifti_time_point, decode_tiff_stack, decode_tiff_stack_plane, encode_nifti_labels,
+    encode_nifti_mask, is_nifti, is_tiff, isotropic, tiff_pages,
 };
+
+/// The plane to read of a file that holds several channels or time points,
+/// each 0-based. `None`: the file must hold only one (for the channel: or colour,
+/// which is then taken to its luminance).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Plane {
+    pub channel: Option<usize>,
+    pub time_point: Option<usize>,
+}
+
+/// What an [`ImageError`] is about: the file, or the plane asked of it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Subject {
+    /// The file is broken or unsupported.
+    #[default]
+    File,
+    /// The file is fine, but not the channel asked of it (or it needs one).
+    Channel,
+    /// The file is fine, but not the time point asked of it (or it needs one).
+    TimePoint,
+}
 
 /// A bad or unsupported input file; `input` names it (the multipart part or file).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -48,17 +69,26 @@ pub use volumes::{
 pub struct ImageError {
     pub input: String,
     pub message: String,
-    /// The file is fine, but not the channel asked of it (or it needs one).
-    pub channel: bool,
+    pub subject: Subject,
 }
 
 impl ImageError {
     pub fn new(input: &str, message: impl Into<String>) -> Self {
-        ImageError { input: input.to_string(), message: message.into(), channel: false }
+        ImageError { input: input.to_string(), message: message.into(), subject: Subject::File }
     }
 
     /// An error of the channel asked of the file `input`.
     pub fn channel(input: &str, message: impl Into<String>) -> Self {
-        ImageError { channel: true, ..ImageError::new(input, message) }
+        ImageError { subject: Subject::Channel, ..ImageError::new(input, message) }
+    }
+
+    /// An error of the time point asked of the file `input`.
+    pub fn time_point(input: &str, message: impl Into<String>) -> Self {
+        ImageError { subject: Subject::TimePoint, ..ImageError::new(input, message) }
+    }
+
+    /// An error of `subject`.
+    pub fn about(subject: Subject, input: &str, message: impl Into<String>) -> Self {
+        ImageError { subject, ..ImageError::new(input, message) }
     }
 }

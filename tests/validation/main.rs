@@ -3,6 +3,7 @@
 mod gltf_files;
 
 use shapeflow::geometry::{circle, icosphere, polygon, CurveMesh, Mesh, MeshError, Point, SurfaceMesh};
+use shapeflow::imaging::Subject;
 use shapeflow::jobs::{parse_spec, prepare, read_mesh_file, AnyMesh, MeshFileError};
 use std::collections::HashMap;
 
@@ -211,7 +212,8 @@ fn channels_are_chosen_with_problem_channel() {
     assert!(e.starts_with("problem.channel: input `s`: has 1 channel (0 to 0)"), "{e}");
     let limits = shapeflow::imaging::ImageLimits::default();
     for (c, value) in [(0, 10.0 * 2.0 + 3.0), (1, 255.0 - (10.0 * 2.0 + 3.0))] {
-        let g = shapeflow::imaging::decode_tiff_stack_channel("s", &stack, &limits, Some(c)).unwrap();
+        let plane = shapeflow::imaging::Plane { channel: Some(c), time_point: None };
+        let g = shapeflow::imaging::decode_tiff_stack_plane("s", &stack, &limits, plane).unwrap();
         assert_eq!(g.dims, [6, 5, 4]);
         assert_eq!(g.values[g.index(3, 1, 2)], value);
     }
@@ -230,7 +232,38 @@ fn channels_are_chosen_with_problem_channel() {
     // row 7 of the file is the grid's row 0
     assert_eq!(blue.values[blue.index(5, 0, 0)], (7 * 8 + 5) as f64 * 3.0);
     let e = shapeflow::imaging::decode_image_channel("c", &rgb, &limits, Some(3)).unwrap_err();
-    assert!(e.channel && e.to_string().contains("has 3 channels (0 to 2)"), "{e}");
+    assert!(e.subject == Subject::Channel && e.to_string().contains("has 3 channels (0 to 2)"), "{e}");
+}
+
+/// `problem.time_point`: a series of several time points needs one (with the
+/// channel, for a stack of several channels), one it does not have is named,
+/// and inputs of one time point have time point 0 only; a broken file is named
+/// first (tests/data/imagej_series.tif, series_nifti1.nii.gz).
+#[test]
+fn time_points_are_chosen_with_problem_time_point() {
+    let data = |name: &str| std::fs::read(format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let with = |extra: &str| format!(r#"{{"problem": {{"type": "segmentation", "image": "input:s"{extra}}}}}"#);
+    let stack = data("imagej_series.tif");
+    let e = image_error(&with(r#", "channel": 1"#), &[("s", stack.clone())]);
+    assert!(e.starts_with("problem.time_point: input `s`: is a stack of 2 channels at 3 time points"), "{e}");
+    assert!(e.contains("`problem.time_point` (0 to 2)"), "{e}");
+    let e = image_error(&with(""), &[("s", stack.clone())]);
+    assert!(e.starts_with("problem.channel:") && e.contains("and the time point"), "{e}");
+    let e = image_error(&with(r#", "channel": 1, "time_point": 3"#), &[("s", stack)]);
+    assert!(e.starts_with("problem.time_point:") && e.contains("time point 3 was asked for"), "{e}");
+    let series = data("series_nifti1.nii.gz");
+    let e = image_error(&with(""), &[("s", series.clone())]);
+    assert!(e.starts_with("problem.time_point: input `s`: is a series of 3 time points"), "{e}");
+    let e = image_error(&with(r#", "time_point": 7"#), &[("s", series)]);
+    assert!(e.starts_with("problem.time_point:") && e.contains("time point 7 was asked for"), "{e}");
+    let e = image_error(&with(r#", "time_point": 1"#), &[("s", data("ramp_nifti1.nii"))]);
+    assert!(e.starts_with("problem.time_point: input `s`: is a series of 1 time point;"), "{e}");
+    let e = image_error(&with(r#", "time_point": 1"#), &[("s", gray_png(16, 16, &(0..=255).collect::<Vec<u8>>()))]);
+    assert!(e.starts_with("problem.time_point: input `s`: is an image of one time point"), "{e}");
+    let e = image_error(&with(r#", "time_point": 1"#), &[("s", b"NRRD0004\ntype: float\n".to_vec())]);
+    assert!(e.starts_with("problem.image: input `s`:"), "{e}");
+    let e = image_error(&with(r#", "time_point": 1000001"#), &[("s", data("ramp_nifti1.nii"))]);
+    assert!(e.starts_with("problem.time_point:"), "{e}");
 }
 
 fn p2(x: f64, y: f64) -> Point<2> {

@@ -1,7 +1,7 @@
 //! Volumes in the formats microscopy and medical imaging use: multi-page TIFF
 //! stacks (one page per slice, the first at the bottom; OME-TIFF and ImageJ
-//! descriptions read for their spacing and refused when they hold several
-//! channels or time points, `tiff_meta`) and NIfTI-1 or NIfTI-2
+//! descriptions read for their spacing and for the pages of one channel and
+//! time point, `tiff_meta`) and NIfTI-1 or NIfTI-2 (one time point of a series)
 //! (`.nii`, gzip-compressed `.nii.gz`; single file, `n+1` or `n+2`). Voxel spacing is honoured: an
 //! anisotropic volume (OME-XML's physical sizes, or ImageJ's `spacing=` and the X
 //! resolution, of a TIFF stack;
@@ -16,9 +16,9 @@ mod nifti_out;
 mod tiff_meta;
 mod tiff_stack;
 
-pub use nifti::{decode_nifti, is_nifti};
+pub use nifti::{decode_nifti, decode_nifti_time_point, is_nifti};
 pub use nifti_out::{encode_nifti_labels, encode_nifti_mask};
-pub use tiff_stack::{decode_tiff_stack, decode_tiff_stack_channel, is_tiff, tiff_pages};
+pub use tiff_stack::{decode_tiff_stack, decode_tiff_stack_plane, is_tiff, tiff_pages};
 
 use super::grid::Grid;
 use super::limits::ImageLimits;
@@ -79,7 +79,12 @@ pub fn isotropic(input: &str, grid: Grid, limits: &ImageLimits) -> Result<Grid, 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::io::Cursor;
+    use crate::imaging::{Plane, Subject};
+    use std::io::{Cursor, Read, Write};
+
+    fn channel(c: usize) -> Plane {
+        Plane { channel: Some(c), time_point: None }
+    }
 
     /// A NIfTI-1 header for `dims`, float32, spacing `pixdim`.
     fn nifti(dims: [i16; 3], pixdim: [f32; 3], data: &[f32], big_endian: bool) -> Vec<u8> {
@@ -207,10 +212,10 @@ mod tests {
             (&include_bytes!("../../../tests/data/imagej_channels.tif")[..], "ImageJ"),
         ] {
             let e = decode_tiff_stack("two", file, &limits).unwrap_err();
-            assert!(e.channel, "{e}");
+            assert_eq!(e.subject, Subject::Channel, "{e}");
             let e = e.to_string();
             assert!(e.contains("`two`") && e.contains("2 channels") && e.contains(source), "{e}");
-            let second = decode_tiff_stack_channel("two", file, &limits, Some(1)).unwrap();
+            let second = decode_tiff_stack_plane("two", file, &limits, channel(1)).unwrap();
             assert_eq!(second.dims, [6, 5, 4]);
             assert_eq!(second.values[second.index(4, 2, 3)], 255.0 - 34.0);
         }
@@ -225,9 +230,25 @@ mod tests {
             image.write_data(&[40 * c + 1; 30]).unwrap();
         }
         let flat = out.into_inner();
-        let g = decode_tiff_stack_channel("rgb", &flat, &limits, Some(2)).unwrap();
+        let g = decode_tiff_stack_plane("rgb", &flat, &limits, channel(2)).unwrap();
         assert_eq!((g.dimension, g.dims), (2, [6, 5, 1]));
         assert!(g.values.iter().all(|&v| v == 81.0));
+        // a 2D time series (one page per time point): the time point's page
+        let mut out = Cursor::new(Vec::new());
+        let mut enc = TiffEncoder::new(&mut out).unwrap();
+        for t in 0..4u8 {
+            let mut image = enc.new_image::<Gray8>(6, 5).unwrap();
+            let description = "ImageJ=1.54f\nimages=4\nframes=4\n";
+            image.encoder().write_tag(tiff::tags::Tag::ImageDescription, description).unwrap();
+            image.write_data(&[10 * t + 1; 30]).unwrap();
+        }
+        let frames = out.into_inner();
+        let e = decode_tiff_stack("movie", &frames, &limits).unwrap_err();
+        assert!(e.subject == Subject::TimePoint && e.message.contains("`problem.time_point` (0 to 3)"), "{e}");
+        let g = decode_tiff_stack_plane("movie", &frames, &limits, Plane { channel: None, time_point: Some(3) });
+        let g = g.unwrap();
+        assert_eq!((g.dimension, g.dims), (2, [6, 5, 1]));
+        assert!(g.values.iter().all(|&v| v == 31.0));
         // three pages without a description: a volume too thin, and why it is one
         let mut out = Cursor::new(Vec::new());
         let mut enc = TiffEncoder::new(&mut out).unwrap();
@@ -236,6 +257,68 @@ mod tests {
         }
         let e = decode_tiff_stack("p", &out.into_inner(), &limits).unwrap_err().to_string();
         assert!(e.contains("at least 4") && e.contains("a slice per page"), "{e}");
+    }
+
+    /// Time series written by tifffile (OME-XML with `DimensionOrder` XYCZT, and
+    /// an ImageJ hyperstack) and nibabel (a 4D NIfTI-1, gzip): refused without a
+    /// time point (and a channel) chosen, naming what to choose; with them, the
+    /// volume of that channel and time point. `scripts/make_volume_samples.py`.
+    #[test]
+    fn time_points_of_series() {
+        let limits = ImageLimits::default();
+        let at = |c, t| Plane { channel: Some(c), time_point: Some(t) };
+        for (file, source) in [
+            (&include_bytes!("../../../tests/data/ome_series.ome.tif")[..], "OME"),
+            (&include_bytes!("../../../tests/data/imagej_series.tif")[..], "ImageJ"),
+        ] {
+            let e = decode_tiff_stack("s", file, &limits).unwrap_err();
+            assert_eq!(e.subject, Subject::Channel, "{e}");
+            assert!(e.message.contains(&format!("2 channels at 3 time points ({source}")), "{e}");
+            let e = decode_tiff_stack_plane("s", file, &limits, channel(0)).unwrap_err();
+            assert!(e.subject == Subject::TimePoint && e.message.contains("(0 to 2)"), "{e}");
+            let e = decode_tiff_stack_plane("s", file, &limits, at(0, 3)).unwrap_err();
+            assert!(e.subject == Subject::TimePoint && e.message.contains("time point 3 was asked for"), "{e}");
+            for (c, t) in [(0, 0), (0, 2), (1, 1)] {
+                let g = decode_tiff_stack_plane("s", file, &limits, at(c, t)).unwrap();
+                assert_eq!(g.dims, [6, 5, 4], "{source}");
+                for (x, z) in [(0, 0), (5, 3), (2, 1)] {
+                    let v = (10 * z + x + 60 * t) as f64;
+                    let want = if c == 0 { v } else { 255.0 - v };
+                    assert_eq!(g.values[g.index(x, 2, z)], want, "{source} channel {c} time point {t}");
+                }
+            }
+        }
+        let series = include_bytes!("../../../tests/data/series_nifti1.nii.gz");
+        let e = decode_nifti("n", series, &limits).unwrap_err();
+        assert_eq!(e.subject, Subject::TimePoint);
+        assert!(e.message.contains("series of 3 time points") && e.message.contains("(0 to 2)"), "{e}");
+        let e = decode_nifti_time_point("n", series, &limits, Some(3)).unwrap_err();
+        assert!(e.subject == Subject::TimePoint && e.message.contains("time point 3 was asked for"), "{e}");
+        let one = decode_nifti("r", include_bytes!("../../../tests/data/ramp_nifti1.nii"), &limits).unwrap();
+        for t in 0..3 {
+            let g = decode_nifti_time_point("n", series, &limits, Some(t)).unwrap();
+            assert_eq!((g.dims, &g.placement), (one.dims, &one.placement));
+            let shifted: Vec<f64> = one.values.iter().map(|v| v + 1000.0 * t as f64).collect();
+            assert_eq!(g.values, shifted, "time point {t}");
+        }
+        // the same series uncompressed, and cut short inside its last volume
+        let mut plain = Vec::new();
+        flate2::read::GzDecoder::new(&series[..]).read_to_end(&mut plain).unwrap();
+        let g = decode_nifti_time_point("n", &plain, &limits, Some(2)).unwrap();
+        assert_eq!(g.values[0], 2000.0);
+        let e = decode_nifti_time_point("n", &plain[..plain.len() - 1], &limits, Some(2)).unwrap_err();
+        assert!(e.message.contains("truncated"), "{e}");
+        assert!(decode_nifti_time_point("n", &plain[..plain.len() - 1], &limits, Some(1)).is_ok());
+        let cut = gzip(&plain[..plain.len() - 1]);
+        let e = decode_nifti_time_point("n", &cut, &limits, Some(2)).unwrap_err();
+        assert!(e.message.contains("truncated"), "{e}");
+        assert_eq!(decode_nifti_time_point("n", &cut, &limits, Some(1)).unwrap().values[0], 1000.0);
+    }
+
+    fn gzip(b: &[u8]) -> Vec<u8> {
+        let mut z = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        z.write_all(b).unwrap();
+        z.finish().unwrap()
     }
 
     /// Slices 2 apart with pixels 1 apart: resampled to twice the slices, a linear

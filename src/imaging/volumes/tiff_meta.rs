@@ -3,10 +3,11 @@
 //! `spacing=`) or OME-XML's `Pixels` element (`SizeC`, `SizeZ`, `SizeT`,
 //! `PhysicalSize{X,Y,Z}` with their units, the `SamplesPerPixel` of its first
 //! `Channel`). A volume is one channel at one time point: of a stack of several
-//! channels the one asked for is read (`problem.channel`); a stack of several
-//! time points, or of several channels without a choice, is refused with its
-//! layout named, never read as slices.
+//! channels or time points the one asked for is read (`problem.channel`,
+//! `problem.time_point`); a stack of several without a choice is refused with
+//! its layout named, never read as slices.
 
+use crate::imaging::{Plane, Subject};
 use quick_xml::events::Event;
 use quick_xml::XmlVersion;
 
@@ -15,11 +16,13 @@ use quick_xml::XmlVersion;
 pub(super) struct StackMeta {
     /// Channels stored as separate pages (colour interleaved within a page is one).
     pub channels: usize,
+    /// Time points.
     pub frames: usize,
-    /// Consecutive pages of one channel: the pages of the dimensions stored
-    /// faster than the channel's (ImageJ: 1, channels fastest; OME: by its
-    /// `DimensionOrder`).
+    /// Consecutive pages of one channel, and of one time point: the pages of the
+    /// dimensions stored faster (ImageJ: channels fastest, then slices, then
+    /// time points; OME: by its `DimensionOrder`).
     pub channel_stride: usize,
+    pub frame_stride: usize,
     /// The pages the metadata accounts for, when it says.
     pub planes: Option<usize>,
     /// Voxel steps along x, y and z, each when given (OME: in micrometres).
@@ -41,10 +44,11 @@ impl StackMeta {
         Ok(None)
     }
 
-    /// What keeps this stack from being read as the volume of `channel` (or of
-    /// its only channel), if anything: several time points, or several channels
-    /// and none chosen.
-    pub(super) fn refusal(&self, channel: Option<usize>) -> Option<String> {
+    /// What keeps this stack from being read as the volume of `plane`, if
+    /// anything: several channels or time points and none chosen (an error of
+    /// the channel when it lacks one, else of the time point), or one asked for
+    /// that it does not have.
+    pub(super) fn refusal(&self, plane: Plane) -> Option<(Subject, String)> {
         let count = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
         let layout = format!(
             "is a stack of {} at {} ({} metadata)",
@@ -52,21 +56,32 @@ impl StackMeta {
             count(self.frames, "time point"),
             self.source
         );
-        if self.frames > 1 {
-            return Some(format!("{layout}; a volume is one time point: save the one to segment as its own stack"));
+        let needs_channel = self.channels > 1 && plane.channel.is_none();
+        let needs_time = self.frames > 1 && plane.time_point.is_none();
+        let choose =
+            |what: &str, field: &str, n: usize| format!("the {what} to segment with `{field}` (0 to {})", n - 1);
+        let (channel, time) = (
+            choose("channel", "problem.channel", self.channels),
+            choose("time point", "problem.time_point", self.frames),
+        );
+        match (needs_channel, needs_time) {
+            (true, true) => return Some((Subject::Channel, format!("{layout}; choose {channel} and {time}"))),
+            (true, false) => return Some((Subject::Channel, format!("{layout}; choose {channel}"))),
+            (false, true) => return Some((Subject::TimePoint, format!("{layout}; choose {time}"))),
+            (false, false) => {}
         }
-        match channel {
-            None if self.channels > 1 => Some(format!(
-                "{layout}; choose the channel to segment with `problem.channel` (0 to {})",
-                self.channels - 1
-            )),
+        match plane.time_point {
+            Some(t) if t >= self.frames => {
+                Some((Subject::TimePoint, format!("{layout}; time point {t} was asked for (0 to {})", self.frames - 1)))
+            }
             _ => None,
         }
     }
 
-    /// The channel that page `page` belongs to.
-    pub(super) fn channel_of(&self, page: usize) -> usize {
-        (page / self.channel_stride.max(1)) % self.channels.max(1)
+    /// The channel and the time point that page `page` belongs to.
+    pub(super) fn plane_of(&self, page: usize) -> (usize, usize) {
+        let along = |stride: usize, n: usize| (page / stride.max(1)) % n.max(1);
+        (along(self.channel_stride, self.channels), along(self.frame_stride, self.frames))
     }
 }
 
@@ -76,14 +91,21 @@ fn positive(v: &str) -> Option<f64> {
 }
 
 /// ImageJ's description: `images=`, `channels=`, `slices=`, `frames=`,
-/// `spacing=` (the z step in the unit of the x resolution).
+/// `spacing=` (the z step in the unit of the x resolution). Pages go through
+/// the channels fastest, then the slices, then the time points; without
+/// `slices=`, the slices are the images left for each channel and time point.
 fn imagej(text: &str) -> StackMeta {
     let value = |key: &str| text.lines().find_map(|l| l.strip_prefix(key)?.strip_prefix('=')).and_then(positive);
     let count = |key: &str| value(key).map_or(1, |v| v as usize);
+    let (channels, frames) = (count("channels"), count("frames"));
+    let slices = value("slices")
+        .map(|v| v as usize)
+        .unwrap_or_else(|| value("images").map_or(1, |v| (v as usize / channels.saturating_mul(frames).max(1)).max(1)));
     StackMeta {
-        channels: count("channels"),
-        frames: count("frames"),
+        channels,
+        frames,
         channel_stride: 1,
+        frame_stride: channels.saturating_mul(slices),
         planes: value("images").map(|v| v as usize),
         spacing: [None, None, value("spacing")],
         source: "ImageJ",
@@ -151,15 +173,25 @@ fn ome(text: &str) -> Result<StackMeta, String> {
     };
     let channels = size("SizeC").div_ceil(samples_per_pixel.max(1));
     let (slices, frames) = (size("SizeZ"), size("SizeT"));
-    // the dimensions stored faster than C, from `XY` + the order of Z, C and T
+    // the pages of the dimensions stored faster than C and than T, from `XY` +
+    // the order of Z, C and T (sizes as written, however large: saturated,
+    // never overflowed)
     let order = get("DimensionOrder").unwrap_or("XYCZT");
-    let faster = order.get(2..).and_then(|o| o.split_once('C')).map_or("", |(before, _)| before);
-    // (sizes as written, however large: saturated, never overflowed)
-    let channel_stride = faster.chars().fold(1usize, |p, d| p.saturating_mul(if d == 'Z' { slices } else { frames }));
+    let stride = |of: char| {
+        let faster = order.get(2..).and_then(|o| o.split_once(of)).map_or("", |(before, _)| before);
+        faster.chars().fold(1usize, |p, d| {
+            p.saturating_mul(match d {
+                'Z' => slices,
+                'C' => channels,
+                _ => frames,
+            })
+        })
+    };
     Ok(StackMeta {
         channels,
         frames,
-        channel_stride,
+        channel_stride: stride('C'),
+        frame_stride: stride('T'),
         planes: Some(slices.saturating_mul(channels).saturating_mul(frames)),
         spacing: [length("X")?, length("Y")?, length("Z")?],
         source: "OME",
@@ -176,12 +208,33 @@ mod tests {
         let m = m.unwrap().unwrap();
         assert_eq!((m.channels, m.frames, m.planes), (2, 1, Some(60)));
         assert_eq!(m.spacing, [None, None, Some(0.25)]);
-        let e = m.refusal(None).unwrap();
+        let (subject, e) = m.refusal(Plane::default()).unwrap();
         assert!(e.contains("2 channels at 1 time point (ImageJ") && e.contains("`problem.channel` (0 to 1)"), "{e}");
-        assert_eq!(m.refusal(Some(1)), None);
-        assert_eq!((m.channel_of(0), m.channel_of(1), m.channel_of(2)), (0, 1, 0));
+        assert_eq!(subject, Subject::Channel);
+        assert_eq!(m.refusal(Plane { channel: Some(1), time_point: None }), None);
+        assert_eq!((m.plane_of(0), m.plane_of(1), m.plane_of(2)), ((0, 0), (1, 0), (0, 0)));
         let one = StackMeta::parse("ImageJ=1.11a\nimages=4\nspacing=2\n").unwrap().unwrap();
-        assert_eq!(one.refusal(None), None);
+        assert_eq!(one.refusal(Plane::default()), None);
+        let (subject, e) = one.refusal(Plane { channel: None, time_point: Some(1) }).unwrap();
+        assert!(subject == Subject::TimePoint && e.contains("time point 1 was asked for (0 to 0)"), "{e}");
+        // a time series of 3 time points of 2 channels of 5 slices: channels
+        // fastest, then slices; without `slices=`, the images left over
+        for text in [
+            "ImageJ=1.54f\nimages=30\nchannels=2\nslices=5\nframes=3\n",
+            "ImageJ=1.54f\nimages=30\nchannels=2\nframes=3\n",
+        ] {
+            let m = StackMeta::parse(text).unwrap().unwrap();
+            assert_eq!((m.channel_stride, m.frame_stride), (1, 10), "{text}");
+            assert_eq!((m.plane_of(9), m.plane_of(10), m.plane_of(29)), ((1, 0), (0, 1), (1, 2)));
+            let (subject, e) = m.refusal(Plane::default()).unwrap();
+            assert_eq!(subject, Subject::Channel);
+            assert!(e.contains("(0 to 1) and the time point to segment with `problem.time_point` (0 to 2)"), "{e}");
+            let (subject, e) = m.refusal(Plane { channel: Some(0), time_point: None }).unwrap();
+            assert!(subject == Subject::TimePoint && e.contains("2 channels at 3 time points"), "{e}");
+            assert_eq!(m.refusal(Plane { channel: Some(0), time_point: Some(2) }), None);
+            let (_, e) = m.refusal(Plane { channel: Some(0), time_point: Some(3) }).unwrap();
+            assert!(e.contains("time point 3 was asked for (0 to 2)"), "{e}");
+        }
         assert_eq!(StackMeta::parse("made by a scanner").unwrap(), None);
     }
 
@@ -205,16 +258,26 @@ mod tests {
         let rgb = StackMeta::parse(&xml(r#"SizeC="3" SizeZ="4" SizeT="1""#, 3)).unwrap().unwrap();
         assert_eq!((rgb.channels, rgb.planes, rgb.spacing), (1, Some(4), [None; 3]));
         let series = StackMeta::parse(&xml(r#"SizeC="1" SizeZ="4" SizeT="5""#, 1)).unwrap().unwrap();
-        assert!(series.refusal(Some(0)).unwrap().contains("1 channel at 5 time points (OME"));
+        let (subject, e) = series.refusal(Plane { channel: Some(0), time_point: None }).unwrap();
+        assert!(subject == Subject::TimePoint && e.contains("1 channel at 5 time points (OME"), "{e}");
+        assert_eq!(series.refusal(Plane { channel: None, time_point: Some(4) }), None);
+        // XYCZT: T slowest, after the 4 slices
+        assert_eq!((series.frame_stride, series.plane_of(3), series.plane_of(4)), (4, (0, 0), (0, 1)));
+        let tfirst = StackMeta::parse(&xml(r#"SizeC="2" SizeZ="4" SizeT="3" DimensionOrder="XYTZC""#, 1));
+        let tfirst = tfirst.unwrap().unwrap();
+        assert_eq!((tfirst.frame_stride, tfirst.channel_stride), (1, 12));
+        assert_eq!((tfirst.plane_of(1), tfirst.plane_of(12)), ((0, 1), (1, 0)));
         // channels stored after the slices: 4 pages of channel 0, then of channel 1
         let zfirst = StackMeta::parse(&xml(r#"SizeC="2" SizeZ="4" SizeT="1" DimensionOrder="XYZCT""#, 1));
         let zfirst = zfirst.unwrap().unwrap();
-        assert_eq!((zfirst.channel_stride, zfirst.channel_of(3), zfirst.channel_of(4)), (4, 0, 1));
+        assert_eq!((zfirst.channel_stride, zfirst.plane_of(3), zfirst.plane_of(4)), (4, (0, 0), (1, 0)));
         // sizes beyond any file (found by fuzzing: their product overflowed)
         let huge = StackMeta::parse(&xml(r#"SizeC="2" SizeZ="1e30" SizeT="9e18" DimensionOrder="XYZTC""#, 1));
         let huge = huge.unwrap().unwrap();
         assert_eq!((huge.channel_stride, huge.planes), (usize::MAX, Some(usize::MAX)));
-        assert!(huge.refusal(Some(0)).is_some());
+        assert!(huge.refusal(Plane { channel: Some(0), time_point: None }).is_some());
+        assert!(huge.refusal(Plane { channel: Some(0), time_point: Some(0) }).is_none());
+        assert_eq!((huge.plane_of(0), huge.plane_of(usize::MAX - 1)), ((0, 0), (0, 0)));
         let e = StackMeta::parse(&xml(r#"SizeZ="4" PhysicalSizeZ="2" PhysicalSizeZUnit="furlong""#, 1));
         assert!(e.unwrap_err().contains("PhysicalSizeZUnit \"furlong\""));
         assert!(StackMeta::parse("<OME><Image><Pixels SizeZ=\"4").is_err());

@@ -8,7 +8,7 @@ use crate::imaging::decode::{no_such_channel, pixel_value};
 use crate::imaging::grid::Placement;
 use crate::imaging::grid::{Grid, SampleKind};
 use crate::imaging::limits::ImageLimits;
-use crate::imaging::ImageError;
+use crate::imaging::{ImageError, Plane};
 use std::io::Cursor;
 
 /// Whether `bytes` start like a TIFF file.
@@ -32,19 +32,21 @@ pub fn tiff_pages(bytes: &[u8], cap: usize) -> usize {
 /// A multi-page TIFF as a volume (gray, or colour reduced to luminance; 8, 16 or
 /// 32-bit integer or float samples).
 pub fn decode_tiff_stack(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Grid, ImageError> {
-    decode_tiff_stack_channel(input, bytes, limits, None)
+    decode_tiff_stack_plane(input, bytes, limits, Plane::default())
 }
 
-/// As [`decode_tiff_stack`], with channel `channel` (0-based) when given: the
-/// pages of that channel in a stack of several (OME-XML, ImageJ hyperstack; a 2D
-/// image when the channel has one page), else that component of colour
-/// interleaved in each page instead of its luminance.
-pub fn decode_tiff_stack_channel(
+/// As [`decode_tiff_stack`], the pages of `plane`: of a stack of several
+/// channels or time points (OME-XML, ImageJ hyperstack), those of the channel
+/// and time point it names (a 2D image when they are one page); a channel of a
+/// stack of one is that component of colour interleaved in each page instead
+/// of its luminance.
+pub fn decode_tiff_stack_plane(
     input: &str,
     bytes: &[u8],
     limits: &ImageLimits,
-    channel: Option<usize>,
+    plane: Plane,
 ) -> Result<Grid, ImageError> {
+    let channel = plane.channel;
     let fail = |m: String| ImageError::new(input, m);
     let mut limits_tiff = tiff::decoder::Limits::default();
     limits_tiff.decoding_buffer_size = limits.max_voxels.saturating_mul(16);
@@ -59,11 +61,16 @@ pub fn decode_tiff_stack_channel(
         Err(_) => 1.0,
     };
     let meta = StackMeta::parse(&description).map_err(&fail)?;
-    if let Some(m) = &meta {
-        if let Some(refusal) = m.refusal(channel) {
-            // several time points are the file's layout, several channels need a choice
-            return Err(if m.frames > 1 { fail(refusal) } else { ImageError::channel(input, refusal) });
-        }
+    if let Some((subject, refusal)) = meta.as_ref().and_then(|m| m.refusal(plane)) {
+        return Err(ImageError::about(subject, input, refusal));
+    }
+    if let Some(t) = plane.time_point.filter(|&t| t > 0 && meta.is_none()) {
+        return Err(ImageError::time_point(
+            input,
+            format!(
+                "is a stack of slices of one time point (no OME or ImageJ description); time point {t} was asked for"
+            ),
+        ));
     }
     // a channel of several stored as pages, or else a component of each page
     let pages_of = meta.as_ref().filter(|m| m.channels > 1).zip(channel);
@@ -71,6 +78,15 @@ pub fn decode_tiff_stack_channel(
         return Err(ImageError::channel(input, no_such_channel(m.channels, c)));
     }
     let component = if pages_of.is_some() { None } else { channel };
+    // the pages of that channel and time point (a time point of a stack of one
+    // channel, too)
+    let wanted = |page: usize| {
+        meta.as_ref().is_none_or(|m| {
+            let (c, t) = m.plane_of(page);
+            (m.channels == 1 || Some(c) == channel) && (m.frames == 1 || Some(t) == plane.time_point)
+        })
+    };
+    let planes_of = meta.as_ref().is_some_and(|m| pages_of.is_some() || m.frames > 1);
     let declared = meta.as_ref().map_or([None; 3], |m| m.spacing);
     // OME's physical sizes where it gives them, else the X resolution; z by
     // ImageJ's `spacing=` or OME's PhysicalSizeZ, else as x
@@ -80,7 +96,7 @@ pub fn decode_tiff_stack_channel(
     let mut kind = None;
     let (mut page, mut slices) = (0usize, 0usize);
     loop {
-        if pages_of.is_some_and(|(m, c)| m.channel_of(page) != c) {
+        if !wanted(page) {
             page += 1;
             if !d.more_images() {
                 break;
@@ -146,9 +162,12 @@ pub fn decode_tiff_stack_channel(
             )));
         }
     }
-    let Some(kind) = kind else { return Err(fail(format!("holds no page of channel {}", channel.unwrap_or(0)))) };
-    if slices == 1 && pages_of.is_some() {
-        // one page of the channel chosen: a 2D image of several channels
+    let Some(kind) = kind else {
+        let (c, t) = (channel.unwrap_or(0), plane.time_point.unwrap_or(0));
+        return Err(fail(format!("holds no page of channel {c} at time point {t}")));
+    };
+    if slices == 1 && planes_of {
+        // one page of the channel and time point chosen: a 2D image
         return Ok(Grid::new(2, [dims[0], dims[1], 1], values, kind));
     }
     limits.check(input, &[dims[0], dims[1], slices]).map_err(|e| match &meta {

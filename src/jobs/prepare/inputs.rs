@@ -1,8 +1,8 @@
 //! The uploaded inputs a spec names as `"input:NAME"`: lookup and image decoding.
 
 use crate::imaging::{
-    decode_image_channel, decode_nifti, decode_slices, decode_tiff_stack_channel, decode_volume, is_nifti, is_tiff,
-    tiff_pages, Grid, ImageError, ImageLimits,
+    decode_image_channel, decode_nifti_time_point, decode_slices, decode_tiff_stack_plane, decode_volume, is_nifti,
+    is_tiff, tiff_pages, Grid, ImageError, ImageLimits, Plane, Subject,
 };
 use crate::jobs::spec::{ImageSource, SpecError};
 use std::collections::HashMap;
@@ -22,22 +22,35 @@ pub(super) fn input<'a>(
 }
 
 /// Decode the image of a segmentation job: 2D raster, NRRD, NIfTI or TIFF volume,
-/// or slice stack; `channel` as `problem.channel`.
+/// or slice stack; of it, the channel and time point of `plane`
+/// (`problem.channel`, `problem.time_point`).
 pub(super) fn load_image(
     source: &ImageSource,
-    channel: Option<u32>,
+    plane: Plane,
     inputs: &HashMap<String, Vec<u8>>,
 ) -> Result<Grid, SpecError> {
     let limits = ImageLimits::default();
-    let channel = channel.map(|c| c as usize);
-    let field =
-        |e: ImageError| SpecError::new(if e.channel { "problem.channel" } else { "problem.image" }, e.to_string());
+    let field = |e: ImageError| {
+        let name = match e.subject {
+            Subject::File => "problem.image",
+            Subject::Channel => "problem.channel",
+            Subject::TimePoint => "problem.time_point",
+        };
+        SpecError::new(name, e.to_string())
+    };
+    // a file of one time point: a broken file is named first, then the time point
+    let one_time_point = |key: &str, decoded: Result<Grid, ImageError>, what: &str| {
+        decoded.and_then(|grid| match plane.time_point {
+            Some(t) if t > 0 => Err(ImageError::time_point(key, format!("{what}; time point {t} was asked for"))),
+            _ => Ok(grid),
+        })
+    };
     match source {
         ImageSource::One(name) => {
             let (key, bytes) = input("problem.image", name, inputs)?;
             // NRRD and NIfTI volumes: a broken file is named first, then the channel
-            let single = |decoded: Result<Grid, ImageError>| {
-                decoded.and_then(|grid| match channel {
+            let one_channel = |decoded: Result<Grid, ImageError>| {
+                decoded.and_then(|grid| match plane.channel {
                     Some(c) if c > 0 => {
                         Err(ImageError::channel(key, format!("is a volume of one channel; channel {c} was asked for")))
                     }
@@ -45,13 +58,15 @@ pub(super) fn load_image(
                 })
             };
             let grid = if bytes.starts_with(b"NRRD") {
-                single(decode_volume(key, bytes, &limits))
+                let volume = one_channel(decode_volume(key, bytes, &limits));
+                one_time_point(key, volume, "is a volume of one time point")
             } else if is_nifti(bytes) {
-                single(decode_nifti(key, bytes, &limits))
+                one_channel(decode_nifti_time_point(key, bytes, &limits, plane.time_point))
             } else if is_tiff(bytes) && tiff_pages(bytes, 2) > 1 {
-                decode_tiff_stack_channel(key, bytes, &limits, channel)
+                decode_tiff_stack_plane(key, bytes, &limits, plane)
             } else {
-                decode_image_channel(key, bytes, &limits, channel)
+                let image = decode_image_channel(key, bytes, &limits, plane.channel);
+                one_time_point(key, image, "is an image of one time point")
             };
             grid.map_err(field)
         }
@@ -61,7 +76,8 @@ pub(super) fn load_image(
                 .enumerate()
                 .map(|(k, n)| input(&format!("problem.image[{k}]"), n, inputs))
                 .collect::<Result<Vec<_>, _>>()?;
-            decode_slices(&slices, &limits, channel).map_err(field)
+            let volume = decode_slices(&slices, &limits, plane.channel);
+            one_time_point(slices[0].0, volume, "is a stack of slices of one time point").map_err(field)
         }
     }
 }

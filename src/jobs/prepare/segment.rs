@@ -11,9 +11,9 @@ use super::preprocess::{preprocess, smoothed_away, Preprocessed};
 use super::ProblemKind;
 use crate::geometry::AnyMesh;
 use crate::imaging::labels::territories;
-use crate::imaging::{EdgeField, Grid};
+use crate::imaging::{EdgeField, Grid, Plane};
 use crate::jobs::necks::NeckSplit;
-use crate::jobs::spec::bounds::{CHANNEL, MIN_SIZE, WEIGHT};
+use crate::jobs::spec::bounds::{CHANNEL, MIN_SIZE, TIME_POINT, WEIGHT};
 use crate::jobs::spec::{
     BackgroundModel, InitialSpec, InscribedShape, MeansKind, Polarity, SeedsShape, SegmentationModel, SegmentationSpec,
     SpecError, ThresholdShape,
@@ -104,7 +104,11 @@ pub(super) fn prepare_segmentation(
     if let Some(c) = spec.channel {
         CHANNEL.check("problem.channel", c)?;
     }
-    let grid = load_image(&spec.image, spec.channel, inputs)?;
+    if let Some(t) = spec.time_point {
+        TIME_POINT.check("problem.time_point", t)?;
+    }
+    let plane = Plane { channel: spec.channel.map(|c| c as usize), time_point: spec.time_point.map(|t| t as usize) };
+    let grid = load_image(&spec.image, plane, inputs)?;
     let model = spec.model.unwrap_or(SegmentationModel::ChanVese);
     let pre = preprocess(spec, &grid, model)?;
     let d = grid.dimension;

@@ -39,6 +39,8 @@ pub const MAX_ITERATIONS: Bound<usize> = Bound { min: 1, max: 100_000_000 };
 pub const SWEEPS: Bound<usize> = Bound { min: 0, max: 1000 };
 /// `problem.channel` of segmentation.
 pub const CHANNEL: Bound<u32> = Bound { min: 0, max: 255 };
+/// `problem.time_point` of segmentation.
+pub const TIME_POINT: Bound<u32> = Bound { min: 0, max: 1_000_000 };
 /// `mesh.max_angle` (degrees).
 pub const MAX_ANGLE: Bound<f64> = Bound { min: 90.0, max: 179.0 };
 /// `problem.sigma` and `problem.data_sigma` of a segmentation (pixels).

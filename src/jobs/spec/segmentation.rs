@@ -1,7 +1,7 @@
 //! `problem` of type `segmentation`: the image, the model and the automatic
 //! choices a user may override, with their documented defaults.
 
-use super::bounds::{CHANNEL, LEVEL, MIN_SIZE, PERCENTILE, SIGMA, WEIGHT};
+use super::bounds::{CHANNEL, LEVEL, MIN_SIZE, PERCENTILE, SIGMA, TIME_POINT, WEIGHT};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -28,6 +28,14 @@ pub struct SegmentationSpec {
     #[serde(default)]
     #[schemars(range(min = CHANNEL.min, max = CHANNEL.max))]
     pub channel: Option<u32>,
+    /// (Addition) the time point to segment, from 0, of a time series: a 4D
+    /// NIfTI file, or a TIFF stack of several time points (OME-TIFF, ImageJ
+    /// hyperstack); a time point of one page is a 2D image. Other inputs have
+    /// time point 0 only. Default: none, and a series of several time points is
+    /// refused.
+    #[serde(default)]
+    #[schemars(range(min = TIME_POINT.min, max = TIME_POINT.max))]
+    pub time_point: Option<u32>,
     /// Gaussian smoothing in pixels of the image the threshold and the edge
     /// indicator see; default from the image's noise level (1–4 pixels; at least
     /// 1.5 for the geodesic model).

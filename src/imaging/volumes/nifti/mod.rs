@@ -27,39 +27,61 @@ pub fn is_nifti(bytes: &[u8]) -> bool {
 /// A NIfTI-1 or NIfTI-2 volume (either byte order, gzip or not; 3D, or 4D with
 /// one time point), scaled by `scl_slope`/`scl_inter`.
 pub fn decode_nifti(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<Grid, ImageError> {
+    decode_nifti_time_point(input, bytes, limits, None)
+}
+
+/// As [`decode_nifti`], the volume of time point `time_point` (0-based) of a
+/// 4D series; a series of several needs one. Of a gzip-compressed file only
+/// what comes before that volume's end is decompressed, and only that volume
+/// kept.
+pub fn decode_nifti_time_point(
+    input: &str,
+    bytes: &[u8],
+    limits: &ImageLimits,
+    time_point: Option<usize>,
+) -> Result<Grid, ImageError> {
     let fail = |m: String| ImageError::new(input, m);
-    let raw;
-    let b: &[u8] = if bytes.starts_with(&[0x1f, 0x8b]) {
-        // at most the largest volume allowed, in 8-byte samples, plus the header
-        let cap = (limits.max_voxels as u64).saturating_mul(8) + NIFTI2 as u64 + 4 + 1;
-        let mut out = Vec::new();
-        flate2::read::GzDecoder::new(bytes)
-            .take(cap)
-            .read_to_end(&mut out)
-            .map_err(|e| fail(format!("is a corrupt gzip stream: {e}")))?;
-        if out.len() as u64 >= cap {
-            return Err(fail(format!("decompresses to more than a volume of {} voxels", limits.max_voxels)));
-        }
-        raw = out;
-        &raw
-    } else {
-        bytes
-    };
-    let h = header::parse(b).map_err(fail)?;
+    let mut source = Source::new(bytes);
+    let head = source.head().map_err(&fail)?;
+    let h = header::parse(&head).map_err(&fail)?;
     let little = h.little;
     let ndim = h.dim[0];
     let dim = &h.dim[1..];
-    if !(2..=4).contains(&ndim) || (ndim == 4 && dim[3] != 1) {
+    if !(2..=4).contains(&ndim) {
         return Err(fail(format!(
             "has {ndim} dimensions (sizes {:?}); a 3D volume is needed",
             &dim[..ndim.clamp(0, 7) as usize]
         )));
     }
-    if dim[..3].iter().any(|&n| n < 1) {
-        return Err(fail(format!("has sizes {:?}", &dim[..3])));
+    if dim[..3].iter().any(|&n| n < 1) || (ndim == 4 && dim[3] < 1) {
+        return Err(fail(format!("has sizes {:?}", &dim[..ndim as usize])));
     }
     let size_of = |n: i64| usize::try_from(n).unwrap_or(usize::MAX);
     let dims = [size_of(dim[0]), size_of(dim[1]), if ndim >= 3 { size_of(dim[2]) } else { 1 }];
+    let frames = if ndim == 4 { size_of(dim[3]) } else { 1 };
+    let t = match time_point {
+        None if frames > 1 => {
+            return Err(ImageError::time_point(
+                input,
+                format!(
+                    "is a series of {frames} time points (sizes {:?}); choose the time point to segment with \
+                     `problem.time_point` (0 to {})",
+                    &dim[..4],
+                    frames - 1
+                ),
+            ))
+        }
+        Some(t) if t >= frames => {
+            return Err(ImageError::time_point(
+                input,
+                format!(
+                    "is a series of {frames} time point{}; time point {t} was asked for",
+                    if frames == 1 { "" } else { "s" }
+                ),
+            ))
+        }
+        t => t.unwrap_or(0),
+    };
     limits.check(input, &dims)?;
     let (datatype, bitpix) = (h.datatype, h.bitpix);
     let size = match datatype {
@@ -84,10 +106,8 @@ pub fn decode_nifti(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<G
     let n = dims[0] * dims[1] * dims[2];
     // a vox_offset far beyond the file (up to f32::MAX or i64::MAX) must not
     // overflow the end
-    let start = offset.min(usize::MAX as f64) as usize;
-    let data = start.checked_add(n * size).and_then(|end| b.get(start..end)).ok_or_else(|| {
-        fail(format!("is truncated: {} voxels of {size} bytes from byte {start}, {} bytes in all", n, b.len()))
-    })?;
+    let start = (offset.min(usize::MAX as f64) as usize).saturating_add(t.saturating_mul(n * size));
+    let data = source.range(start, n * size).map_err(&fail)?;
     let value = |c: &[u8]| -> f64 {
         macro_rules! num {
             ($t:ty, $n:expr) => {{
@@ -132,6 +152,75 @@ pub fn decode_nifti(input: &str, bytes: &[u8], limits: &ImageLimits) -> Result<G
     let sform = (h.sform_code > 0).then_some(h.srow);
     let placement = placement(h.pixdim, qform, h.qoffset, sform);
     isotropic(input, Grid::new(3, dims, values, kind).placed(placement), limits)
+}
+
+/// The most bytes of a gzip-compressed file decompressed to reach a time
+/// point's volume (4 GiB: a series of 1,200 volumes of 128×128×64 int16).
+const MAX_SKIP: u64 = 1 << 32;
+
+/// A NIfTI file's bytes, plain or gzip-compressed: its header, then the bytes
+/// of one range, decompressing no further than that range's end.
+enum Source<'a> {
+    Plain(&'a [u8]),
+    Gzip { reader: Box<flate2::read::GzDecoder<&'a [u8]>>, read: Vec<u8> },
+}
+
+impl<'a> Source<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        if bytes.starts_with(&[0x1f, 0x8b]) {
+            Source::Gzip { reader: Box::new(flate2::read::GzDecoder::new(bytes)), read: Vec::new() }
+        } else {
+            Source::Plain(bytes)
+        }
+    }
+
+    /// The first bytes, enough for either header (fewer if the file is shorter).
+    fn head(&mut self) -> Result<Vec<u8>, String> {
+        match self {
+            Source::Plain(b) => Ok(b[..b.len().min(NIFTI2 + 4)].to_vec()),
+            Source::Gzip { reader, read } => {
+                Read::take(&mut **reader, (NIFTI2 + 4) as u64).read_to_end(read).map_err(corrupt)?;
+                Ok(read.clone())
+            }
+        }
+    }
+
+    /// The `len` bytes from byte `start` (called once, after [`Source::head`]).
+    fn range(&mut self, start: usize, len: usize) -> Result<Vec<u8>, String> {
+        let truncated =
+            |total: String| format!("is truncated: {} bytes wanted from byte {start}, {total} bytes in all", len);
+        match self {
+            Source::Plain(b) => {
+                let end = start.checked_add(len).filter(|&e| e <= b.len());
+                end.map(|e| b[start..e].to_vec()).ok_or_else(|| truncated(b.len().to_string()))
+            }
+            Source::Gzip { reader, read } => {
+                // skip what lies between the header and `start`, then keep `len` bytes
+                let have = read.len();
+                let mut out = read.get(start.min(have)..).unwrap_or_default().to_vec();
+                out.truncate(len);
+                let skip = start.saturating_sub(have) as u64;
+                if skip > MAX_SKIP {
+                    return Err(format!(
+                        "has its volume {start} bytes into the decompressed file, beyond the {MAX_SKIP} bytes read"
+                    ));
+                }
+                let skipped =
+                    std::io::copy(&mut Read::take(&mut **reader, skip), &mut std::io::sink()).map_err(corrupt)?;
+                let want = (len - out.len()) as u64;
+                let got = Read::take(&mut **reader, want).read_to_end(&mut out).map_err(corrupt)? as u64;
+                if skipped < skip || got < want {
+                    let total = have as u64 + skipped + got;
+                    return Err(truncated(format!("{total} decompressed")));
+                }
+                Ok(out)
+            }
+        }
+    }
+}
+
+fn corrupt(e: std::io::Error) -> String {
+    format!("is a corrupt gzip stream: {e}")
 }
 
 /// Where a NIfTI file's voxels lie: by its `sform` (`srow_*`) when
