@@ -138,7 +138,7 @@ pub struct MeshSpec {
     /// Refinement threshold for `h_S β_S`; default 1.5 × the initial mesh's largest.
     pub epsilon: Option<f64>,
     /// Smallest edge length; default ¼ of the initial mean edge (a surface traced
-    /// from the image: at least ¼ of a voxel).
+    /// from the image: at least ½ voxel).
     pub h_min: Option<f64>,
     /// Largest edge length; default 3 × the initial mean edge (a surface traced from
     /// the image: at most one voxel).
