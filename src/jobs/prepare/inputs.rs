@@ -77,7 +77,8 @@ pub(super) fn load_image(
                 .map(|(k, n)| input(&format!("problem.image[{k}]"), n, inputs))
                 .collect::<Result<Vec<_>, _>>()?;
             let volume = decode_slices(&slices, &limits, plane.channel);
-            one_time_point(slices[0].0, volume, "is a stack of slices of one time point").map_err(field)
+            let first = slices.first().map_or("(slices)", |s| s.0);
+            one_time_point(first, volume, "is a stack of slices of one time point").map_err(field)
         }
     }
 }
