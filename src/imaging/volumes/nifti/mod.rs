@@ -9,6 +9,7 @@ use crate::imaging::limits::ImageLimits;
 use crate::imaging::ImageError;
 use header::{NIFTI1, NIFTI2};
 use nalgebra::{Quaternion, UnitQuaternion};
+use std::borrow::Cow;
 use std::io::Read;
 
 /// Whether `bytes`, plain or gzip-compressed, begin with a NIfTI-1 or NIfTI-2
@@ -185,14 +186,16 @@ impl<'a> Source<'a> {
         }
     }
 
-    /// The `len` bytes from byte `start` (called once, after [`Source::head`]).
-    fn range(&mut self, start: usize, len: usize) -> Result<Vec<u8>, String> {
+    /// The `len` bytes from byte `start` (called once, after [`Source::head`]);
+    /// of a plain file, borrowed.
+    fn range(&mut self, start: usize, len: usize) -> Result<Cow<'a, [u8]>, String> {
         let truncated =
             |total: String| format!("is truncated: {} bytes wanted from byte {start}, {total} bytes in all", len);
         match self {
             Source::Plain(b) => {
+                let b: &'a [u8] = b;
                 let end = start.checked_add(len).filter(|&e| e <= b.len());
-                end.map(|e| b[start..e].to_vec()).ok_or_else(|| truncated(b.len().to_string()))
+                end.map(|e| Cow::Borrowed(&b[start..e])).ok_or_else(|| truncated(b.len().to_string()))
             }
             Source::Gzip { reader, read } => {
                 // skip what lies between the header and `start`, then keep `len` bytes
@@ -213,7 +216,7 @@ impl<'a> Source<'a> {
                     let total = have as u64 + skipped + got;
                     return Err(truncated(format!("{total} decompressed")));
                 }
-                Ok(out)
+                Ok(Cow::Owned(out))
             }
         }
     }
