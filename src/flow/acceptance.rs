@@ -158,18 +158,20 @@ pub(super) fn tangled<const D: usize>(old: &Mesh<D>, new: &Mesh<D>) -> Option<us
     (0..old.num_elements()).find(|&e| {
         let (m0, n0) = old.element_geometry(e);
         let (m1, n1) = new.element_geometry(e);
-        !(m1 > 1e-12 * m0) || !(m1 > tiny) || n0.dot(&n1) <= 0.0 || !m1.is_finite()
+        !(m1 > 1e-12 * m0) || no_measure(m1, tiny) || n0.dot(&n1) <= 0.0
     })
+}
+
+/// A measure `m` at or below `tiny` ([`degenerate_measure`]), or not finite.
+fn no_measure(m: f64, tiny: f64) -> bool {
+    !(m > tiny) || !m.is_finite()
 }
 
 /// The first element of `mesh` of no measure (below [`degenerate_measure`] of its
 /// extent, or not finite), if any: a state the flow cannot assemble.
 pub(super) fn degenerate<const D: usize>(mesh: &Mesh<D>) -> Option<usize> {
     let tiny = degenerate_measure(mesh.positions());
-    (0..mesh.num_elements()).find(|&e| {
-        let m = mesh.element_geometry(e).0;
-        !(m > tiny) || !m.is_finite()
-    })
+    (0..mesh.num_elements()).find(|&e| no_measure(mesh.element_geometry(e).0, tiny))
 }
 
 /// At debug level, the tangled element `e` of a trial step: its measure before

@@ -220,29 +220,12 @@ mod tests {
             assert_eq!(second.values[second.index(4, 2, 3)], 255.0 - 34.0);
         }
         // a 2D image of three channels stored as pages: one page each, a 2D grid
-        use tiff::encoder::{colortype::Gray8, TiffEncoder};
-        let mut out = Cursor::new(Vec::new());
-        let mut enc = TiffEncoder::new(&mut out).unwrap();
-        for c in 0..3u8 {
-            let mut image = enc.new_image::<Gray8>(6, 5).unwrap();
-            let description = "ImageJ=1.54f\nimages=3\nchannels=3\nmode=composite\n";
-            image.encoder().write_tag(tiff::tags::Tag::ImageDescription, description).unwrap();
-            image.write_data(&[40 * c + 1; 30]).unwrap();
-        }
-        let flat = out.into_inner();
+        let flat = imagej_pages("ImageJ=1.54f\nimages=3\nchannels=3\nmode=composite\n", &[1, 41, 81]);
         let g = decode_tiff_stack_plane("rgb", &flat, &limits, channel(2)).unwrap();
         assert_eq!((g.dimension, g.dims), (2, [6, 5, 1]));
         assert!(g.values.iter().all(|&v| v == 81.0));
         // a 2D time series (one page per time point): the time point's page
-        let mut out = Cursor::new(Vec::new());
-        let mut enc = TiffEncoder::new(&mut out).unwrap();
-        for t in 0..4u8 {
-            let mut image = enc.new_image::<Gray8>(6, 5).unwrap();
-            let description = "ImageJ=1.54f\nimages=4\nframes=4\n";
-            image.encoder().write_tag(tiff::tags::Tag::ImageDescription, description).unwrap();
-            image.write_data(&[10 * t + 1; 30]).unwrap();
-        }
-        let frames = out.into_inner();
+        let frames = imagej_pages("ImageJ=1.54f\nimages=4\nframes=4\n", &[1, 11, 21, 31]);
         let e = decode_tiff_stack("movie", &frames, &limits).unwrap_err();
         assert!(e.subject == Subject::TimePoint && e.message.contains("`problem.time_point` (0 to 3)"), "{e}");
         let g = decode_tiff_stack_plane("movie", &frames, &limits, Plane { channel: None, time_point: Some(3) });
@@ -250,6 +233,7 @@ mod tests {
         assert_eq!((g.dimension, g.dims), (2, [6, 5, 1]));
         assert!(g.values.iter().all(|&v| v == 31.0));
         // three pages without a description: a volume too thin, and why it is one
+        use tiff::encoder::{colortype::Gray8, TiffEncoder};
         let mut out = Cursor::new(Vec::new());
         let mut enc = TiffEncoder::new(&mut out).unwrap();
         for c in 0..3u8 {
@@ -313,6 +297,20 @@ mod tests {
         let e = decode_nifti_time_point("n", &cut, &limits, Some(2)).unwrap_err();
         assert!(e.message.contains("truncated"), "{e}");
         assert_eq!(decode_nifti_time_point("n", &cut, &limits, Some(1)).unwrap().values[0], 1000.0);
+    }
+
+    /// A TIFF of 6×5 gray pages, page `k` filled with `values[k]`, each with the
+    /// image description `description`.
+    fn imagej_pages(description: &str, values: &[u8]) -> Vec<u8> {
+        use tiff::encoder::{colortype::Gray8, TiffEncoder};
+        let mut out = Cursor::new(Vec::new());
+        let mut enc = TiffEncoder::new(&mut out).unwrap();
+        for &v in values {
+            let mut image = enc.new_image::<Gray8>(6, 5).unwrap();
+            image.encoder().write_tag(tiff::tags::Tag::ImageDescription, description).unwrap();
+            image.write_data(&[v; 30]).unwrap();
+        }
+        out.into_inner()
     }
 
     fn gzip(b: &[u8]) -> Vec<u8> {
