@@ -1,6 +1,8 @@
 //! The glTF document and its binary buffer as they are built: buffer views,
-//! accessors with exact bounds, and the GLB container.
+//! accessors with exact bounds, and the GLB container. The arrays of the views are
+//! kept as they are given and written once, into the container, when it is made.
 
+use super::document::{materials, Accessor, Document, MeshDoc, Primitive, View};
 use serde_json::{json, Value};
 
 pub(super) const ARRAY_BUFFER: u32 = 34962;
@@ -8,12 +10,22 @@ pub(super) const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 pub(super) const FLOAT: u32 = 5126;
 pub(super) const UNSIGNED_INT: u32 = 5125;
 
+/// The array of one buffer view (4-byte values: every view starts on a 4-byte
+/// boundary without padding).
+enum Piece {
+    Floats(Vec<f32>),
+    Indices(Vec<u32>),
+}
+
 #[derive(Default)]
 pub(super) struct Builder {
-    pub(super) bin: Vec<u8>,
-    pub(super) views: Vec<Value>,
-    pub(super) accessors: Vec<Value>,
-    pub(super) meshes: Vec<Value>,
+    /// The binary chunk's arrays, in order.
+    pieces: Vec<Piece>,
+    /// Their bytes so far.
+    bin_len: usize,
+    views: Vec<View>,
+    accessors: Vec<Accessor>,
+    meshes: Vec<MeshDoc>,
     /// The frame nodes and the domain's (the scene's roots).
     pub(super) nodes: Vec<Value>,
     /// Their children (filled regions), placed after them in `finish`.
@@ -21,24 +33,20 @@ pub(super) struct Builder {
 }
 
 impl Builder {
-    /// A buffer view of the bytes that `write` appends to the binary chunk (from a
-    /// 4-byte boundary); returns its index.
-    fn view(&mut self, target: Option<u32>, write: impl FnOnce(&mut Vec<u8>)) -> usize {
-        while self.bin.len() % 4 != 0 {
-            self.bin.push(0);
-        }
-        let offset = self.bin.len();
-        write(&mut self.bin);
-        let mut v = json!({"buffer": 0, "byteOffset": offset, "byteLength": self.bin.len() - offset});
-        if let Some(t) = target {
-            v["target"] = json!(t);
-        }
-        self.views.push(v);
+    /// A buffer view of `piece`, appended to the binary chunk; returns its index.
+    fn view(&mut self, target: Option<u32>, piece: Piece) -> usize {
+        let bytes = 4 * match &piece {
+            Piece::Floats(v) => v.len(),
+            Piece::Indices(v) => v.len(),
+        };
+        self.views.push(View { buffer: 0, byte_offset: self.bin_len, byte_length: bytes, target });
+        self.bin_len += bytes;
+        self.pieces.push(piece);
         self.views.len() - 1
     }
 
     /// A float accessor of `kind` (`SCALAR`, `VEC3`) with exact min/max.
-    pub(super) fn floats(&mut self, data: &[f32], kind: &str, target: Option<u32>) -> usize {
+    pub(super) fn floats(&mut self, data: Vec<f32>, kind: &'static str, target: Option<u32>) -> usize {
         let comps = if kind == "VEC3" { 3 } else { 1 };
         let count = data.len() / comps;
         let mut lo = vec![f32::INFINITY; comps];
@@ -47,26 +55,40 @@ impl Builder {
             lo[i % comps] = lo[i % comps].min(x);
             hi[i % comps] = hi[i % comps].max(x);
         }
-        let view = self.view(target, |bin| extend_le(bin, data, f32::to_le_bytes));
-        let as_json = |v: &[f32]| v.iter().map(|&x| json!(x as f64)).collect::<Vec<_>>();
-        self.accessors.push(json!({
-            "bufferView": view, "componentType": FLOAT, "count": count, "type": kind,
-            "min": as_json(&lo), "max": as_json(&hi),
-        }));
+        let view = self.view(target, Piece::Floats(data));
+        let wide = |v: Vec<f32>| Some(v.into_iter().map(f64::from).collect());
+        self.accessors.push(Accessor {
+            buffer_view: view,
+            component_type: FLOAT,
+            count,
+            kind,
+            min: wide(lo),
+            max: wide(hi),
+        });
         self.accessors.len() - 1
     }
 
-    pub(super) fn indices(&mut self, data: &[u32]) -> usize {
-        let view = self.view(Some(ELEMENT_ARRAY_BUFFER), |bin| extend_le(bin, data, u32::to_le_bytes));
-        self.accessors
-            .push(json!({"bufferView": view, "componentType": UNSIGNED_INT, "count": data.len(), "type": "SCALAR"}));
+    pub(super) fn indices(&mut self, data: Vec<u32>) -> usize {
+        let count = data.len();
+        let view = self.view(Some(ELEMENT_ARRAY_BUFFER), Piece::Indices(data));
+        self.accessors.push(Accessor {
+            buffer_view: view,
+            component_type: UNSIGNED_INT,
+            count,
+            kind: "SCALAR",
+            min: None,
+            max: None,
+        });
         self.accessors.len() - 1
+    }
+
+    /// A mesh of `primitives`; returns its index.
+    pub(super) fn mesh_of(&mut self, primitives: Vec<Primitive>) -> usize {
+        self.meshes.push(MeshDoc { primitives });
+        self.meshes.len() - 1
     }
 
     pub(super) fn finish(mut self, extras: Value, animations: Vec<Value>) -> Vec<u8> {
-        while self.bin.len() % 4 != 0 {
-            self.bin.push(0);
-        }
         // the frame nodes are the scene's roots, their filled children follow them
         let roots: Vec<usize> = (0..self.nodes.len()).collect();
         let first_child = self.nodes.len();
@@ -79,45 +101,29 @@ impl Builder {
         }
         let mut nodes = self.nodes;
         nodes.append(&mut self.children);
-        let mut doc = json!({
-            "asset": {"version": "2.0", "generator": concat!("shapeflow ", env!("CARGO_PKG_VERSION"))},
-            "scene": 0,
-            "scenes": [{"nodes": roots}],
-            "nodes": nodes,
-            "meshes": self.meshes,
-            "materials": [{
-                "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8},
-                "doubleSided": true,
-            }, {
-                "name": "region",
-                "pbrMetallicRoughness": {"baseColorFactor": [0.55, 0.65, 0.8, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.9},
-                "doubleSided": true,
-            }, {
-                "name": "domain",
-                "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.2, 0.2, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.9},
-                "doubleSided": true,
-            }, {
-                "name": "control region",
-                "pbrMetallicRoughness": {"baseColorFactor": [0.95, 0.8, 0.35, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.9},
-                "doubleSided": true,
-            }],
-            "accessors": self.accessors,
-            "bufferViews": self.views,
-            "buffers": [{"byteLength": self.bin.len()}],
-            "extras": extras,
-        });
-        if !animations.is_empty() {
-            doc["animations"] = json!(animations);
-        }
-        glb(&serde_json::to_vec(&doc).expect("JSON"), &self.bin)
+        let doc = Document {
+            asset: json!({"version": "2.0", "generator": concat!("shapeflow ", env!("CARGO_PKG_VERSION"))}),
+            scene: 0,
+            scenes: json!([{"nodes": roots}]),
+            nodes,
+            meshes: self.meshes,
+            materials: materials(),
+            accessors: self.accessors,
+            buffer_views: self.views,
+            buffers: json!([{"byteLength": self.bin_len}]),
+            extras,
+            animations: (!animations.is_empty()).then_some(animations),
+        };
+        glb(&serde_json::to_vec(&doc).expect("JSON"), self.bin_len, &self.pieces)
     }
 }
 
-/// `data` appended to `bin` as the little-endian bytes `bytes` gives each value.
-fn extend_le<T: Copy>(bin: &mut Vec<u8>, data: &[T], bytes: impl Fn(T) -> [u8; 4]) {
-    bin.reserve(4 * data.len());
-    for &x in data {
-        bin.extend_from_slice(&bytes(x));
+/// `data` appended to `out` as the little-endian bytes `bytes` gives each value.
+fn extend_le<T: Copy>(out: &mut Vec<u8>, data: &[T], bytes: impl Fn(T) -> [u8; 4]) {
+    let start = out.len();
+    out.resize(start + 4 * data.len(), 0);
+    for (to, &x) in out[start..].chunks_exact_mut(4).zip(data) {
+        to.copy_from_slice(&bytes(x));
     }
 }
 
@@ -129,11 +135,12 @@ pub(super) fn finite(x: f64) -> f32 {
     }
 }
 
-/// The GLB container: header, JSON chunk (space-padded), BIN chunk (zero-padded).
-fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
-    let pad = |n: usize| (4 - n % 4) % 4;
-    let (jl, bl) = (json.len() + pad(json.len()), bin.len() + pad(bin.len()));
-    let total = 12 + 8 + jl + if bl > 0 { 8 + bl } else { 0 };
+/// The GLB container: header, JSON chunk (space-padded), BIN chunk of the
+/// `pieces`, `bin_len` bytes (a multiple of 4).
+fn glb(json: &[u8], bin_len: usize, pieces: &[Piece]) -> Vec<u8> {
+    let pad = (4 - json.len() % 4) % 4;
+    let jl = json.len() + pad;
+    let total = 12 + 8 + jl + if bin_len > 0 { 8 + bin_len } else { 0 };
     let mut out = Vec::with_capacity(total);
     out.extend_from_slice(b"glTF");
     out.extend_from_slice(&2u32.to_le_bytes());
@@ -141,12 +148,17 @@ fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
     out.extend_from_slice(&(jl as u32).to_le_bytes());
     out.extend_from_slice(b"JSON");
     out.extend_from_slice(json);
-    out.extend(std::iter::repeat_n(b' ', pad(json.len())));
-    if bl > 0 {
-        out.extend_from_slice(&(bl as u32).to_le_bytes());
+    out.extend(std::iter::repeat_n(b' ', pad));
+    if bin_len > 0 {
+        out.extend_from_slice(&(bin_len as u32).to_le_bytes());
         out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(bin);
-        out.extend(std::iter::repeat_n(0u8, pad(bin.len())));
+        for piece in pieces {
+            match piece {
+                Piece::Floats(v) => extend_le(&mut out, v, f32::to_le_bytes),
+                Piece::Indices(v) => extend_le(&mut out, v, u32::to_le_bytes),
+            }
+        }
     }
+    debug_assert_eq!(out.len(), total);
     out
 }

@@ -21,6 +21,7 @@
 //!   trailing hold key so that the last frame is shown).
 
 mod builder;
+mod document;
 mod nodes;
 
 use super::domain_node::DomainOutline;
@@ -134,7 +135,7 @@ pub fn evolution_glb(frames: &[GltfFrame<'_>], domain: Option<&DomainOutline>, e
     }
     // keys at k·Δt for k = 0..n-1, plus a trailing hold key at n·Δt
     let times: Vec<f32> = (0..=n).map(|k| k as f32 * FRAME_SECONDS).collect();
-    let input = b.floats(&times, "SCALAR", None);
+    let input = b.floats(times, "SCALAR", None);
     let mut samplers = Vec::new();
     let mut channels = Vec::new();
     for node in 0..n {
@@ -144,7 +145,7 @@ pub fn evolution_glb(frames: &[GltfFrame<'_>], domain: Option<&DomainOutline>, e
                 [on as u8 as f32; 3]
             })
             .collect();
-        let output = b.floats(&scales, "VEC3", None);
+        let output = b.floats(scales, "VEC3", None);
         samplers.push(json!({"input": input, "output": output, "interpolation": "STEP"}));
         channels.push(json!({"sampler": node, "target": {"node": node, "path": "scale"}}));
     }

@@ -3,13 +3,15 @@
 //! fixed domain of a shape-design job.
 
 use super::builder::{finite, Builder, ARRAY_BUFFER};
+use super::document::Primitive;
 use super::{frame_extras, GltfFrame};
 use crate::export::colors::ColorScale;
 use crate::export::domain_node::{domain_primitives, DomainOutline, Part, DOMAIN_NODE};
 use crate::export::fill::{bounding_diagonal, Filled, RIBBON_WIDTH};
 use crate::flow::MeshData;
 use crate::geometry::{segment_cycles, vertex_normals, Point};
-use serde_json::{json, Value};
+use serde_json::json;
+use std::borrow::Cow;
 
 /// Materials of the shape-design domain (indices into the document's materials).
 const DOMAIN_MATERIAL: usize = 2;
@@ -27,7 +29,7 @@ impl Builder {
         order: &[usize],
         dx: &[f64],
         scale: &ColorScale,
-    ) -> serde_json::Map<String, Value> {
+    ) -> Vec<(Cow<'static, str>, usize)> {
         let m = frame.mesh;
         let pos: Vec<f32> = order
             .iter()
@@ -44,15 +46,15 @@ impl Builder {
         let vel: Vec<f32> = order.iter().map(|&v| finite(frame.normal_velocity[v])).collect();
         let field = frame.colored().0;
         let color: Vec<f32> = order.iter().flat_map(|&v| scale.color(field[v])).collect();
-        let mut a = serde_json::Map::new();
-        a.insert("POSITION".into(), json!(self.floats(&pos, "VEC3", Some(ARRAY_BUFFER))));
-        a.insert("_CURVATURE".into(), json!(self.floats(&kappa, "SCALAR", Some(ARRAY_BUFFER))));
-        a.insert("_NORMAL_VELOCITY".into(), json!(self.floats(&vel, "SCALAR", Some(ARRAY_BUFFER))));
+        let mut a = Vec::with_capacity(6);
+        a.push(("POSITION".into(), self.floats(pos, "VEC3", Some(ARRAY_BUFFER))));
+        a.push(("_CURVATURE".into(), self.floats(kappa, "SCALAR", Some(ARRAY_BUFFER))));
+        a.push(("_NORMAL_VELOCITY".into(), self.floats(vel, "SCALAR", Some(ARRAY_BUFFER))));
         if let Some((name, values)) = frame.own {
             let own: Vec<f32> = order.iter().map(|&v| finite(values[v])).collect();
-            a.insert(name.into(), json!(self.floats(&own, "SCALAR", Some(ARRAY_BUFFER))));
+            a.push((name.to_string().into(), self.floats(own, "SCALAR", Some(ARRAY_BUFFER))));
         }
-        a.insert("COLOR_0".into(), json!(self.floats(&color, "VEC3", Some(ARRAY_BUFFER))));
+        a.push(("COLOR_0".into(), self.floats(color, "VEC3", Some(ARRAY_BUFFER))));
         a
     }
 
@@ -64,24 +66,24 @@ impl Builder {
             for mut cycle in segment_cycles(m.positions.len(), m.elements.iter().map(|e| (e[0], e[1]))) {
                 let Some(period) = m.period else {
                     let attributes = self.attributes(frame, &cycle, &[], scale);
-                    primitives.push(json!({"attributes": attributes, "mode": 2, "material": 0}));
+                    primitives.push(Primitive { attributes, indices: None, mode: 2, material: 0 });
                     continue;
                 };
                 let (dx, winds) = crate::export::lift_component(m, &mut cycle, period);
                 let attributes = self.attributes(frame, &cycle, &dx, scale);
-                primitives.push(json!({"attributes": attributes, "mode": if winds { 3 } else { 2 }, "material": 0}));
+                let mode = if winds { 3 } else { 2 };
+                primitives.push(Primitive { attributes, indices: None, mode, material: 0 });
             }
         } else {
             let order: Vec<usize> = (0..m.positions.len()).collect();
             let mut attributes = self.attributes(frame, &order, &[], scale);
             let normals = surface_normals(m);
-            attributes.insert("NORMAL".into(), json!(self.floats(&normals, "VEC3", Some(ARRAY_BUFFER))));
+            attributes.push(("NORMAL".into(), self.floats(normals, "VEC3", Some(ARRAY_BUFFER))));
             let idx: Vec<u32> = m.elements.iter().flat_map(|t| t.iter().map(|&v| v as u32)).collect();
-            let indices = self.indices(&idx);
-            primitives.push(json!({"attributes": attributes, "indices": indices, "mode": 4, "material": 0}));
+            let indices = self.indices(idx);
+            primitives.push(Primitive { attributes, indices: Some(indices), mode: 4, material: 0 });
         }
-        self.meshes.push(json!({"primitives": primitives}));
-        self.meshes.len() - 1
+        self.mesh_of(primitives)
     }
 
     /// The mesh of `filled` (the region and ribbons of `frame`'s curves, see the
@@ -92,12 +94,11 @@ impl Builder {
             let pos: Vec<f32> = filled.points.iter().flat_map(|p| [p[0] as f32, p[1] as f32, 0.0]).collect();
             let normals: Vec<f32> = filled.points.iter().flat_map(|_| [0.0f32, 0.0, 1.0]).collect();
             let idx: Vec<u32> = filled.region.iter().flat_map(|t| t.map(|v| v as u32)).collect();
-            let position = self.floats(&pos, "VEC3", Some(ARRAY_BUFFER));
-            let normal = self.floats(&normals, "VEC3", Some(ARRAY_BUFFER));
-            let indices = self.indices(&idx);
-            primitives.push(json!({
-                "attributes": {"POSITION": position, "NORMAL": normal}, "indices": indices, "mode": 4, "material": 1,
-            }));
+            let position = self.floats(pos, "VEC3", Some(ARRAY_BUFFER));
+            let normal = self.floats(normals, "VEC3", Some(ARRAY_BUFFER));
+            let indices = self.indices(idx);
+            let attributes = vec![("POSITION".into(), position), ("NORMAL".into(), normal)];
+            primitives.push(Primitive { attributes, indices: Some(indices), mode: 4, material: 1 });
         }
         // the ribbons, a little above the region so that both show
         let z = (0.5 * filled.width) as f32;
@@ -106,16 +107,13 @@ impl Builder {
         let color: Vec<f32> = filled.ribbon_source.iter().flat_map(|&v| scale.color(field[v])).collect();
         let normals: Vec<f32> = filled.ribbon_points.iter().flat_map(|_| [0.0f32, 0.0, 1.0]).collect();
         let idx: Vec<u32> = filled.ribbon_triangles.iter().flatten().copied().collect();
-        let position = self.floats(&pos, "VEC3", Some(ARRAY_BUFFER));
-        let normal = self.floats(&normals, "VEC3", Some(ARRAY_BUFFER));
-        let colors = self.floats(&color, "VEC3", Some(ARRAY_BUFFER));
-        let indices = self.indices(&idx);
-        primitives.push(json!({
-            "attributes": {"POSITION": position, "NORMAL": normal, "COLOR_0": colors},
-            "indices": indices, "mode": 4, "material": 0,
-        }));
-        self.meshes.push(json!({"primitives": primitives}));
-        self.meshes.len() - 1
+        let position = self.floats(pos, "VEC3", Some(ARRAY_BUFFER));
+        let normal = self.floats(normals, "VEC3", Some(ARRAY_BUFFER));
+        let colors = self.floats(color, "VEC3", Some(ARRAY_BUFFER));
+        let indices = self.indices(idx);
+        let attributes = vec![("POSITION".into(), position), ("NORMAL".into(), normal), ("COLOR_0".into(), colors)];
+        primitives.push(Primitive { attributes, indices: Some(indices), mode: 4, material: 0 });
+        self.mesh_of(primitives)
     }
 
     /// The node of a shape-design domain (docs/results.md); returns its index.
@@ -124,22 +122,25 @@ impl Builder {
         let mut primitives = Vec::new();
         for p in domain_primitives(domain, width) {
             let pos: Vec<f32> = p.points.iter().flat_map(|q| [q[0] as f32, q[1] as f32, p.z as f32]).collect();
-            let position = self.floats(&pos, "VEC3", Some(ARRAY_BUFFER));
+            let position = self.floats(pos, "VEC3", Some(ARRAY_BUFFER));
             let material = if p.part == Part::Control { CONTROL_MATERIAL } else { DOMAIN_MATERIAL };
             if p.part == Part::Loop {
-                primitives.push(json!({"attributes": {"POSITION": position}, "mode": 2, "material": material}));
+                primitives.push(Primitive {
+                    attributes: vec![("POSITION".into(), position)],
+                    indices: None,
+                    mode: 2,
+                    material,
+                });
                 continue;
             }
             let normals: Vec<f32> = p.points.iter().flat_map(|_| [0.0f32, 0.0, 1.0]).collect();
-            let normal = self.floats(&normals, "VEC3", Some(ARRAY_BUFFER));
+            let normal = self.floats(normals, "VEC3", Some(ARRAY_BUFFER));
             let idx: Vec<u32> = p.triangles.iter().flatten().copied().collect();
-            let indices = self.indices(&idx);
-            primitives.push(json!({
-                "attributes": {"POSITION": position, "NORMAL": normal}, "indices": indices, "mode": 4, "material": material,
-            }));
+            let indices = self.indices(idx);
+            let attributes = vec![("POSITION".into(), position), ("NORMAL".into(), normal)];
+            primitives.push(Primitive { attributes, indices: Some(indices), mode: 4, material });
         }
-        self.meshes.push(json!({"primitives": primitives}));
-        let mesh = self.meshes.len() - 1;
+        let mesh = self.mesh_of(primitives);
         self.nodes.push(json!({"mesh": mesh, "name": DOMAIN_NODE, "extras": {"shapeflow": "display"}}));
         self.nodes.len() - 1
     }
