@@ -49,21 +49,20 @@ impl Builder {
     pub(super) fn floats(&mut self, data: Vec<f32>, kind: &'static str, target: Option<u32>) -> usize {
         let comps = if kind == "VEC3" { 3 } else { 1 };
         let count = data.len() / comps;
-        let mut lo = vec![f32::INFINITY; comps];
-        let mut hi = vec![f32::NEG_INFINITY; comps];
+        let mut lo = vec![f64::INFINITY; comps];
+        let mut hi = vec![f64::NEG_INFINITY; comps];
         for (i, &x) in data.iter().enumerate() {
-            lo[i % comps] = lo[i % comps].min(x);
-            hi[i % comps] = hi[i % comps].max(x);
+            lo[i % comps] = lo[i % comps].min(f64::from(x));
+            hi[i % comps] = hi[i % comps].max(f64::from(x));
         }
         let view = self.view(target, Piece::Floats(data));
-        let wide = |v: Vec<f32>| Some(v.into_iter().map(f64::from).collect());
         self.accessors.push(Accessor {
             buffer_view: view,
             component_type: FLOAT,
             count,
             kind,
-            min: wide(lo),
-            max: wide(hi),
+            min: Some(lo),
+            max: Some(hi),
         });
         self.accessors.len() - 1
     }
