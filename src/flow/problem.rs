@@ -50,6 +50,8 @@ pub struct FlowDefaults {
     /// `flow.conservation`: the enclosed measure kept to this relative change per
     /// step.
     pub conservation: Option<f64>,
+    /// `flow.tolerance` of a run without an end time.
+    pub tolerance: Option<f64>,
 }
 
 /// An error raised by a problem (bad data met during a run).

@@ -31,7 +31,7 @@ pub(super) fn flow_settings(f: &FlowSpec, problem: &ProblemKind) -> Result<FlowS
         return Err(SpecError::new("flow.tau_min", format!("must not exceed flow.tau ({tau})")));
     }
     // a run given an end time runs to it unless the spec also asks for a tolerance
-    let default_tolerance = if f.end_time.is_some() { 0.0 } else { d.tolerance };
+    let default_tolerance = if f.end_time.is_some() { 0.0 } else { own.tolerance.unwrap_or(d.tolerance) };
     let tolerance = f.tolerance.unwrap_or(default_tolerance);
     if !(tolerance.is_finite() && tolerance >= 0.0) {
         return Err(SpecError::new("flow.tolerance", format!("must be a nonnegative number, got {tolerance}")));

@@ -96,9 +96,11 @@ pub struct FlowSpec {
     /// Stop with `converged` when `|J_{n+1} − J_n| ≤ tolerance·|J_n|` (a rate for
     /// physical evolutions; for the others judged on steps of the flow's own
     /// length, not on one cut short by a tangled trial or still growing back after
-    /// one; also when over six such steps the recorded energy ended within
-    /// `tolerance·|J|` of where it began); 0 disables; default 1e-6, but 0 when `end_time` is given (the run then
-    /// goes to its end time).
+    /// one, and only when the judged step before it was as small; also when over
+    /// six such steps the recorded energy ended within `tolerance·|J|` of where it
+    /// began); 0 disables; default 1e-6 (1e-5 for segmentation's `chan_vese` and
+    /// `both` models), but 0 when `end_time` is given (the run then goes to its end
+    /// time).
     #[schemars(range(min = 0))]
     pub tolerance: Option<f64>,
     /// Halve τ until J decreases; default on, off for physical flows.

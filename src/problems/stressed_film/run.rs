@@ -147,6 +147,7 @@ impl Problem<2> for FilmRun {
             tau: Some(super::DEFAULT_TAU),
             tau_min: Some(super::DEFAULT_TAU_MIN),
             conservation: Some(super::DEFAULT_CONSERVATION),
+            tolerance: None,
         }
     }
 
