@@ -4,7 +4,7 @@
 //! across elements; a curve of many segments in two halves on two threads.
 
 use super::ChanVese;
-use crate::geometry::{surface_edges, Mesh, Point};
+use crate::geometry::{surface_edges, Mesh, Point, SurfaceEdge};
 use crate::imaging::EdgeField;
 
 /// `(∫ I, ∫ Q, |Ω|)` of one object.
@@ -94,17 +94,15 @@ pub(super) fn accumulate_moments<const D: usize>(
             scope.spawn(|| curve_points(cv, l, mesh, element_object, half..element_object.len(), &mut second));
             curve_points(cv, l, mesh, element_object, 0..half, moments);
         });
-        for (m, s) in moments.iter_mut().zip(&second) {
-            for k in 0..3 {
-                m[k] += s[k];
-            }
-        }
+        add(moments, &second);
+        return;
+    }
+    if D == 3 {
+        edge_midpoints(cv, l, mesh, element_object, moments);
         return;
     }
     let mut lanes = Lanes::new(cv, moments);
-    if D == 3 {
-        edge_midpoints(l, mesh, element_object, &mut lanes);
-    } else {
+    {
         for (e, &o) in element_object.iter().enumerate() {
             element_points(l, &mesh.element_points(e), &mut lanes, o);
         }
@@ -112,8 +110,8 @@ pub(super) fn accumulate_moments<const D: usize>(
     lanes.finish();
 }
 
-/// Curves of at least this many segments have their points evaluated on two
-/// threads.
+/// Curves of at least this many segments, and surfaces of at least this many
+/// edges, have their points evaluated on two threads.
 const SPLIT_AT: usize = 2048;
 
 /// The points of the segments `range` of a curve mesh added to `moments`;
@@ -138,10 +136,18 @@ fn curve_points<const D: usize>(
 /// (`|T|/3` at each edge's midpoint; degree 2, as the interior 3-point rule) with
 /// each edge's midpoint evaluated once for the triangles beside it
 /// ([`surface_edges`]), half the points of a rule per triangle. A larger triangle
-/// takes [`element_points`]' sub-triangles.
+/// takes [`element_points`]' sub-triangles. The edges of a large surface go in two
+/// halves to two threads, as the segments of a long curve.
 #[inline(always)]
-fn edge_midpoints<const D: usize>(l: f64, mesh: &Mesh<D>, element_object: &[usize], lanes: &mut Lanes<'_>) {
+fn edge_midpoints<const D: usize>(
+    cv: &ChanVese,
+    l: f64,
+    mesh: &Mesh<D>,
+    element_object: &[usize],
+    moments: &mut [Moments],
+) {
     let (x, tris) = (mesh.positions(), mesh.elements());
+    let mut lanes = Lanes::new(cv, moments);
     // each triangle's weight `ν₁|T|/3`, 0 for a large one (it has its own points)
     let mut weight = Vec::with_capacity(tris.len());
     for (e, &o) in element_object.iter().enumerate() {
@@ -152,15 +158,54 @@ fn edge_midpoints<const D: usize>(l: f64, mesh: &Mesh<D>, element_object: &[usiz
             weight.push((u[1] * v[2] - u[2] * v[1]) / 6.0);
         } else {
             weight.push(0.0);
-            element_points(l, &p, lanes, o);
+            element_points(l, &p, &mut lanes, o);
         }
     }
-    for edge in surface_edges(x.len(), tris) {
+    lanes.finish();
+    let edges = surface_edges(x.len(), tris);
+    let points =
+        |edges: &[SurfaceEdge], moments: &mut [Moments]| midpoints(cv, x, edges, &weight, element_object, moments);
+    if edges.len() < SPLIT_AT {
+        points(&edges, moments);
+        return;
+    }
+    let (first, second) = edges.split_at(edges.len() / 2);
+    let mut other = vec![[0.0; 3]; moments.len()];
+    std::thread::scope(|scope| {
+        scope.spawn(|| points(second, &mut other));
+        points(first, moments);
+    });
+    add(moments, &other);
+}
+
+/// The midpoints of `edges` with the weights of the triangles beside them, added
+/// to `moments` (compiled for AVX2 as [`accumulate_moments`]).
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+fn midpoints<const D: usize>(
+    cv: &ChanVese,
+    x: &[Point<D>],
+    edges: &[SurfaceEdge],
+    weight: &[f64],
+    element_object: &[usize],
+    moments: &mut [Moments],
+) {
+    let mut lanes = Lanes::new(cv, moments);
+    for edge in edges {
         let [t, across] = edge.t;
         let w = weight[t] + if across == usize::MAX { 0.0 } else { weight[across] };
         if w != 0.0 {
             let (a, b) = (x[edge.a], x[edge.b]);
             lanes.push([0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])], w, element_object[t]);
+        }
+    }
+    lanes.finish();
+}
+
+/// `other` added to `moments`, object by object.
+fn add(moments: &mut [Moments], other: &[Moments]) {
+    for (m, s) in moments.iter_mut().zip(other) {
+        for k in 0..3 {
+            m[k] += s[k];
         }
     }
 }
@@ -252,7 +297,7 @@ mod tests {
     /// quadratic, which both surface rules integrate exactly on flat triangles:
     /// `(∫ I, |Ω|)` equal the polyhedron's, summed over the tetrahedra from the
     /// origin, with triangles larger than two voxels (sub-triangles) and smaller
-    /// (edge midpoints).
+    /// (edge midpoints, on one thread and on two).
     #[test]
     fn surface_rules_are_exact_on_a_linear_image() {
         let n = 32;
@@ -261,8 +306,11 @@ mod tests {
             .map(|p| lin([p % n, (p / n) % n, p / (n * n)].map(|i| (i as f64 + 0.5) / n as f64)))
             .collect();
         let cv = ChanVese::new(3, [n, n, n], &values, 0.0, (1.0, 1.0));
-        for level in [2, 3] {
+        // level 4 has more edges than `SPLIT_AT`: two threads
+        for level in [2, 3, 4] {
             let mesh = icosphere([0.5, 0.45, 0.52], 0.25, level).unwrap();
+            let edges = surface_edges(mesh.num_vertices(), mesh.elements()).len();
+            assert_eq!(level == 4, edges >= SPLIT_AT, "level {level}: {edges} edges");
             let edge = (mesh.element_points(0)[1] - mesh.element_points(0)[0]).norm() * n as f64;
             assert!((level == 2) == (edge > 2.0), "level {level}: edges of {edge} voxels");
             let (mut volume, mut integral) = (0.0, 0.0);
