@@ -1,7 +1,7 @@
 //! The region integrals of the Chan–Vese functional: per object `(∫ I, ∫ Q, |Ω|)`
 //! as boundary integrals of the antiderivatives of the image splines, by Gauss
 //! quadrature on segments and edge midpoints on triangles, four points at a time
-//! across elements; a curve of many segments in two halves on two threads.
+//! across elements; the elements of a large mesh in two halves on two threads.
 
 use super::ChanVese;
 use crate::geometry::{surface_edges, Mesh, Point, SurfaceEdge};
@@ -85,7 +85,7 @@ pub(super) fn accumulate_moments<const D: usize>(
     moments: &mut [Moments],
 ) {
     let l = cv.intensity.scale();
-    if D == 2 && element_object.len() >= SPLIT_AT {
+    if D == 2 && element_object.len() >= SPLIT_AT && two_cores() {
         // two halves of the elements on two threads, each into moments of its
         // own, added in a fixed order (the same sums whatever the threads' timing)
         let half = element_object.len() / 2;
@@ -102,17 +102,21 @@ pub(super) fn accumulate_moments<const D: usize>(
         return;
     }
     let mut lanes = Lanes::new(cv, moments);
-    {
-        for (e, &o) in element_object.iter().enumerate() {
-            element_points(l, &mesh.element_points(e), &mut lanes, o);
-        }
+    for (e, &o) in element_object.iter().enumerate() {
+        element_points(l, &mesh.element_points(e), &mut lanes, o);
     }
     lanes.finish();
 }
 
-/// Curves of at least this many segments, and surfaces of at least this many
+/// On a machine of more than one core, curves of at least this many segments, and surfaces of at least this many
 /// edges, have their points evaluated on two threads.
 const SPLIT_AT: usize = 2048;
+
+/// Whether this machine runs two threads at once.
+fn two_cores() -> bool {
+    static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get())) > 1
+}
 
 /// The points of the segments `range` of a curve mesh added to `moments`;
 /// compiled for AVX2 as [`accumulate_moments`] (a thread calls it on its own).
@@ -165,7 +169,7 @@ fn edge_midpoints<const D: usize>(
     let edges = surface_edges(x.len(), tris);
     let points =
         |edges: &[SurfaceEdge], moments: &mut [Moments]| midpoints(cv, x, edges, &weight, element_object, moments);
-    if edges.len() < SPLIT_AT {
+    if edges.len() < SPLIT_AT || !two_cores() {
         points(&edges, moments);
         return;
     }
