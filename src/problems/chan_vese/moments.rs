@@ -85,31 +85,35 @@ pub(super) fn accumulate_moments<const D: usize>(
     moments: &mut [Moments],
 ) {
     let l = cv.intensity.scale();
-    if D == 2 && element_object.len() >= SPLIT_AT && two_cores() {
-        // two halves of the elements on two threads, each into moments of its
-        // own, added in a fixed order (the same sums whatever the threads' timing)
-        let half = element_object.len() / 2;
-        let mut second = vec![[0.0; 3]; moments.len()];
-        std::thread::scope(|scope| {
-            scope.spawn(|| curve_points(cv, l, mesh, element_object, half..element_object.len(), &mut second));
-            curve_points(cv, l, mesh, element_object, 0..half, moments);
-        });
-        add(moments, &second);
-        return;
-    }
     if D == 3 {
         edge_midpoints(cv, l, mesh, element_object, moments);
-        return;
+    } else {
+        in_halves(element_object.len(), moments, |range, part| curve_points(cv, l, mesh, element_object, range, part));
     }
-    let mut lanes = Lanes::new(cv, moments);
-    for (e, &o) in element_object.iter().enumerate() {
-        element_points(l, &mesh.element_points(e), &mut lanes, o);
-    }
-    lanes.finish();
 }
 
-/// On a machine of more than one core, curves of at least this many segments, and surfaces of at least this many
-/// edges, have their points evaluated on two threads.
+/// `points(0..n, moments)`; on a machine of more than one core, with `n` at least
+/// [`SPLIT_AT`], as two halves on two threads, the second into moments of its own
+/// added after the first (the same sums whatever the threads' timing).
+fn in_halves(n: usize, moments: &mut [Moments], points: impl Fn(std::ops::Range<usize>, &mut [Moments]) + Sync) {
+    if n < SPLIT_AT || !two_cores() {
+        return points(0..n, moments);
+    }
+    let mut second = vec![[0.0; 3]; moments.len()];
+    std::thread::scope(|scope| {
+        scope.spawn(|| points(n / 2..n, &mut second));
+        points(0..n / 2, moments);
+    });
+    for (m, s) in moments.iter_mut().zip(&second) {
+        for k in 0..3 {
+            m[k] += s[k];
+        }
+    }
+}
+
+/// On a machine of more than one core, curves of at least this many segments,
+/// and surfaces of at least this many edges, have their points evaluated on two
+/// threads ([`in_halves`]).
 const SPLIT_AT: usize = 2048;
 
 /// Whether this machine runs two threads at once.
@@ -167,19 +171,7 @@ fn edge_midpoints<const D: usize>(
     }
     lanes.finish();
     let edges = surface_edges(x.len(), tris);
-    let points =
-        |edges: &[SurfaceEdge], moments: &mut [Moments]| midpoints(cv, x, edges, &weight, element_object, moments);
-    if edges.len() < SPLIT_AT || !two_cores() {
-        points(&edges, moments);
-        return;
-    }
-    let (first, second) = edges.split_at(edges.len() / 2);
-    let mut other = vec![[0.0; 3]; moments.len()];
-    std::thread::scope(|scope| {
-        scope.spawn(|| points(second, &mut other));
-        points(first, moments);
-    });
-    add(moments, &other);
+    in_halves(edges.len(), moments, |range, part| midpoints(cv, x, &edges[range], &weight, element_object, part));
 }
 
 /// The midpoints of `edges` with the weights of the triangles beside them, added
@@ -203,15 +195,6 @@ fn midpoints<const D: usize>(
         }
     }
     lanes.finish();
-}
-
-/// `other` added to `moments`, object by object.
-fn add(moments: &mut [Moments], other: &[Moments]) {
-    for (m, s) in moments.iter_mut().zip(other) {
-        for k in 0..3 {
-            m[k] += s[k];
-        }
-    }
 }
 
 /// Quadrature points of any elements, evaluated four at a time on both splines
