@@ -12,7 +12,7 @@ mod mesh;
 pub use dirichlet::DirichletLaplace;
 pub use domain::{DesignDomain, Polygon};
 pub use laplace::{curve_sensitivity, solve_design_fields, DesignFields};
-pub(crate) use mesh::{region_parities, triangulate};
+pub(crate) use mesh::triangulate;
 pub use mesh::{triangle_area, BulkMesh, DomainMesh, MeshingOptions};
 
 /// Errors of bulk meshing and solving.

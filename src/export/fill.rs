@@ -4,8 +4,7 @@
 //! (model-viewer, three.js); triangles they all draw.
 
 use crate::flow::MeshData;
-use crate::geometry::segment_cycles;
-use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
+use crate::geometry::{find_segment_intersections, segment_cycles, Point};
 
 /// Width of the curve ribbons, relative to the diagonal of the curves' bounding box.
 pub(super) const RIBBON_WIDTH: f64 = 0.004;
@@ -104,29 +103,91 @@ impl Drawing {
 }
 
 /// The triangles of the region enclosed by the closed polygons `loops` (indices
-/// into `points`), by the even–odd rule: a constrained Delaunay triangulation of
-/// all the loops' segments, flood-filled from outside, crossing a segment toggling
-/// inside and outside. Triangles use the input indices only. `None` when the
-/// segments cross or touch (the triangulation would need new vertices).
+/// into `points`), by the even–odd rule: each loop is nested in the loops around
+/// it, a loop inside an even number of others bounds the region from outside and
+/// one inside an odd number is a hole of the innermost loop around it; each outer
+/// loop with its holes is cut into ears (`earcut`, the triangulation renderers use
+/// to fill shapes: robust and quick on round contours, whose nearly cocircular
+/// points make a Delaunay triangulation fall back to exact arithmetic). Triangles
+/// use the input indices only and turn counter-clockwise. `None` when segments
+/// cross or touch (no region to fill).
 pub fn region_triangles(points: &[[f64; 2]], loops: &[Vec<usize>]) -> Option<Vec<[usize; 3]>> {
-    let n = points.len();
-    let edges: Vec<[usize; 2]> =
+    let loops: Vec<&[usize]> = loops.iter().map(|l| l.as_slice()).filter(|l| l.len() >= 3).collect();
+    let segments: Vec<[usize; 2]> =
         loops.iter().flat_map(|l| (0..l.len()).map(move |k| [l[k], l[(k + 1) % l.len()]])).collect();
-    let input: Vec<Point2<f64>> = points.iter().map(|p| Point2::new(p[0], p[1])).collect();
-    let mut conflicts = 0usize;
-    let cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
-        ConstrainedDelaunayTriangulation::try_bulk_load_cdt(input, edges, |_| conflicts += 1).ok()?;
-    if conflicts > 0 || cdt.num_vertices() != n {
+    let at: Vec<Point<2>> = points.iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
+    if !find_segment_intersections(&at, &segments).is_empty() {
         return None;
     }
-    // crossing a curve's segment toggles inside and outside
-    let inside = crate::bulk::region_parities(&cdt, |constraint, _, _| (constraint, false));
-    let triangles: Vec<[usize; 3]> = cdt
-        .inner_faces()
-        .filter(|f| inside[f.fix().index()].is_some_and(|(i, _)| i))
-        .map(|f| f.vertices().map(|v| v.fix().index()))
+    let boxes: Vec<[f64; 4]> = loops.iter().map(|l| bounding_box(points, l)).collect();
+    // the loops around each loop (its first point inside them: loops do not touch)
+    let around: Vec<Vec<usize>> = (0..loops.len())
+        .map(|i| {
+            let p = points[loops[i][0]];
+            (0..loops.len()).filter(|&j| j != i && in_box(&boxes[j], p) && inside(points, loops[j], p)).collect()
+        })
         .collect();
+    let mut holes: Vec<Vec<usize>> = vec![Vec::new(); loops.len()];
+    for (i, a) in around.iter().enumerate() {
+        if a.len() % 2 == 1 {
+            // the innermost loop around it: the one with the most loops around itself
+            let parent = *a.iter().max_by_key(|&&j| around[j].len()).expect("odd, so not empty");
+            holes[parent].push(i);
+        }
+    }
+    let mut earcut = earcut::Earcut::new();
+    let (mut local, mut index, mut starts, mut out) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut triangles = Vec::new();
+    for (i, l) in loops.iter().enumerate() {
+        if around[i].len() % 2 == 1 {
+            continue;
+        }
+        index.clear();
+        starts.clear();
+        index.extend_from_slice(l);
+        for &h in &holes[i] {
+            starts.push(index.len() as u32);
+            index.extend_from_slice(loops[h]);
+        }
+        local.clear();
+        local.extend(index.iter().map(|&v| points[v]));
+        earcut.earcut_slice(&local, &starts, &mut out);
+        for t in out.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|k| index[k as usize]);
+            // counter-clockwise, as the ribbons and the domain's faces
+            triangles.push(if cross(points[a], points[b], points[c]) < 0.0 { [a, c, b] } else { [a, b, c] });
+        }
+    }
     Some(triangles)
+}
+
+/// `[x_min, y_min, x_max, y_max]` of the points `l` of `points`.
+fn bounding_box(points: &[[f64; 2]], l: &[usize]) -> [f64; 4] {
+    l.iter().fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, &v| {
+        let p = points[v];
+        [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
+    })
+}
+
+fn in_box(b: &[f64; 4], p: [f64; 2]) -> bool {
+    p[0] >= b[0] && p[0] <= b[2] && p[1] >= b[1] && p[1] <= b[3]
+}
+
+/// Whether `p` lies inside the closed polygon `l` of `points` (even–odd rule).
+fn inside(points: &[[f64; 2]], l: &[usize], p: [f64; 2]) -> bool {
+    let mut odd = false;
+    for k in 0..l.len() {
+        let (a, b) = (points[l[k]], points[l[(k + 1) % l.len()]]);
+        if (a[1] > p[1]) != (b[1] > p[1]) && p[0] < a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]) {
+            odd = !odd;
+        }
+    }
+    odd
+}
+
+/// Twice the signed area of the triangle `a b c`.
+fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])
 }
 
 /// A ribbon of width `width` along the polygon `l` of `points` (closed, or an open
@@ -189,6 +250,46 @@ mod tests {
         // crossing segments: no fill
         let bow = [[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]];
         assert!(region_triangles(&bow, &[vec![0, 1, 2, 3]]).is_none());
+    }
+
+    /// Nested loops by the even–odd rule: an island inside the hole is filled again,
+    /// every triangle turns counter-clockwise, and a round contour of 256 nearly
+    /// cocircular points is cut into its 254 triangles with its polygon's area.
+    #[test]
+    fn nested_loops_and_a_round_contour() {
+        let square = |c: f64, r: f64, clockwise: bool| {
+            let mut s = vec![[c - r, c - r], [c + r, c - r], [c + r, c + r], [c - r, c + r]];
+            if clockwise {
+                s.reverse();
+            }
+            s
+        };
+        // outer side 8, hole side 6, island side 2, and a separate square beside them
+        let mut points = square(4.0, 4.0, false);
+        points.extend(square(4.0, 3.0, true));
+        points.extend(square(4.0, 1.0, false));
+        points.extend(square(12.0, 1.0, true));
+        let loops: Vec<Vec<usize>> = (0..4).map(|k| (4 * k..4 * k + 4).collect()).collect();
+        let tris = region_triangles(&points, &loops).unwrap();
+        assert!((area(&points, &tris) - (64.0 - 36.0 + 4.0 + 4.0)).abs() < 1e-12);
+        for t in &tris {
+            let [a, b, c] = t.map(|i| points[i]);
+            assert!(cross(a, b, c) > 0.0, "{t:?}");
+        }
+        let n = 256;
+        let circle: Vec<[f64; 2]> = (0..n)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / n as f64;
+                [t.cos(), t.sin()]
+            })
+            .collect();
+        let tris = region_triangles(&circle, &[(0..n).collect()]).unwrap();
+        assert_eq!(tris.len(), n - 2);
+        let polygon = 0.5 * n as f64 * (std::f64::consts::TAU / n as f64).sin();
+        assert!((area(&circle, &tris) - polygon).abs() < 1e-12);
+        // two loops that touch at a corner: no fill
+        let touching = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [1.0, 1.0], [2.0, 1.0], [2.0, 2.0], [1.0, 2.0]];
+        assert!(region_triangles(&touching, &[vec![0, 1, 2, 3], vec![4, 5, 6, 7]]).is_none());
     }
 
     /// The ribbon of a square has its inner and outer sides at ±w/2 (on the

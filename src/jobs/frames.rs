@@ -65,8 +65,8 @@ impl Frame {
         Frame { state: state.clone(), fields: Some(fields.into()), fill: None }
     }
 
-    /// The frame with its drawing computed now (a constrained Delaunay
-    /// triangulation of a 2D state's region), so that the glb files made of it
+    /// The frame with its drawing computed now (the triangles of a 2D state's
+    /// region and the ribbons along its curves, [`Filled::of`]), so that the glb files made of it
     /// later need not: a worker computes it for each checkpoint while the run
     /// goes on, and not all of them at the end.
     pub fn with_fill(mut self) -> Frame {
