@@ -162,8 +162,30 @@ pub struct ResultFile {
 /// ([`image_result_names`]). Empty if there is no frame. The CLI writes these to
 /// its output directory; the service stores them when a job ends.
 pub fn result_files(job: &PreparedJob, frames: &[Frame]) -> Vec<ResultFile> {
-    let Some(last) = frames.last() else { return Vec::new() };
+    if frames.is_empty() {
+        return Vec::new();
+    }
     let context = GlbContext::of(job);
+    // evolution.glb, the largest, on a second core beside the others
+    let (mut files, evolution) = if std::thread::available_parallelism().map_or(1, |n| n.get()) > 1 {
+        std::thread::scope(|scope| {
+            let evolution = scope.spawn(|| context.evolution_glb(frames));
+            let files = state_files(job, &context, frames);
+            (files, evolution.join().expect("evolution.glb panicked"))
+        })
+    } else {
+        (state_files(job, &context, frames), context.evolution_glb(frames))
+    };
+    if let Some(glb) = evolution {
+        files.insert(2, ResultFile { name: "evolution.glb", media_type: GLB, bytes: glb });
+    }
+    files
+}
+
+/// The result files of the state the last of `frames` shows (all but evolution.glb):
+/// shape.json, shape.glb, then an image job's files.
+fn state_files(job: &PreparedJob, context: &GlbContext, frames: &[Frame]) -> Vec<ResultFile> {
+    let last = frames.last().expect("a frame");
     let shown = result_state(job, &last.state);
     // the fields of the shown state: the last frame's, unless the contour moved
     let shown_frame = if shown == last.state { last.clone() } else { Frame::of(job, &shown) };
@@ -173,9 +195,6 @@ pub fn result_files(job: &PreparedJob, frames: &[Frame]) -> Vec<ResultFile> {
         ResultFile { name: "shape.json", media_type: "application/json", bytes: json },
         ResultFile { name: "shape.glb", media_type: GLB, bytes: context.frame_glb(&shown_frame) },
     ];
-    if let Some(glb) = context.evolution_glb(frames) {
-        files.push(ResultFile { name: "evolution.glb", media_type: GLB, bytes: glb });
-    }
     if let Some(img) = job.image.as_deref() {
         for &(name, media_type) in image_result_names(img.dimension) {
             if let Some((_, bytes)) = results.image_file(name) {
