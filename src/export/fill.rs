@@ -120,11 +120,13 @@ pub fn region_triangles(points: &[[f64; 2]], loops: &[Vec<usize>]) -> Option<Vec
         return None;
     }
     let boxes: Vec<[f64; 4]> = loops.iter().map(|l| bounding_box(points, l)).collect();
+    let grid = BoxGrid::new(&boxes);
     // the loops around each loop (its first point inside them: loops do not touch)
     let around: Vec<Vec<usize>> = (0..loops.len())
         .map(|i| {
             let p = points[loops[i][0]];
-            (0..loops.len()).filter(|&j| j != i && in_box(&boxes[j], p) && inside(points, loops[j], p)).collect()
+            let candidates = grid.at(p).iter().copied();
+            candidates.filter(|&j| j != i && in_box(&boxes[j], p) && inside(points, loops[j], p)).collect()
         })
         .collect();
     let mut holes: Vec<Vec<usize>> = vec![Vec::new(); loops.len()];
@@ -167,6 +169,47 @@ fn bounding_box(points: &[[f64; 2]], l: &[usize]) -> [f64; 4] {
         let p = points[v];
         [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
     })
+}
+
+/// The boxes of many loops binned on a grid of about as many cells over them all,
+/// so that the loops whose box may hold a point are found without looking at every
+/// loop (the seeds start has thousands of small ones).
+struct BoxGrid {
+    origin: [f64; 2],
+    cell: [f64; 2],
+    side: usize,
+    cells: Vec<Vec<usize>>,
+}
+
+impl BoxGrid {
+    fn new(boxes: &[[f64; 4]]) -> BoxGrid {
+        let all = boxes.iter().fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |a, b| {
+            [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])]
+        });
+        let side = ((boxes.len() as f64).sqrt().ceil() as usize).clamp(1, 256);
+        let cell = [((all[2] - all[0]) / side as f64).max(1e-300), ((all[3] - all[1]) / side as f64).max(1e-300)];
+        let mut grid = BoxGrid { origin: [all[0], all[1]], cell, side, cells: vec![Vec::new(); side * side] };
+        for (k, b) in boxes.iter().enumerate() {
+            let (lo, hi) = (grid.index([b[0], b[1]]), grid.index([b[2], b[3]]));
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    grid.cells[y * side + x].push(k);
+                }
+            }
+        }
+        grid
+    }
+
+    fn index(&self, p: [f64; 2]) -> [usize; 2] {
+        let at = |d: usize| (((p[d] - self.origin[d]) / self.cell[d]).max(0.0) as usize).min(self.side - 1);
+        [at(0), at(1)]
+    }
+
+    /// The loops whose box meets the cell of `p`.
+    fn at(&self, p: [f64; 2]) -> &[usize] {
+        let [x, y] = self.index(p);
+        &self.cells[y * self.side + x]
+    }
 }
 
 fn in_box(b: &[f64; 4], p: [f64; 2]) -> bool {
