@@ -8,7 +8,7 @@ mod listen;
 
 use super::{
     now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
-    JobStore, Lease, StoreResult, Which,
+    JobStore, Lease, StoreError, StoreResult, Which,
 };
 use crate::flow::Progress;
 use sqlx::postgres::{PgConnectOptions, PgPool, PgPoolOptions, PgRow};
@@ -211,7 +211,26 @@ impl JobStore for PgStore {
         checkpoints: &[CheckpointKey],
     ) -> StoreResult<bool> {
         let mut tx = self.pool.begin().await?;
-        let cancel = fence(&mut tx, id, lease).await?;
+        // the fence and the job's progress in one statement (one round trip less)
+        let cancel = match rows.last() {
+            Some(p) => sqlx::query(
+                "UPDATE jobs SET iteration = $3, time = $4, tau = $5, energy = $6, vertices = $7, components = $8 \
+                 WHERE id = $1 AND lease_epoch = $2 AND status = 'running' RETURNING cancel_requested",
+            )
+            .bind(id)
+            .bind(lease.epoch)
+            .bind(p.iteration as i64)
+            .bind(p.time)
+            .bind(p.tau)
+            .bind(p.energy)
+            .bind(p.vertices as i64)
+            .bind(p.components as i64)
+            .fetch_optional(&mut *tx)
+            .await?
+            .map(|r| r.get::<bool, _>(0))
+            .ok_or_else(|| StoreError::LeaseLost(id.to_string()))?,
+            None => fence(&mut tx, id, lease).await?,
+        };
         if !rows.is_empty() {
             // one statement for the batch
             let col = |f: fn(&Progress) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
@@ -229,20 +248,6 @@ impl JobStore for PgStore {
             .bind(col(|p| p.energy))
             .bind(int(|p| p.vertices))
             .bind(int(|p| p.components))
-            .execute(&mut *tx)
-            .await?;
-            let p = rows[rows.len() - 1];
-            sqlx::query(
-                "UPDATE jobs SET iteration = $2, time = $3, tau = $4, energy = $5, vertices = $6, components = $7 \
-                 WHERE id = $1",
-            )
-            .bind(id)
-            .bind(p.iteration as i64)
-            .bind(p.time)
-            .bind(p.tau)
-            .bind(p.energy)
-            .bind(p.vertices as i64)
-            .bind(p.components as i64)
             .execute(&mut *tx)
             .await?;
         }

@@ -6,7 +6,7 @@
 
 use super::{
     now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
-    JobStore, Lease, StoreResult, Which,
+    JobStore, Lease, StoreError, StoreResult, Which,
 };
 use crate::flow::Progress;
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous};
@@ -220,8 +220,27 @@ impl JobStore for SqliteStore {
         checkpoints: &[CheckpointKey],
     ) -> StoreResult<bool> {
         let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
-        let cancel = fence(&mut tx, id, lease).await?;
-        // one statement per chunk: a statement is a round trip to the connection's thread
+        // the fence and the job's progress in one statement: a statement is a round
+        // trip to the connection's thread
+        let cancel = match rows.last() {
+            Some(p) => sqlx::query(
+                "UPDATE jobs SET (iteration, time, tau, energy, vertices, components) = (?3, ?4, ?5, ?6, ?7, ?8) \
+                 WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running' RETURNING cancel_requested",
+            )
+            .bind(id)
+            .bind(lease.epoch)
+            .bind(p.iteration as i64)
+            .bind(p.time)
+            .bind(p.tau)
+            .bind(p.energy)
+            .bind(p.vertices as i64)
+            .bind(p.components as i64)
+            .fetch_optional(&mut *tx)
+            .await?
+            .map(|r| r.get::<i64, _>(0) != 0)
+            .ok_or_else(|| StoreError::LeaseLost(id.to_string()))?,
+            None => fence(&mut tx, id, lease).await?,
+        };
         for chunk in rows.chunks(HISTORY_ROWS_PER_STATEMENT) {
             sqlx::QueryBuilder::<Sqlite>::new("INSERT OR REPLACE INTO history ")
                 .push_values(chunk, |mut row, p| {
@@ -236,21 +255,6 @@ impl JobStore for SqliteStore {
                 .build()
                 .execute(&mut *tx)
                 .await?;
-        }
-        if let Some(p) = rows.last() {
-            sqlx::query(
-                "UPDATE jobs SET (iteration, time, tau, energy, vertices, components) = (?2, ?3, ?4, ?5, ?6, ?7) \
-                 WHERE id = ?1",
-            )
-            .bind(id)
-            .bind(p.iteration as i64)
-            .bind(p.time)
-            .bind(p.tau)
-            .bind(p.energy)
-            .bind(p.vertices as i64)
-            .bind(p.components as i64)
-            .execute(&mut *tx)
-            .await?;
         }
         for c in checkpoints {
             sqlx::query(
@@ -352,5 +356,33 @@ impl JobStore for SqliteStore {
                 .fetch_all(&self.reader)
                 .await?;
         Ok(rows.iter().map(progress_from_row).collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A batch is written under the lease it names and refused under any other; the
+    /// fence reports a cancellation request, with and without history rows.
+    #[tokio::test]
+    async fn the_rows_of_a_batch_are_fenced_by_the_lease() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = SqliteStore::open(&dir.path().join("jobs.db"), Blobs::local(dir.path()).unwrap()).await.unwrap();
+        store.insert_rows("j1", "{}", &[]).await.unwrap();
+        let claimed = store.claim_next("node", &ClaimPolicy::default()).await.unwrap().unwrap();
+        let lease = claimed.lease;
+        let row = |iteration| Progress { iteration, time: 0.1, tau: 0.1, energy: 2.0, vertices: 8, components: 1 };
+        let rows: Vec<Progress> = (0..3).map(row).collect();
+        assert!(!store.record_rows("j1", &lease, &rows, &[]).await.unwrap());
+        assert_eq!(store.job("j1").await.unwrap().unwrap().progress.unwrap().iteration, 2);
+        assert_eq!(store.history("j1").await.unwrap(), rows);
+        let stale = Lease { owner: "node".into(), epoch: lease.epoch + 1 };
+        assert!(matches!(store.record_rows("j1", &stale, &[row(3)], &[]).await, Err(StoreError::LeaseLost(_))));
+        assert!(matches!(store.record_rows("j1", &stale, &[], &[]).await, Err(StoreError::LeaseLost(_))));
+        assert_eq!(store.history("j1").await.unwrap(), rows, "a refused batch writes nothing");
+        store.request_cancel("j1").await.unwrap();
+        assert!(store.record_rows("j1", &lease, &[row(3)], &[]).await.unwrap());
+        assert!(store.record_rows("j1", &lease, &[], &[]).await.unwrap());
     }
 }
