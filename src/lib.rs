@@ -32,6 +32,13 @@ pub mod linalg;
 pub mod problems;
 pub mod service;
 
+/// The number of threads this machine runs at once (1 if it cannot be told), read
+/// once: the work that splits over cores asks on hot paths.
+pub fn cores() -> usize {
+    static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+}
+
 /// Keep freed memory in the process instead of returning it to the kernel at once
 /// (glibc on Linux; elsewhere a no-op). A flow step allocates and frees vectors of
 /// a few hundred KiB (positions, loops, hash tables); by default glibc serves

@@ -4,7 +4,7 @@
 //! (model-viewer, three.js); triangles they all draw.
 
 use crate::flow::MeshData;
-use crate::geometry::{find_segment_intersections, segment_cycles, Point};
+use crate::geometry::{find_segment_intersections, segment_cycles, winding_number, Point};
 
 /// Width of the curve ribbons, relative to the diagonal of the curves' bounding box.
 pub(super) const RIBBON_WIDTH: f64 = 0.004;
@@ -52,10 +52,15 @@ impl Filled {
 /// The diagonal of the bounding box of `points` (ribbons are a share of it wide:
 /// the curves' for a frame, `Σ`'s for the domain).
 pub(super) fn bounding_diagonal(points: &[[f64; 2]]) -> f64 {
-    let (lo, hi) = points.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
-        ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])
-    });
-    (hi[0] - lo[0]).hypot(hi[1] - lo[1])
+    let b = bounding_box(points.iter().copied());
+    (b[2] - b[0]).hypot(b[3] - b[1])
+}
+
+/// `[x_min, y_min, x_max, y_max]` of `points`.
+fn bounding_box(points: impl Iterator<Item = [f64; 2]>) -> [f64; 4] {
+    points.fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, p| {
+        [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
+    })
 }
 
 /// The curves of a 2D state as drawn in the plane: points (periodic components
@@ -119,14 +124,17 @@ pub fn region_triangles(points: &[[f64; 2]], loops: &[Vec<usize>]) -> Option<Vec
     if !find_segment_intersections(&at, &segments).is_empty() {
         return None;
     }
-    let boxes: Vec<[f64; 4]> = loops.iter().map(|l| bounding_box(points, l)).collect();
+    let rings: Vec<Vec<Point<2>>> = loops.iter().map(|l| l.iter().map(|&v| at[v]).collect()).collect();
+    let boxes: Vec<[f64; 4]> = loops.iter().map(|l| bounding_box(l.iter().map(|&v| points[v]))).collect();
     let grid = BoxGrid::new(&boxes);
     // the loops around each loop (its first point inside them: loops do not touch)
     let around: Vec<Vec<usize>> = (0..loops.len())
         .map(|i| {
             let p = points[loops[i][0]];
             let candidates = grid.at(p).iter().copied();
-            candidates.filter(|&j| j != i && in_box(&boxes[j], p) && inside(points, loops[j], p)).collect()
+            candidates
+                .filter(|&j| j != i && in_box(&boxes[j], p) && winding_number(&[&rings[j]], at[loops[i][0]]) != 0)
+                .collect()
         })
         .collect();
     let mut holes: Vec<Vec<usize>> = vec![Vec::new(); loops.len()];
@@ -163,14 +171,6 @@ pub fn region_triangles(points: &[[f64; 2]], loops: &[Vec<usize>]) -> Option<Vec
     Some(triangles)
 }
 
-/// `[x_min, y_min, x_max, y_max]` of the points `l` of `points`.
-fn bounding_box(points: &[[f64; 2]], l: &[usize]) -> [f64; 4] {
-    l.iter().fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, &v| {
-        let p = points[v];
-        [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
-    })
-}
-
 /// The boxes of many loops binned on a grid of about as many cells over them all,
 /// so that the loops whose box may hold a point are found without looking at every
 /// loop (the seeds start has thousands of small ones).
@@ -183,9 +183,7 @@ struct BoxGrid {
 
 impl BoxGrid {
     fn new(boxes: &[[f64; 4]]) -> BoxGrid {
-        let all = boxes.iter().fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |a, b| {
-            [a[0].min(b[0]), a[1].min(b[1]), a[2].max(b[2]), a[3].max(b[3])]
-        });
+        let all = bounding_box(boxes.iter().flat_map(|b| [[b[0], b[1]], [b[2], b[3]]]));
         let side = ((boxes.len() as f64).sqrt().ceil() as usize).clamp(1, 256);
         let cell = [((all[2] - all[0]) / side as f64).max(1e-300), ((all[3] - all[1]) / side as f64).max(1e-300)];
         let mut grid = BoxGrid { origin: [all[0], all[1]], cell, side, cells: vec![Vec::new(); side * side] };
@@ -214,18 +212,6 @@ impl BoxGrid {
 
 fn in_box(b: &[f64; 4], p: [f64; 2]) -> bool {
     p[0] >= b[0] && p[0] <= b[2] && p[1] >= b[1] && p[1] <= b[3]
-}
-
-/// Whether `p` lies inside the closed polygon `l` of `points` (even–odd rule).
-fn inside(points: &[[f64; 2]], l: &[usize], p: [f64; 2]) -> bool {
-    let mut odd = false;
-    for k in 0..l.len() {
-        let (a, b) = (points[l[k]], points[l[(k + 1) % l.len()]]);
-        if (a[1] > p[1]) != (b[1] > p[1]) && p[0] < a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]) {
-            odd = !odd;
-        }
-    }
-    odd
 }
 
 /// Twice the signed area of the triangle `a b c`.

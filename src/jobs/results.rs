@@ -166,43 +166,38 @@ pub fn result_files(job: &PreparedJob, frames: &[Frame]) -> Vec<ResultFile> {
         return Vec::new();
     }
     let context = GlbContext::of(job);
-    // evolution.glb, the largest, on a second core beside the others
-    let (mut files, evolution) = if std::thread::available_parallelism().map_or(1, |n| n.get()) > 1 {
-        std::thread::scope(|scope| {
-            let evolution = scope.spawn(|| context.evolution_glb(frames));
-            let files = state_files(job, &context, frames);
-            (files, evolution.join().expect("evolution.glb panicked"))
-        })
-    } else {
-        (state_files(job, &context, frames), context.evolution_glb(frames))
-    };
-    if let Some(glb) = evolution {
-        files.insert(2, ResultFile { name: "evolution.glb", media_type: GLB, bytes: glb });
-    }
+    // evolution.glb, the largest, on a second thread beside the others
+    let (evolution, (mut files, image_files)) = std::thread::scope(|scope| {
+        let evolution = scope.spawn(|| context.evolution_glb(frames));
+        let state = state_files(job, &context, frames);
+        (evolution.join().expect("evolution.glb panicked"), state)
+    });
+    files.extend(evolution.map(|bytes| ResultFile { name: "evolution.glb", media_type: GLB, bytes }));
+    files.extend(image_files);
     files
 }
 
-/// The result files of the state the last of `frames` shows (all but evolution.glb):
-/// shape.json, shape.glb, then an image job's files.
-fn state_files(job: &PreparedJob, context: &GlbContext, frames: &[Frame]) -> Vec<ResultFile> {
+/// The result files of the state the last of `frames` shows: shape.json and
+/// shape.glb, and an image job's files.
+fn state_files(job: &PreparedJob, context: &GlbContext, frames: &[Frame]) -> (Vec<ResultFile>, Vec<ResultFile>) {
     let last = frames.last().expect("a frame");
     let shown = result_state(job, &last.state);
     // the fields of the shown state: the last frame's, unless the contour moved
     let shown_frame = if shown == last.state { last.clone() } else { Frame::of(job, &shown) };
     let results = StateResults::new(job, &shown);
     let json = serde_json::to_vec_pretty(&results.shape_document()).expect("shape.json serializes");
-    let mut files = vec![
+    let shape = vec![
         ResultFile { name: "shape.json", media_type: "application/json", bytes: json },
         ResultFile { name: "shape.glb", media_type: GLB, bytes: context.frame_glb(&shown_frame) },
     ];
-    if let Some(img) = job.image.as_deref() {
-        for &(name, media_type) in image_result_names(img.dimension) {
-            if let Some((_, bytes)) = results.image_file(name) {
-                files.push(ResultFile { name, media_type, bytes });
-            }
-        }
-    }
-    files
+    let names = job.image.as_deref().map_or(&[][..], |img| image_result_names(img.dimension));
+    let images = names
+        .iter()
+        .filter_map(|&(name, media_type)| {
+            results.image_file(name).map(|(_, bytes)| ResultFile { name, media_type, bytes })
+        })
+        .collect();
+    (shape, images)
 }
 
 /// The media type of glTF binary files.

@@ -88,7 +88,7 @@ pub const FRAME_SECONDS: f32 = 0.2;
 
 /// [`GltfFrame::filled`] of every frame, on as many threads as there are cores.
 fn filled_all<'a>(frames: &[GltfFrame<'a>]) -> Vec<Cow<'a, Option<Filled>>> {
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).clamp(1, frames.len().max(1));
+    let threads = crate::cores().clamp(1, frames.len().max(1));
     let chunk = frames.len().div_ceil(threads).max(1);
     std::thread::scope(|s| {
         let parts: Vec<_> = frames

@@ -96,7 +96,7 @@ pub(super) fn accumulate_moments<const D: usize>(
 /// [`SPLIT_AT`], as two halves on two threads, the second into moments of its own
 /// added after the first (the same sums whatever the threads' timing).
 fn in_halves(n: usize, moments: &mut [Moments], points: impl Fn(std::ops::Range<usize>, &mut [Moments]) + Sync) {
-    if n < SPLIT_AT || !two_cores() {
+    if n < SPLIT_AT || crate::cores() < 2 {
         return points(0..n, moments);
     }
     let mut second = vec![[0.0; 3]; moments.len()];
@@ -115,12 +115,6 @@ fn in_halves(n: usize, moments: &mut [Moments], points: impl Fn(std::ops::Range<
 /// and surfaces of at least this many edges, have their points evaluated on two
 /// threads ([`in_halves`]).
 const SPLIT_AT: usize = 2048;
-
-/// Whether this machine runs two threads at once.
-fn two_cores() -> bool {
-    static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-    *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get())) > 1
-}
 
 /// The points of the segments `range` of a curve mesh added to `moments`;
 /// compiled for AVX2 as [`accumulate_moments`] (a thread calls it on its own).
