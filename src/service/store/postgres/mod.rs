@@ -8,7 +8,7 @@ mod listen;
 
 use super::{
     now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
-    JobStore, Lease, StoreError, StoreResult, Which,
+    JobStore, Lease, StoreResult, Which,
 };
 use crate::flow::Progress;
 use sqlx::postgres::{PgConnectOptions, PgPool, PgPoolOptions, PgRow};
@@ -29,7 +29,7 @@ macro_rules! clock_ms {
 }
 
 mod leases;
-use leases::fence;
+use leases::{fence, fenced_progress};
 
 #[derive(Clone)]
 pub struct PgStore {
@@ -211,24 +211,8 @@ impl JobStore for PgStore {
         checkpoints: &[CheckpointKey],
     ) -> StoreResult<bool> {
         let mut tx = self.pool.begin().await?;
-        // the fence and the job's progress in one statement (one round trip less)
         let cancel = match rows.last() {
-            Some(p) => sqlx::query(
-                "UPDATE jobs SET iteration = $3, time = $4, tau = $5, energy = $6, vertices = $7, components = $8 \
-                 WHERE id = $1 AND lease_epoch = $2 AND status = 'running' RETURNING cancel_requested",
-            )
-            .bind(id)
-            .bind(lease.epoch)
-            .bind(p.iteration as i64)
-            .bind(p.time)
-            .bind(p.tau)
-            .bind(p.energy)
-            .bind(p.vertices as i64)
-            .bind(p.components as i64)
-            .fetch_optional(&mut *tx)
-            .await?
-            .map(|r| r.get::<bool, _>(0))
-            .ok_or_else(|| StoreError::LeaseLost(id.to_string()))?,
+            Some(p) => fenced_progress(&mut tx, id, lease, p).await?,
             None => fence(&mut tx, id, lease).await?,
         };
         if !rows.is_empty() {

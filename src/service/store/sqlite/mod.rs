@@ -6,7 +6,7 @@
 
 use super::{
     now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
-    JobStore, Lease, StoreError, StoreResult, Which,
+    JobStore, Lease, StoreResult, Which,
 };
 use crate::flow::Progress;
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous};
@@ -25,7 +25,7 @@ macro_rules! clock_ms {
 }
 
 mod leases;
-use leases::fence;
+use leases::{fence, fenced_progress};
 
 #[derive(Clone)]
 pub struct SqliteStore {
@@ -220,25 +220,8 @@ impl JobStore for SqliteStore {
         checkpoints: &[CheckpointKey],
     ) -> StoreResult<bool> {
         let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
-        // the fence and the job's progress in one statement: a statement is a round
-        // trip to the connection's thread
         let cancel = match rows.last() {
-            Some(p) => sqlx::query(
-                "UPDATE jobs SET (iteration, time, tau, energy, vertices, components) = (?3, ?4, ?5, ?6, ?7, ?8) \
-                 WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running' RETURNING cancel_requested",
-            )
-            .bind(id)
-            .bind(lease.epoch)
-            .bind(p.iteration as i64)
-            .bind(p.time)
-            .bind(p.tau)
-            .bind(p.energy)
-            .bind(p.vertices as i64)
-            .bind(p.components as i64)
-            .fetch_optional(&mut *tx)
-            .await?
-            .map(|r| r.get::<i64, _>(0) != 0)
-            .ok_or_else(|| StoreError::LeaseLost(id.to_string()))?,
+            Some(p) => fenced_progress(&mut tx, id, lease, p).await?,
             None => fence(&mut tx, id, lease).await?,
         };
         for chunk in rows.chunks(HISTORY_ROWS_PER_STATEMENT) {
@@ -362,6 +345,7 @@ impl JobStore for SqliteStore {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::service::store::StoreError;
 
     /// A batch is written under the lease it names and refused under any other; the
     /// fence reports a cancellation request, with and without history rows.
