@@ -4,11 +4,12 @@
 //! measured first on idle workers (wall time from POST to `successful`, or to the
 //! `status` event, minus the engine time of the same job run in-process, and minus
 //! what the CLI computes for it: the run, each checkpoint's fields, the result
-//! files), then the same on a job ten times longer with as many checkpoints; and
+//! files), then the same on the short job stopped after one step (a job's fixed
+//! cost) and on a job ten times longer with as many checkpoints; and
 //! the latency of a claim with 100,000 finished jobs in the table.
 //! On a temporary SQLite file, or on PostgreSQL when `SHAPEFLOW_BENCH_DATABASE` is
 //! a `postgres://` URL (an empty database: the bench fills it).
-//! `cargo bench --bench service` (`-- short`: the two overhead tables only).
+//! `cargo bench --bench service` (`-- short`: the three overhead tables and the claim).
 
 use shapeflow::jobs::{parse_spec, prepare, result_files, run_prepared, run_with_frames};
 use shapeflow::service::store::{self, ClaimPolicy, JobStatus};
@@ -29,6 +30,12 @@ const RUNS: usize = 11;
 /// A short job (about twenty milliseconds of engine time on this host).
 const SHORT: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 256},
   "flow": {"tau": 1e-4, "end_time": 0.1, "max_iterations": 2000, "tolerance": 0}, "output": {"checkpoint_every": 100}}"#;
+
+/// The short job stopped after its first step: what a job costs the service
+/// whatever its run (submission, claim, the checkpoint, the result files, the
+/// outcome and its event).
+const ONE_STEP: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 256},
+  "flow": {"tau": 1e-4, "end_time": 0.1, "max_iterations": 1, "tolerance": 0}, "output": {"checkpoint_every": 100}}"#;
 
 /// The short job run ten times longer, with as many checkpoints.
 const LONGER: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 256},
@@ -133,9 +140,11 @@ fn main() {
     rt.spawn(async move { axum::serve(listener, app).await.unwrap() });
 
     // overhead on a short job, first, with idle workers and an empty database;
-    // then on a job ten times longer with as many checkpoints (the fixed costs of
-    // a job's life against a longer run)
+    // then on the same job stopped after one step (the fixed costs of a job's life
+    // alone), and on a job ten times longer with as many checkpoints (those costs
+    // against a longer run)
     overhead(addr, SHORT, RUNS, "short job (1000 iterations, 256 vertices, checkpoints every 100)");
+    overhead(addr, ONE_STEP, RUNS, "one-step job (the short job stopped after 1 iteration)");
     overhead(addr, LONGER, 5, "longer job (10,000 iterations, 256 vertices, checkpoints every 1000)");
     // `-- short`: only the overhead tables, without the load after them
     if !std::env::args().any(|a| a == "short") {
