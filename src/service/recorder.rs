@@ -7,12 +7,14 @@
 //! by the writer, on the blocking pool, with its drawing for the glb files while
 //! the frames fit in evolution.glb ([`FrameMaker`]), so that the result files need
 //! little work when the run ends.
+//! The writer first stores the job's glb context, which the checkpoints' glb files
+//! need, while the run starts.
 //! A lost lease or a storage error stops the run (through its cancel flag) and is
 //! reported when the recorder is closed.
 
 use super::store::{Lease, Store, StoreError};
 use crate::flow::{Checkpoint, Progress};
-use crate::jobs::{Frame, FrameMaker, PreparedJob, RunEvents};
+use crate::jobs::{Frame, FrameMaker, GlbContext, PreparedJob, RunEvents};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -68,9 +70,10 @@ pub(super) struct Recorder {
 }
 
 impl Recorder {
-    /// Start the writer of job `id` under `lease`; `cancel` is raised when the run
-    /// must stop (cancellation requested, lease lost, storage error); every written
-    /// batch is announced on `events`.
+    /// Start the writer of job `id` under `lease`, which stores the job's glb
+    /// context before any checkpoint; `cancel` is raised when the run must stop
+    /// (cancellation requested, lease lost, storage error); every written batch is
+    /// announced on `events`.
     pub(super) fn start(
         rt: &Handle,
         job: Arc<PreparedJob>,
@@ -85,6 +88,11 @@ impl Recorder {
         let writer = rt.spawn(async move {
             let mut state = WriteState::default();
             let mut maker = FrameMaker::default();
+            let context = GlbContext::of(&job);
+            if let Err(e) = retrying(|| store.put_context(&id, &context)).await {
+                state.error = Some(e.to_string());
+                cancel.store(true, Ordering::Relaxed);
+            }
             while let Some(first) = rx.recv().await {
                 // the batches that queued while the last one was written go together,
                 // in one transaction: a writer that falls behind catches up
@@ -151,7 +159,9 @@ impl Recorder {
 
     /// Write what is left, wait for the writer, and say how the writes went.
     pub(super) fn close(mut self) -> WriteState {
-        self.flush(None);
+        if !self.rows.is_empty() {
+            self.flush(None);
+        }
         self.queue = None;
         let writer = self.writer.take().expect("closed once");
         self.rt

@@ -11,7 +11,7 @@
 use super::recorder::{retrying, Recorder};
 use super::store::{ClaimPolicy, Claimed, JobStatus, Lease, Store, StoreError, StoredResults, Which};
 use crate::flow::StopReason;
-use crate::jobs::{parse_spec, prepare, result_files, run_prepared, GlbContext};
+use crate::jobs::{parse_spec, prepare, result_files, run_prepared};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -148,8 +148,6 @@ impl Worker {
             Ok(p) => Arc::new(p),
             Err(e) => return finish(JobStatus::Failed, None, Some(&e.to_string())),
         };
-        let context = GlbContext::of(&prepared);
-        self.rt.block_on(retrying(|| self.store.put_context(&job.id, &context)))?;
         // the frames stored so far (a takeover), for evolution.glb
         let mut frames = self.rt.block_on(self.store.frames(&job.id, Which::All))?;
         let resume = frames.last().map(|f| f.state.clone());
