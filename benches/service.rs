@@ -5,11 +5,11 @@
 //! `status` event, minus the engine time of the same job run in-process, and minus
 //! what the CLI computes for it: the run, each checkpoint's fields, the result
 //! files), then the same on the short job stopped after one step (a job's fixed
-//! cost) and on a job ten times longer with as many checkpoints; and
+//! cost) and on jobs four and ten times longer with as many checkpoints; and
 //! the latency of a claim with 100,000 finished jobs in the table.
 //! On a temporary SQLite file, or on PostgreSQL when `SHAPEFLOW_BENCH_DATABASE` is
 //! a `postgres://` URL (an empty database: the bench fills it).
-//! `cargo bench --bench service` (`-- short`: the three overhead tables and the claim).
+//! `cargo bench --bench service` (`-- short`: the overhead tables and the claim).
 
 use shapeflow::jobs::{parse_spec, prepare, result_files, run_prepared, run_with_frames};
 use shapeflow::service::store::{self, ClaimPolicy, JobStatus};
@@ -36,6 +36,12 @@ const SHORT: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shap
 /// outcome and its event).
 const ONE_STEP: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 256},
   "flow": {"tau": 1e-4, "end_time": 0.1, "max_iterations": 1, "tolerance": 0}, "output": {"checkpoint_every": 100}}"#;
+
+/// The short job run four times longer, with as many checkpoints: about as long
+/// as the short job's engine took on the host where the 10 % target was set
+/// (about 80 ms).
+const MEDIUM: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 256},
+  "flow": {"tau": 2.5e-5, "end_time": 0.1, "max_iterations": 8000, "tolerance": 0}, "output": {"checkpoint_every": 400}}"#;
 
 /// The short job run ten times longer, with as many checkpoints.
 const LONGER: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 256},
@@ -141,10 +147,11 @@ fn main() {
 
     // overhead on a short job, first, with idle workers and an empty database;
     // then on the same job stopped after one step (the fixed costs of a job's life
-    // alone), and on a job ten times longer with as many checkpoints (those costs
-    // against a longer run)
+    // alone), and on jobs four and ten times longer with as many checkpoints (those
+    // costs against longer runs)
     overhead(addr, SHORT, RUNS, "short job (1000 iterations, 256 vertices, checkpoints every 100)");
     overhead(addr, ONE_STEP, RUNS, "one-step job (the short job stopped after 1 iteration)");
+    overhead(addr, MEDIUM, 7, "job of 4,000 iterations (256 vertices, checkpoints every 400)");
     overhead(addr, LONGER, 5, "longer job (10,000 iterations, 256 vertices, checkpoints every 1000)");
     // `-- short`: only the overhead tables, without the load after them
     if !std::env::args().any(|a| a == "short") {
