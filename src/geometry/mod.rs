@@ -3,6 +3,7 @@
 //! is kept apart from positions; derived quantities are computed on request.
 
 mod any_mesh;
+mod component_crossings;
 mod crossing_watch;
 mod curve_loop;
 pub use any_mesh::AnyMesh;

@@ -163,8 +163,7 @@ fn crossing_vertices<const D: usize>(mesh: &Mesh<D>) -> Vec<usize> {
     let pts: Vec<Point<2>> = mesh.positions().iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
     let els: Vec<[usize; 2]> = mesh.elements().iter().map(|e| [e[0], e[D - 1]]).collect();
     let curve = Mesh::<2>::from_trusted_parts(pts, els.clone());
-    let all = curve.crossings();
-    let hits = curve.crossings_between_components(&all);
+    let hits = curve.component_crossings();
     if hits.is_empty() {
         return Vec::new();
     }

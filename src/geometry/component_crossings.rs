@@ -1,0 +1,107 @@
+//! Crossings between different components of a curve mesh, searched only where
+//! two components' bounding boxes overlap: a segment crossing another
+//! component's segment lies in the overlap of the two boxes, so the segments
+//! elsewhere (most of them, for objects that touch only here and there) need no
+//! test. The hits are those of [`Mesh::crossings`] that join two components.
+
+use super::{find_segment_intersections, Mesh, SegmentHit};
+
+/// A closed axis-aligned box `[x0, y0, x1, y1]`.
+type Rect = [f64; 4];
+
+fn meets(a: &Rect, b: &Rect) -> bool {
+    a[0] <= b[2] && b[0] <= a[2] && a[1] <= b[3] && b[1] <= a[3]
+}
+
+impl Mesh<2> {
+    /// The crossings of segments of two different components (`a < b`, in the
+    /// order of [`Mesh::crossings`]); a non-periodic mesh.
+    pub fn component_crossings(&self) -> Vec<SegmentHit> {
+        debug_assert!(self.period().is_none(), "component crossings of a periodic curve");
+        let (label, count) = self.component_labels();
+        if count < 2 {
+            return Vec::new();
+        }
+        let x = self.positions();
+        let mut boxes = vec![[f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY]; count];
+        for (p, &c) in x.iter().zip(&label) {
+            let b = &mut boxes[c];
+            *b = [b[0].min(p.x), b[1].min(p.y), b[2].max(p.x), b[3].max(p.y)];
+        }
+        // the overlaps of every component's box with the others', by component
+        let mut overlaps: Vec<Vec<Rect>> = vec![Vec::new(); count];
+        for i in 0..count {
+            for j in i + 1..count {
+                let (a, b) = (&boxes[i], &boxes[j]);
+                if meets(a, b) {
+                    let o = [a[0].max(b[0]), a[1].max(b[1]), a[2].min(b[2]), a[3].min(b[3])];
+                    overlaps[i].push(o);
+                    overlaps[j].push(o);
+                }
+            }
+        }
+        let candidates: Vec<usize> = (0..self.num_elements())
+            .filter(|&e| {
+                let [a, b] = self.elements()[e];
+                let s = [x[a].x.min(x[b].x), x[a].y.min(x[b].y), x[a].x.max(x[b].x), x[a].y.max(x[b].y)];
+                overlaps[label[a]].iter().any(|o| meets(&s, o))
+            })
+            .collect();
+        if candidates.is_empty() {
+            return Vec::new();
+        }
+        let segments: Vec<[usize; 2]> = candidates.iter().map(|&e| self.elements()[e]).collect();
+        find_segment_intersections(x, &segments)
+            .into_iter()
+            .map(|h| SegmentHit { a: candidates[h.a], b: candidates[h.b], ..h })
+            .filter(|h| label[self.elements()[h.a][0]] != label[self.elements()[h.b][0]])
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::geometry::{circle, CurveMesh, Mesh, Point};
+
+    /// The circles side by side in one mesh, crossings allowed.
+    fn together(parts: &[CurveMesh]) -> CurveMesh {
+        let (mut x, mut elements) = (Vec::new(), Vec::new());
+        for part in parts {
+            let k = x.len();
+            x.extend_from_slice(part.positions());
+            elements.extend(part.elements().iter().map(|&[a, b]| [a + k, b + k]));
+        }
+        Mesh::from_trusted_parts(x, elements)
+    }
+
+    /// Every crossing of two components that the full search finds, and only
+    /// those: two overlapping circles, a third apart, a fourth crossing both.
+    #[test]
+    fn the_same_crossings_as_the_full_search() {
+        let mesh = together(&[
+            circle([0.0, 0.0], 1.0, 64).unwrap(),
+            circle([1.5, 0.0], 1.0, 48).unwrap(),
+            circle([6.0, 0.0], 1.0, 32).unwrap(),
+            circle([0.75, 0.9], 0.5, 40).unwrap(),
+        ]);
+        let all = mesh.crossings();
+        let between: Vec<(usize, usize)> = mesh.crossings_between_components(&all).iter().map(|h| (h.a, h.b)).collect();
+        let found: Vec<(usize, usize)> = mesh.component_crossings().iter().map(|h| (h.a, h.b)).collect();
+        assert!(between.len() >= 6, "{between:?}");
+        assert_eq!(found, between);
+        // apart, and a single component: nothing to search
+        let apart = together(&[circle([0.0, 0.0], 1.0, 32).unwrap(), circle([3.0, 0.0], 1.0, 32).unwrap()]);
+        assert!(apart.component_crossings().is_empty());
+        assert!(circle([0.0, 0.0], 1.0, 32).unwrap().component_crossings().is_empty());
+        // a component that crosses itself is not reported
+        let x = vec![
+            Point::<2>::new(0.0, 0.0),
+            Point::<2>::new(1.0, 1.0),
+            Point::<2>::new(1.0, 0.0),
+            Point::<2>::new(0.0, 1.0),
+        ];
+        let bow = Mesh::from_trusted_parts(x, vec![[0, 1], [1, 2], [2, 3], [3, 0]]);
+        assert!(!bow.crossings().is_empty());
+        assert!(bow.component_crossings().is_empty());
+    }
+}
