@@ -160,16 +160,24 @@ fn objects_cross<const D: usize>(mesh: &Mesh<D>) -> bool {
 /// cross (and of their neighbouring segments, so that the held stretch is not
 /// folded by the step around it).
 fn crossing_vertices<const D: usize>(mesh: &Mesh<D>) -> Vec<usize> {
-    let pts: Vec<Point<2>> = mesh.positions().iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
-    let els: Vec<[usize; 2]> = mesh.elements().iter().map(|e| [e[0], e[D - 1]]).collect();
-    let curve = Mesh::<2>::from_trusted_parts(pts, els.clone());
+    // the curve itself (its component labels are cached with its connectivity)
+    let copy;
+    let curve = match (mesh as &dyn std::any::Any).downcast_ref::<Mesh<2>>() {
+        Some(curve) => curve,
+        None => {
+            let pts = mesh.positions().iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
+            copy = Mesh::<2>::from_trusted_parts(pts, mesh.elements().iter().map(|e| [e[0], e[D - 1]]).collect());
+            &copy
+        }
+    };
     let hits = curve.component_crossings();
     if hits.is_empty() {
         return Vec::new();
     }
+    let els = curve.elements();
     let mut prev = vec![usize::MAX; mesh.num_vertices()];
     let mut next = vec![usize::MAX; mesh.num_vertices()];
-    for e in &els {
+    for e in els {
         next[e[0]] = e[1];
         prev[e[1]] = e[0];
     }
