@@ -4,7 +4,9 @@
 //! (model-viewer, three.js); triangles they all draw.
 
 use crate::flow::MeshData;
-use crate::geometry::{find_segment_intersections, segment_cycles, winding_number, Point};
+use crate::geometry::{
+    bounding_box, find_segment_intersections, in_box, segment_cycles, winding_number, BoxGrid, Point,
+};
 
 /// Width of the curve ribbons, relative to the diagonal of the curves' bounding box.
 pub(super) const RIBBON_WIDTH: f64 = 0.004;
@@ -54,13 +56,6 @@ impl Filled {
 pub(super) fn bounding_diagonal(points: &[[f64; 2]]) -> f64 {
     let b = bounding_box(points.iter().copied());
     (b[2] - b[0]).hypot(b[3] - b[1])
-}
-
-/// `[x_min, y_min, x_max, y_max]` of `points`.
-fn bounding_box(points: impl Iterator<Item = [f64; 2]>) -> [f64; 4] {
-    points.fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, p| {
-        [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
-    })
 }
 
 /// The curves of a 2D state as drawn in the plane: points (periodic components
@@ -169,49 +164,6 @@ pub fn region_triangles(points: &[[f64; 2]], loops: &[Vec<usize>]) -> Option<Vec
         }
     }
     Some(triangles)
-}
-
-/// The boxes of many loops binned on a grid of about as many cells over them all,
-/// so that the loops whose box may hold a point are found without looking at every
-/// loop (the seeds start has thousands of small ones).
-struct BoxGrid {
-    origin: [f64; 2],
-    cell: [f64; 2],
-    side: usize,
-    cells: Vec<Vec<usize>>,
-}
-
-impl BoxGrid {
-    fn new(boxes: &[[f64; 4]]) -> BoxGrid {
-        let all = bounding_box(boxes.iter().flat_map(|b| [[b[0], b[1]], [b[2], b[3]]]));
-        let side = ((boxes.len() as f64).sqrt().ceil() as usize).clamp(1, 256);
-        let cell = [((all[2] - all[0]) / side as f64).max(1e-300), ((all[3] - all[1]) / side as f64).max(1e-300)];
-        let mut grid = BoxGrid { origin: [all[0], all[1]], cell, side, cells: vec![Vec::new(); side * side] };
-        for (k, b) in boxes.iter().enumerate() {
-            let (lo, hi) = (grid.index([b[0], b[1]]), grid.index([b[2], b[3]]));
-            for y in lo[1]..=hi[1] {
-                for x in lo[0]..=hi[0] {
-                    grid.cells[y * side + x].push(k);
-                }
-            }
-        }
-        grid
-    }
-
-    fn index(&self, p: [f64; 2]) -> [usize; 2] {
-        let at = |d: usize| (((p[d] - self.origin[d]) / self.cell[d]).max(0.0) as usize).min(self.side - 1);
-        [at(0), at(1)]
-    }
-
-    /// The loops whose box meets the cell of `p`.
-    fn at(&self, p: [f64; 2]) -> &[usize] {
-        let [x, y] = self.index(p);
-        &self.cells[y * self.side + x]
-    }
-}
-
-fn in_box(b: &[f64; 4], p: [f64; 2]) -> bool {
-    p[0] >= b[0] && p[0] <= b[2] && p[1] >= b[1] && p[1] <= b[3]
 }
 
 /// Twice the signed area of the triangle `a b c`.

@@ -4,14 +4,7 @@
 //! elsewhere (most of them, for objects that touch only here and there) need no
 //! test. The hits are those of [`Mesh::crossings`] that join two components.
 
-use super::{find_segment_intersections, Mesh, SegmentHit};
-
-/// A closed axis-aligned box `[x0, y0, x1, y1]`.
-type Rect = [f64; 4];
-
-fn meets(a: &Rect, b: &Rect) -> bool {
-    a[0] <= b[2] && b[0] <= a[2] && a[1] <= b[3] && b[1] <= a[3]
-}
+use super::{bounding_box, boxes_meet, find_segment_intersections, BoxGrid, Mesh, Rect, SegmentHit};
 
 impl Mesh<2> {
     /// The crossings of segments of two different components (`a < b`, in the
@@ -23,28 +16,34 @@ impl Mesh<2> {
             return Vec::new();
         }
         let x = self.positions();
-        let mut boxes = vec![[f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY]; count];
+        let mut boxes = vec![bounding_box(std::iter::empty()); count];
         for (p, &c) in x.iter().zip(&label) {
             let b = &mut boxes[c];
             *b = [b[0].min(p.x), b[1].min(p.y), b[2].max(p.x), b[3].max(p.y)];
         }
-        // the overlaps of every component's box with the others', by component
+        // the overlaps of every component's box with the others', by component,
+        // the pairs found on a grid of the boxes (a seeds start has thousands)
+        let grid = BoxGrid::new(&boxes);
         let mut overlaps: Vec<Vec<Rect>> = vec![Vec::new(); count];
+        let mut seen = vec![usize::MAX; count];
         for i in 0..count {
-            for j in i + 1..count {
-                let (a, b) = (&boxes[i], &boxes[j]);
-                if meets(a, b) {
-                    let o = [a[0].max(b[0]), a[1].max(b[1]), a[2].min(b[2]), a[3].min(b[3])];
-                    overlaps[i].push(o);
-                    overlaps[j].push(o);
+            let a = boxes[i];
+            for j in grid.near(&a) {
+                if j <= i || seen[j] == i || !boxes_meet(&a, &boxes[j]) {
+                    continue;
                 }
+                seen[j] = i;
+                let b = &boxes[j];
+                let o = [a[0].max(b[0]), a[1].max(b[1]), a[2].min(b[2]), a[3].min(b[3])];
+                overlaps[i].push(o);
+                overlaps[j].push(o);
             }
         }
         let candidates: Vec<usize> = (0..self.num_elements())
             .filter(|&e| {
                 let [a, b] = self.elements()[e];
                 let s = [x[a].x.min(x[b].x), x[a].y.min(x[b].y), x[a].x.max(x[b].x), x[a].y.max(x[b].y)];
-                overlaps[label[a]].iter().any(|o| meets(&s, o))
+                overlaps[label[a]].iter().any(|o| boxes_meet(&s, o))
             })
             .collect();
         if candidates.is_empty() {

@@ -3,10 +3,12 @@
 //! is kept apart from positions; derived quantities are computed on request.
 
 mod any_mesh;
+mod boxes;
 mod component_crossings;
 mod crossing_watch;
 mod curve_loop;
 pub use any_mesh::AnyMesh;
+pub use boxes::{bounding_box, boxes_meet, in_box, BoxGrid, Rect};
 pub use curve_loop::loop_area;
 mod curve_pass;
 mod curve_remesh;

@@ -1,0 +1,98 @@
+//! Axis-aligned boxes in the plane and a grid that bins many of them, so that the
+//! boxes near a point or another box are found without looking at every box
+//! (a segmentation's seeds start has thousands of small loops).
+
+/// A closed box `[x_min, y_min, x_max, y_max]`.
+pub type Rect = [f64; 4];
+
+/// The bounding box of `points` (empty: infinite the wrong way round).
+pub fn bounding_box(points: impl Iterator<Item = [f64; 2]>) -> Rect {
+    points.fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, p| {
+        [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
+    })
+}
+
+/// Whether the closed boxes `a` and `b` meet.
+pub fn boxes_meet(a: &Rect, b: &Rect) -> bool {
+    a[0] <= b[2] && b[0] <= a[2] && a[1] <= b[3] && b[1] <= a[3]
+}
+
+/// Whether `p` lies in the closed box `b`.
+pub fn in_box(b: &Rect, p: [f64; 2]) -> bool {
+    p[0] >= b[0] && p[0] <= b[2] && p[1] >= b[1] && p[1] <= b[3]
+}
+
+/// Boxes binned on a grid of about as many cells over them all: every box is
+/// listed in each cell it meets.
+pub struct BoxGrid {
+    origin: [f64; 2],
+    cell: [f64; 2],
+    side: usize,
+    cells: Vec<Vec<usize>>,
+}
+
+impl BoxGrid {
+    pub fn new(boxes: &[Rect]) -> BoxGrid {
+        let all = bounding_box(boxes.iter().flat_map(|b| [[b[0], b[1]], [b[2], b[3]]]));
+        let side = ((boxes.len() as f64).sqrt().ceil() as usize).clamp(1, 256);
+        let cell = [((all[2] - all[0]) / side as f64).max(1e-300), ((all[3] - all[1]) / side as f64).max(1e-300)];
+        let mut grid = BoxGrid { origin: [all[0], all[1]], cell, side, cells: vec![Vec::new(); side * side] };
+        for (k, b) in boxes.iter().enumerate() {
+            let (lo, hi) = (grid.index([b[0], b[1]]), grid.index([b[2], b[3]]));
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    grid.cells[y * side + x].push(k);
+                }
+            }
+        }
+        grid
+    }
+
+    fn index(&self, p: [f64; 2]) -> [usize; 2] {
+        let at = |d: usize| (((p[d] - self.origin[d]) / self.cell[d]).max(0.0) as usize).min(self.side - 1);
+        [at(0), at(1)]
+    }
+
+    /// The boxes listed in the cell of `p` (every box that holds `p` among them).
+    pub fn at(&self, p: [f64; 2]) -> &[usize] {
+        let [x, y] = self.index(p);
+        &self.cells[y * self.side + x]
+    }
+
+    /// The boxes listed in the cells that `b` meets (every box that meets `b`
+    /// among them), a box once for each such cell.
+    pub fn near(&self, b: &Rect) -> impl Iterator<Item = usize> + '_ {
+        let (lo, hi) = (self.index([b[0], b[1]]), self.index([b[2], b[3]]));
+        (lo[1]..=hi[1])
+            .flat_map(move |y| (lo[0]..=hi[0]).flat_map(move |x| self.cells[y * self.side + x].iter().copied()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The boxes near a box are found by the grid exactly as by looking at all.
+    #[test]
+    fn the_grid_finds_every_box_that_meets() {
+        let boxes: Vec<Rect> = (0..400)
+            .map(|k| {
+                let (x, y) = ((k % 20) as f64 * 1.5, (k / 20) as f64 * 1.5 + 0.1 * (k % 3) as f64);
+                [x, y, x + 1.0 + 0.5 * (k % 4) as f64, y + 1.0]
+            })
+            .collect();
+        let grid = BoxGrid::new(&boxes);
+        for (i, b) in boxes.iter().enumerate() {
+            let mut found: Vec<usize> = grid.near(b).filter(|&j| boxes_meet(b, &boxes[j])).collect();
+            found.sort_unstable();
+            found.dedup();
+            let all: Vec<usize> = (0..boxes.len()).filter(|&j| boxes_meet(b, &boxes[j])).collect();
+            assert_eq!(found, all, "box {i}");
+            let p = [b[0] + 0.25, b[1] + 0.25];
+            let mut holding: Vec<usize> = grid.at(p).iter().copied().filter(|&j| in_box(&boxes[j], p)).collect();
+            holding.sort_unstable();
+            assert_eq!(holding, (0..boxes.len()).filter(|&j| in_box(&boxes[j], p)).collect::<Vec<_>>());
+        }
+        assert_eq!(bounding_box([[1.0, 2.0], [-1.0, 5.0]].into_iter()), [-1.0, 2.0, 1.0, 5.0]);
+    }
+}
