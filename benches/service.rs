@@ -6,11 +6,13 @@
 //! what the CLI computes for it: the run, each checkpoint's fields, the result
 //! files), then the same on the short job stopped after one step (a job's fixed
 //! cost) and on jobs four and ten times longer with as many checkpoints; and
-//! the latency of a claim with 100,000 finished jobs in the table.
+//! the latency of a claim with 100,000 finished jobs in the table, and the rate
+//! of history batches the database takes from 1, 4 and 16 writers at once.
 //! On a temporary SQLite file, or on PostgreSQL when `SHAPEFLOW_BENCH_DATABASE` is
 //! a `postgres://` URL (an empty database: the bench fills it).
-//! `cargo bench --bench service` (`-- short`: the overhead tables and the claim).
+//! `cargo bench --bench service` (`-- short`: the overhead tables, the claim and the batch rate).
 
+use shapeflow::flow::Progress;
 use shapeflow::jobs::{parse_spec, prepare, result_files, run_prepared, run_with_frames};
 use shapeflow::service::store::{self, ClaimPolicy, JobStatus};
 use shapeflow::service::{Service, ServiceConfig};
@@ -325,6 +327,55 @@ async fn claims(database: &str, dir: &std::path::Path) {
         percentile(&mut lat.clone(), 0.5),
         percentile(&mut lat, 0.99)
     );
+    batch_rate(&st, &policy).await;
+}
+
+/// History batches as workers write them (`JobStore::record`: the fence, 64
+/// history rows, the notification), from 1, 4 and 16 writers at once for 3 s, each
+/// on a running job of its own: how many batches and rows per second the database
+/// takes.
+async fn batch_rate(st: &store::Store, policy: &ClaimPolicy) {
+    println!();
+    println!("| history batches of 64 rows, 3 s | batches/s | rows/s | p50 | p99 |");
+    println!("|---|---|---|---|---|");
+    for writers in [1, 4, 16] {
+        let mut tasks = Vec::new();
+        for k in 0..writers {
+            st.insert_job(&format!("batch-{}-{writers}-{k}", std::process::id()), SHORT, &Default::default())
+                .await
+                .unwrap();
+            let c = st.claim_next("bench", policy).await.unwrap().expect("an accepted job");
+            let st = st.clone();
+            tasks.push(tokio::spawn(async move {
+                let (mut lat, mut iteration, start) = (Vec::new(), 0, Instant::now());
+                while start.elapsed() < Duration::from_secs(3) {
+                    let rows: Vec<Progress> = (0..64)
+                        .map(|_| {
+                            iteration += 1;
+                            Progress { iteration, time: 0.0, tau: 1e-3, energy: 1.0, vertices: 256, components: 1 }
+                        })
+                        .collect();
+                    let t = Instant::now();
+                    st.record(&c.job.id, &c.lease, &rows, &[]).await.unwrap();
+                    lat.push(t.elapsed().as_secs_f64() * 1e3);
+                }
+                st.finish(&c.job.id, Some(&c.lease), JobStatus::Successful, None, None, None).await.unwrap();
+                lat
+            }));
+        }
+        let mut lat = Vec::new();
+        for t in tasks {
+            lat.extend(t.await.unwrap());
+        }
+        let rate = lat.len() as f64 / 3.0;
+        println!(
+            "| {writers} writer{} | {rate:.0} | {:.0} | {:.2} ms | {:.2} ms |",
+            if writers > 1 { "s" } else { "" },
+            64.0 * rate,
+            percentile(&mut lat.clone(), 0.5),
+            percentile(&mut lat, 0.99)
+        );
+    }
 }
 
 /// Follow a job's event stream until `stop`: ms to the first event, the number of

@@ -73,7 +73,7 @@ impl Recorder {
     /// Start the writer of job `id` under `lease`, which stores the job's glb
     /// context before any checkpoint; `cancel` is raised when the run must stop
     /// (cancellation requested, lease lost, storage error); every written batch is
-    /// announced on `events`.
+    /// announced on `events` (unless the store announces it to every node).
     pub(super) fn start(
         rt: &Handle,
         job: Arc<PreparedJob>,
@@ -128,7 +128,9 @@ impl Recorder {
                 match retrying(|| store.record(&id, &lease, &rows, &frames)).await {
                     Ok(cancelled) => {
                         state.frames.extend(frames);
-                        let _ = events.send(Arc::from(id.as_str()));
+                        if !store.announces() {
+                            let _ = events.send(Arc::from(id.as_str()));
+                        }
                         if cancelled {
                             cancel.store(true, Ordering::Relaxed);
                         }

@@ -44,7 +44,8 @@ pub struct Worker {
     pub registry: Registry,
     pub wake: Arc<Notify>,
     pub shutdown: Arc<AtomicBool>,
-    /// Where each history batch and outcome is announced (the job's id).
+    /// Where each history batch and outcome is announced (the job's id), unless
+    /// the store announces them itself ([`crate::service::store::JobStore::announces`]).
     pub events: broadcast::Sender<Arc<str>>,
     /// This node's name in the leases it holds.
     pub owner: String,
@@ -136,7 +137,9 @@ impl Worker {
                 }
             }
             ended?;
-            let _ = self.events.send(Arc::from(job.id.as_str()));
+            if !self.store.announces() {
+                let _ = self.events.send(Arc::from(job.id.as_str()));
+            }
             Ok(status)
         };
         let finish = |status: JobStatus, stop: Option<&str>, msg: Option<&str>| finish_with(status, stop, msg, None);

@@ -1,7 +1,7 @@
 //! `GET /v1/jobs/{id}/events`: Server-Sent Events of a job. The stream reads the
-//! database when the job is announced on the node's broadcast channel (its own
-//! workers' batches, and on PostgreSQL other nodes' notifications), never on a
-//! fixed short period.
+//! database when the job is announced on the node's broadcast channel (on SQLite
+//! by its own workers after each batch; on PostgreSQL by the notifications of
+//! every node's batches, its own included), never on a fixed short period.
 
 use super::find;
 use crate::service::wire::JobView;

@@ -44,6 +44,13 @@ pub trait JobStore: Send + Sync + 'static {
     /// outcome; `"*"`: re-read everything). Nothing to do on a single node, whose
     /// workers send to `events` themselves.
     fn watch(&self, _events: tokio::sync::broadcast::Sender<Arc<str>>) {}
+    /// Whether the store announces every history batch and outcome itself (to
+    /// every node, through [`JobStore::watch`]), so that a node's workers need not
+    /// announce them again to its own event streams (a stream woken twice reads
+    /// the database twice).
+    fn announces(&self) -> bool {
+        false
+    }
     /// Insert a new accepted job and the rows of its inputs (already in the blob
     /// store; `heads`: name and first bytes of each), in one transaction.
     async fn insert_rows(&self, id: &str, spec: &str, heads: &[(String, Vec<u8>)]) -> StoreResult<JobRow>;

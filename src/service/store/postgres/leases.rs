@@ -2,7 +2,6 @@
 //! transactions, renewals and the fence, all on the database's clock.
 
 use super::{job_from_row, CHANNEL};
-use crate::flow::Progress;
 use crate::service::store::{crash_message, now, ClaimPolicy, Claimed, Lease, StoreError, StoreResult};
 use sqlx::postgres::PgPool;
 use sqlx::{Postgres, Row, Transaction};
@@ -15,32 +14,6 @@ pub(super) async fn fence(tx: &mut Transaction<'_, Postgres>, id: &str, lease: &
     )
     .bind(id)
     .bind(lease.epoch)
-    .fetch_optional(&mut **tx)
-    .await?;
-    held.map(|r| r.get::<bool, _>(0)).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
-}
-
-/// Within `tx`: the fence and the job's progress (its last history row `p`) in
-/// one statement, a round trip less than [`fence`] and an update; whether
-/// cancellation was requested.
-pub(super) async fn fenced_progress(
-    tx: &mut Transaction<'_, Postgres>,
-    id: &str,
-    lease: &Lease,
-    p: &Progress,
-) -> StoreResult<bool> {
-    let held = sqlx::query(
-        "UPDATE jobs SET iteration = $3, time = $4, tau = $5, energy = $6, vertices = $7, components = $8 \
-         WHERE id = $1 AND lease_epoch = $2 AND status = 'running' RETURNING cancel_requested",
-    )
-    .bind(id)
-    .bind(lease.epoch)
-    .bind(p.iteration as i64)
-    .bind(p.time)
-    .bind(p.tau)
-    .bind(p.energy)
-    .bind(p.vertices as i64)
-    .bind(p.components as i64)
     .fetch_optional(&mut **tx)
     .await?;
     held.map(|r| r.get::<bool, _>(0)).ok_or_else(|| StoreError::LeaseLost(id.to_string()))

@@ -8,7 +8,7 @@ mod listen;
 
 use super::{
     now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
-    JobStore, Lease, StoreResult, Which,
+    JobStore, Lease, StoreError, StoreResult, Which,
 };
 use crate::flow::Progress;
 use sqlx::postgres::{PgConnectOptions, PgPool, PgPoolOptions, PgRow};
@@ -29,7 +29,7 @@ macro_rules! clock_ms {
 }
 
 mod leases;
-use leases::{fence, fenced_progress};
+use leases::fence;
 
 #[derive(Clone)]
 pub struct PgStore {
@@ -94,6 +94,10 @@ impl JobStore for PgStore {
     /// have dropped notifications) it sends `"*"`, on which every stream re-reads.
     fn watch(&self, events: broadcast::Sender<Arc<str>>) {
         listen::forward(self.pool.clone(), CHANNEL, events);
+    }
+
+    fn announces(&self) -> bool {
+        true
     }
 
     async fn insert_rows(&self, id: &str, spec: &str, heads: &[(String, Vec<u8>)]) -> StoreResult<JobRow> {
@@ -203,6 +207,9 @@ impl JobStore for PgStore {
             .collect())
     }
 
+    /// The fence, the job's progress, the batch's history rows, its checkpoints'
+    /// rows and the notification in one statement: one round trip, atomic on its
+    /// own (each part runs only where the fence's update found the lease).
     async fn record_rows(
         &self,
         id: &str,
@@ -210,46 +217,49 @@ impl JobStore for PgStore {
         rows: &[Progress],
         checkpoints: &[CheckpointKey],
     ) -> StoreResult<bool> {
-        let mut tx = self.pool.begin().await?;
-        let cancel = match rows.last() {
-            Some(p) => fenced_progress(&mut tx, id, lease, p).await?,
-            None => fence(&mut tx, id, lease).await?,
-        };
-        if !rows.is_empty() {
-            // one statement for the batch
-            let col = |f: fn(&Progress) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
-            let int = |f: fn(&Progress) -> usize| rows.iter().map(|p| f(p) as i64).collect::<Vec<i64>>();
-            sqlx::query(
-                "INSERT INTO history (job_id, iteration, time, tau, energy, vertices, components) \
-                 SELECT $1, * FROM UNNEST($2::bigint[], $3::float8[], $4::float8[], $5::float8[], $6::bigint[], $7::bigint[]) \
+        let col = |f: fn(&Progress) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+        let int = |f: fn(&Progress) -> usize| rows.iter().map(|p| f(p) as i64).collect::<Vec<i64>>();
+        let last = rows.last();
+        let held = sqlx::query(
+            "WITH fence AS ( \
+                 UPDATE jobs SET iteration = COALESCE($3, iteration), time = COALESCE($4, time), \
+                 tau = COALESCE($5, tau), energy = COALESCE($6, energy), vertices = COALESCE($7, vertices), \
+                 components = COALESCE($8, components) \
+                 WHERE id = $1 AND lease_epoch = $2 AND status = 'running' RETURNING cancel_requested), \
+             rows AS ( \
+                 INSERT INTO history (job_id, iteration, time, tau, energy, vertices, components) \
+                 SELECT $1, u.* FROM UNNEST($9::bigint[], $10::float8[], $11::float8[], $12::float8[], \
+                 $13::bigint[], $14::bigint[]) AS u WHERE EXISTS (SELECT 1 FROM fence) \
                  ON CONFLICT (job_id, iteration) DO UPDATE SET time = EXCLUDED.time, tau = EXCLUDED.tau, \
-                 energy = EXCLUDED.energy, vertices = EXCLUDED.vertices, components = EXCLUDED.components",
-            )
-            .bind(id)
-            .bind(int(|p| p.iteration))
-            .bind(col(|p| p.time))
-            .bind(col(|p| p.tau))
-            .bind(col(|p| p.energy))
-            .bind(int(|p| p.vertices))
-            .bind(int(|p| p.components))
-            .execute(&mut *tx)
-            .await?;
-        }
-        for c in checkpoints {
-            sqlx::query(
-                "INSERT INTO checkpoints (job_id, iteration, time, data, blob) VALUES ($1, $2, $3, '', $4) \
-                 ON CONFLICT (job_id, iteration) DO UPDATE SET time = EXCLUDED.time, data = '', blob = EXCLUDED.blob",
-            )
-            .bind(id)
-            .bind(c.iteration)
-            .bind(c.time)
-            .bind(&c.key)
-            .execute(&mut *tx)
-            .await?;
-        }
-        sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind(id).execute(&mut *tx).await?;
-        tx.commit().await?;
-        Ok(cancel)
+                 energy = EXCLUDED.energy, vertices = EXCLUDED.vertices, components = EXCLUDED.components), \
+             frames AS ( \
+                 INSERT INTO checkpoints (job_id, iteration, time, data, blob) \
+                 SELECT $1, c.iteration, c.time, '', c.blob FROM UNNEST($15::bigint[], $16::float8[], $17::text[]) \
+                 AS c (iteration, time, blob) WHERE EXISTS (SELECT 1 FROM fence) \
+                 ON CONFLICT (job_id, iteration) DO UPDATE SET time = EXCLUDED.time, data = '', blob = EXCLUDED.blob) \
+             SELECT cancel_requested, pg_notify($18, $1) FROM fence",
+        )
+        .bind(id)
+        .bind(lease.epoch)
+        .bind(last.map(|p| p.iteration as i64))
+        .bind(last.map(|p| p.time))
+        .bind(last.map(|p| p.tau))
+        .bind(last.map(|p| p.energy))
+        .bind(last.map(|p| p.vertices as i64))
+        .bind(last.map(|p| p.components as i64))
+        .bind(int(|p| p.iteration))
+        .bind(col(|p| p.time))
+        .bind(col(|p| p.tau))
+        .bind(col(|p| p.energy))
+        .bind(int(|p| p.vertices))
+        .bind(int(|p| p.components))
+        .bind(checkpoints.iter().map(|c| c.iteration).collect::<Vec<i64>>())
+        .bind(checkpoints.iter().map(|c| c.time).collect::<Vec<f64>>())
+        .bind(checkpoints.iter().map(|c| c.key.as_str()).collect::<Vec<&str>>())
+        .bind(CHANNEL)
+        .fetch_optional(&self.pool)
+        .await?;
+        held.map(|r| r.get::<bool, _>(0)).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
     }
 
     async fn truncate_history(&self, id: &str, lease: &Lease, after: usize) -> StoreResult<()> {
@@ -277,6 +287,8 @@ impl JobStore for PgStore {
         Ok(done.rows_affected() == 1)
     }
 
+    /// One statement: the fence (the lease's epoch in the update's condition), the
+    /// outcome and the notification.
     async fn finish(
         &self,
         id: &str,
@@ -286,13 +298,11 @@ impl JobStore for PgStore {
         message: Option<&str>,
         results: Option<&str>,
     ) -> StoreResult<()> {
-        let mut tx = self.pool.begin().await?;
-        if let Some(lease) = lease {
-            fence(&mut tx, id, lease).await?;
-        }
-        sqlx::query(
+        let ended = sqlx::query(
             "UPDATE jobs SET status = $2, stop_reason = $3, message = $4, finished_at = $5, lease_expires = NULL, \
-             results = COALESCE($6, results) WHERE id = $1",
+             results = COALESCE($6, results) \
+             WHERE id = $1 AND ($7::bigint IS NULL OR (lease_epoch = $7 AND status = 'running')) \
+             RETURNING pg_notify($8, $1)",
         )
         .bind(id)
         .bind(status.as_str())
@@ -300,10 +310,14 @@ impl JobStore for PgStore {
         .bind(message)
         .bind(now())
         .bind(results)
-        .execute(&mut *tx)
+        .bind(lease.map(|l| l.epoch))
+        .bind(CHANNEL)
+        .fetch_optional(&self.pool)
         .await?;
-        sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind(id).execute(&mut *tx).await?;
-        Ok(tx.commit().await?)
+        match (ended, lease) {
+            (None, Some(_)) => Err(StoreError::LeaseLost(id.to_string())),
+            _ => Ok(()),
+        }
     }
 
     async fn cancel_requested(&self, id: &str) -> StoreResult<bool> {
