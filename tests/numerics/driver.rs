@@ -189,3 +189,50 @@ fn failed_backtracking_rediscretizes_the_current_state_once() {
     assert_eq!(flow.iteration(), 5);
     assert!(flow.energy() < j_fresh, "curve shortening shortens: {j_fresh} → {}", flow.energy());
 }
+
+/// Where the geometric control sets `τ` (an ellipse pushed outwards by an area
+/// term far from its target: neighbours' normals differ by `hκ`, so the push
+/// parts them at a rate `fκ` and the control allows `τ ≤ ε/(f κ_max)`, which grows
+/// as the tips blunt), each step starts from 0.9 times the longest step the
+/// control allowed the last one, not from a doubled `τ` that it would cut back:
+/// `τ` follows the limit without cuts, growing by less than twice each step
+/// (without the prediction it alternates between a doubled step and one cut
+/// back to it). The limit is kept in the checkpoint, so a resumed run takes the
+/// uninterrupted run's steps.
+#[test]
+fn steps_start_from_the_step_controls_last_limit() {
+    let mut problem = AreaTarget { target: 100.0, eps: 0.01 };
+    let settings = FlowSettings { tau: 1.0, max_iterations: 11, tolerance: 0.0, ..FlowSettings::default() };
+    let start = || ellipse([0.0, 0.0], [1.0, 0.5], 0.0, 96).unwrap();
+    let run = |flow: &mut Flow<'_, 2>| {
+        let (mut steps, mut cut) = (Vec::new(), 0);
+        while let Ok(r) = flow.step() {
+            if r.accepted {
+                cut += r.reductions;
+                steps.push((flow.iteration(), flow.time(), flow.progress().tau, flow.energy()));
+            }
+            if r.stop.is_some() {
+                break;
+            }
+        }
+        (steps, cut)
+    };
+    let mut flow = Flow::new(&mut problem, start(), settings.clone()).unwrap();
+    let (full, cut) = run(&mut flow);
+    let taus: Vec<f64> = full.iter().map(|s| s.2).collect();
+    eprintln!("{cut} trials cut in {} steps; τ {taus:?}", full.len());
+    assert_eq!(full.len(), 11);
+    assert!(taus.windows(2).all(|w| w[1] > w[0] && w[1] < 1.9 * w[0]), "τ does not follow the limit: {taus:?}");
+    assert!(cut <= 3, "{cut} trials cut in 11 steps (the first step's cuts from τ_spec = 1 among them)");
+
+    drop(flow);
+    let mut flow = Flow::new(&mut problem, start(), FlowSettings { max_iterations: 6, ..settings.clone() }).unwrap();
+    let (mut first, _) = run(&mut flow);
+    let json = serde_json::to_string(&flow.checkpoint()).unwrap();
+    assert!(json.contains("motion_limit"), "{json:.200}");
+    let cp: shapeflow::flow::Checkpoint = serde_json::from_str(&json).unwrap();
+    drop(flow);
+    let mut resumed = Flow::resume(&mut problem, &cp, settings).unwrap();
+    first.extend(run(&mut resumed).0);
+    assert_eq!(first, full, "the resumed run takes other steps");
+}
