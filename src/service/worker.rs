@@ -44,8 +44,9 @@ pub struct Worker {
     pub registry: Registry,
     pub wake: Arc<Notify>,
     pub shutdown: Arc<AtomicBool>,
-    /// Where each history batch and outcome is announced (the job's id), unless
-    /// the store announces them itself ([`crate::service::store::JobStore::announces`]).
+    /// Where each outcome is announced (the job's id), and each history batch
+    /// unless the store announces it itself
+    /// ([`crate::service::store::JobStore::announces`]).
     pub events: broadcast::Sender<Arc<str>>,
     /// This node's name in the leases it holds.
     pub owner: String,
@@ -137,9 +138,9 @@ impl Worker {
                 }
             }
             ended?;
-            if !self.store.announces() {
-                let _ = self.events.send(Arc::from(job.id.as_str()));
-            }
+            // at once, without waiting for the store's notification: a stream that
+            // reads the outcome ends, so the notification wakes it no more
+            let _ = self.events.send(Arc::from(job.id.as_str()));
             Ok(status)
         };
         let finish = |status: JobStatus, stop: Option<&str>, msg: Option<&str>| finish_with(status, stop, msg, None);

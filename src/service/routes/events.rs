@@ -1,7 +1,8 @@
 //! `GET /v1/jobs/{id}/events`: Server-Sent Events of a job. The stream reads the
 //! database when the job is announced on the node's broadcast channel (on SQLite
 //! by its own workers after each batch; on PostgreSQL by the notifications of
-//! every node's batches, its own included), never on a fixed short period.
+//! every node's batches, its own included; a job's outcome also by the worker
+//! that ends it, at once), never on a fixed short period.
 
 use super::find;
 use crate::service::wire::JobView;

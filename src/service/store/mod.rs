@@ -45,9 +45,10 @@ pub trait JobStore: Send + Sync + 'static {
     /// workers send to `events` themselves.
     fn watch(&self, _events: tokio::sync::broadcast::Sender<Arc<str>>) {}
     /// Whether the store announces every history batch and outcome itself (to
-    /// every node, through [`JobStore::watch`]), so that a node's workers need not
-    /// announce them again to its own event streams (a stream woken twice reads
-    /// the database twice).
+    /// every node, through [`JobStore::watch`]), so that a node's writers need not
+    /// announce batches again to its own event streams (a stream woken twice reads
+    /// the database twice; outcomes are announced at once all the same, and a
+    /// stream that read one has ended).
     fn announces(&self) -> bool {
         false
     }
