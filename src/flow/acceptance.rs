@@ -31,12 +31,6 @@ pub(super) fn motion_limit<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, tau: f6
     (ratio > 0.0).then(|| tau * eps / ratio)
 }
 
-/// The share of the last step's [`motion_limit`] at which the next step starts
-/// when that is shorter than the doubled `τ`: the factor of the retry in
-/// [`step_control`], so that a run whose `τ` the control sets tries the step the
-/// control would have retried with.
-pub(super) const PREDICTED: f64 = 0.9;
-
 /// Geometric control: a step longer than its [`motion_limit`] (its ratio above
 /// `ε`) is retried with `min(0.9 · limit, τ/2)`, that is `τ · min(0.9 ε/ratio, ½)`.
 pub(super) fn step_control(tau: f64, limit: Option<f64>) -> Verdict {

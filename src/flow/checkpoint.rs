@@ -92,11 +92,6 @@ pub struct Checkpoint {
     /// ([`Flow`](super::Flow)); 0 (none yet) is left out of the JSON.
     #[serde(default, skip_serializing_if = "is_zero_f64")]
     pub settled_tau: f64,
-    /// The geometric control's limit on the last step's motion, from which the
-    /// next step starts where the control binds ([`Flow`](super::Flow)); left out
-    /// of the JSON when there is none.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub motion_limit: Option<f64>,
     /// The recorded energies at the ends of the last judged steps, oldest first
     /// (the convergence test over several steps, [`Flow`](super::Flow)); left out
     /// of the JSON when empty.

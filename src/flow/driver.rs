@@ -1,10 +1,8 @@
 //! The driver: time-step selection (geometric control, backtracking), stop
 //! criteria, progress, cancellation and checkpoints.
 //!
-//! Each step tries `τ = min(τ_spec, 2 τ_last)` (clipped to the end time; and where
-//! the geometric control bound the last step, at most 0.9 times the longest step
-//! it allowed that step's motion, the `τ` it would retry with), solves for `V⃗`,
-//! and then
+//! Each step tries `τ = min(τ_spec, 2 τ_last)` (clipped to the end time), solves for
+//! `V⃗`, and then
 //! 1. *geometric control* (paper §4.1): if `τ max_T |V⃗(z_a) − V⃗(z_b)| / h_T > ε`
 //!    the step is retried with `τ ← 0.9 ε τ / ratio`;
 //! 2. *tangling*: an element that degenerates or flips halves `τ`; so does a change
@@ -96,11 +94,6 @@ pub struct Flow<'p, const D: usize> {
     /// time, step control, backtracking): a step growing back to it after a short
     /// one is judged for convergence once it is at least half as long.
     pub(super) settled_tau: f64,
-    /// The longest step the geometric control allowed the last accepted step's
-    /// motion ([`rules::motion_limit`]); the next step starts from at most
-    /// [`rules::PREDICTED`] of it instead of a doubled `τ` that the control
-    /// would cut back (a solve saved per step while the control sets `τ`).
-    pub(super) motion_limit: Option<f64>,
     /// The recorded energies (after mesh management) at the ends of the last judged
     /// steps, oldest first, at most [`rules::WINDOW`] + 1 of them: the test over
     /// several steps.
@@ -147,7 +140,6 @@ impl<'p, const D: usize> Flow<'p, D> {
             mesh: MeshData::from(&self.mesh),
             stage: 0,
             settled_tau: self.settled_tau,
-            motion_limit: self.motion_limit,
             recent_energies: self.recent.clone(),
         }
     }
@@ -188,11 +180,6 @@ impl<'p, const D: usize> Flow<'p, D> {
         let mut tau = s.tau.min(2.0 * self.tau);
         // still growing back after a step that was cut short
         let growing = 2.0 * self.tau < s.tau;
-        // the step control's limit on the last step, where it binds (a trial at
-        // least at τ_min: the control, not the prediction, says why a run stops)
-        let predicted =
-            self.motion_limit.map(|l| (rules::PREDICTED * l).max(self.settings.tau_min)).filter(|&l| l < tau);
-        tau = predicted.unwrap_or(tau);
         if let Some(end) = s.end_time {
             let left = end - self.time;
             if left <= 1e-12 * end.abs().max(1.0) {
@@ -211,7 +198,6 @@ impl<'p, const D: usize> Flow<'p, D> {
         };
         let mut smallest_rise = f64::INFINITY;
         let mut tangled = false;
-        let mut limit: Option<f64>;
         loop {
             if tau < s.tau_min {
                 if report.rejected == Some(Rejection::EnergyIncrease) && self.rediscretized_at != Some(self.iteration) {
@@ -245,7 +231,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             // the problem's constraints (an obstacle, the image's box, the objects'
             // territories)
             let mut candidate = self.problem.constrain_step(&self.mesh, advanced);
-            limit = rules::motion_limit(&self.mesh, &candidate, tau, s.step_control);
+            let limit = rules::motion_limit(&self.mesh, &candidate, tau, s.step_control);
             if let Some(shorter) = report.retry(rules::step_control(tau, limit)) {
                 tau = shorter;
                 continue;
@@ -307,13 +293,11 @@ impl<'p, const D: usize> Flow<'p, D> {
             self.tau = tau;
             self.energy = energy;
             self.iteration += 1;
-            // a step shortened to its first contact moved less than `limit` says
-            self.motion_limit = limit.filter(|_| !report.contact);
             report.accepted = true;
             // a step whose τ the flow's own limits did not set (tangling cut it
             // short, or τ is still growing back after such a step) changes `J` little
             // because it is short, not because the state is stationary
-            let limited = report.backtracks > 0 || report.reductions > 0 || predicted == Some(tau);
+            let limited = report.backtracks > 0 || report.reductions > 0;
             let (judged, settled) = rules::judged_step(tau, self.settled_tau, tangled, growing, limited);
             let last_settled = std::mem::replace(&mut self.settled_tau, settled);
             let (per_time, tolerance, tau_min) = (s.tolerance_per_time, s.tolerance, s.tau_min);
@@ -334,7 +318,6 @@ impl<'p, const D: usize> Flow<'p, D> {
                     tracing::debug!(iteration = self.iteration, %reason, tau, "management failed, step taken back");
                     (self.mesh, self.time, self.energy, self.settled_tau) = (before, time, previous, last_settled);
                     self.tau = 0.25 * tau;
-                    self.motion_limit = None;
                     self.iteration -= 1;
                     report.accepted = false;
                     report.rejected = Some(Rejection::Management);

@@ -74,7 +74,6 @@ impl<'p, const D: usize> Flow<'p, D> {
             checkpoint.energy,
         );
         flow.settled_tau = checkpoint.settled_tau;
-        flow.motion_limit = checkpoint.motion_limit;
         flow.recent = checkpoint.recent_energies.clone();
         Ok(flow)
     }
@@ -107,7 +106,6 @@ impl<'p, const D: usize> Flow<'p, D> {
             stop_cause: None,
             rediscretized_at: None,
             settled_tau: 0.0,
-            motion_limit: None,
             recent: Vec::new(),
             vertex_limit: vertex_limit(vertices),
         }

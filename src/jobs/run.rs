@@ -124,7 +124,6 @@ fn split_at_necks<const D: usize>(job: &PreparedJob, dim: &Dimension<'_, D>, las
         energy,
         mesh,
         settled_tau: 0.0,
-        motion_limit: None,
         recent_energies: Vec::new(),
         ..last.clone()
     })
@@ -153,7 +152,6 @@ fn run_stage<const D: usize>(
             mesh: mesh.into(),
             stage,
             settled_tau: 0.0,
-            motion_limit: None,
             recent_energies: Vec::new(),
         })
     };
