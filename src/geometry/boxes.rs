@@ -5,11 +5,23 @@
 /// A closed box `[x_min, y_min, x_max, y_max]`.
 pub type Rect = [f64; 4];
 
-/// The bounding box of `points` (empty: infinite the wrong way round).
+/// The box of no point: infinite the wrong way round, so that [`grown`] by a
+/// point gives that point's box.
+pub const EMPTY: Rect = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+
+/// The smallest box holding `b` and `p`.
+pub fn grown(b: Rect, p: [f64; 2]) -> Rect {
+    [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
+}
+
+/// The bounding box of `points` ([`EMPTY`] if there are none).
 pub fn bounding_box(points: impl Iterator<Item = [f64; 2]>) -> Rect {
-    points.fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, p| {
-        [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
-    })
+    points.fold(EMPTY, grown)
+}
+
+/// The intersection of two boxes that meet.
+pub fn overlap(a: &Rect, b: &Rect) -> Rect {
+    [a[0].max(b[0]), a[1].max(b[1]), a[2].min(b[2]), a[3].min(b[3])]
 }
 
 /// Whether the closed boxes `a` and `b` meet.

@@ -4,7 +4,8 @@
 //! elsewhere (most of them, for objects that touch only here and there) need no
 //! test. The hits are those of [`Mesh::crossings`] that join two components.
 
-use super::{bounding_box, boxes_meet, find_segment_intersections, BoxGrid, Mesh, Rect, SegmentHit};
+use super::boxes::{bounding_box, boxes_meet, grown, overlap, EMPTY};
+use super::{find_segment_intersections, BoxGrid, Mesh, Rect, SegmentHit};
 
 impl Mesh<2> {
     /// The crossings of segments of two different components (`a < b`, in the
@@ -16,10 +17,9 @@ impl Mesh<2> {
             return Vec::new();
         }
         let x = self.positions();
-        let mut boxes = vec![bounding_box(std::iter::empty()); count];
+        let mut boxes = vec![EMPTY; count];
         for (p, &c) in x.iter().zip(&label) {
-            let b = &mut boxes[c];
-            *b = [b[0].min(p.x), b[1].min(p.y), b[2].max(p.x), b[3].max(p.y)];
+            boxes[c] = grown(boxes[c], [p.x, p.y]);
         }
         // the overlaps of every component's box with the others', by component,
         // the pairs found on a grid of the boxes (a seeds start has thousands)
@@ -33,8 +33,7 @@ impl Mesh<2> {
                     continue;
                 }
                 seen[j] = i;
-                let b = &boxes[j];
-                let o = [a[0].max(b[0]), a[1].max(b[1]), a[2].min(b[2]), a[3].min(b[3])];
+                let o = overlap(&a, &boxes[j]);
                 overlaps[i].push(o);
                 overlaps[j].push(o);
             }
@@ -42,7 +41,7 @@ impl Mesh<2> {
         let candidates: Vec<usize> = (0..self.num_elements())
             .filter(|&e| {
                 let [a, b] = self.elements()[e];
-                let s = [x[a].x.min(x[b].x), x[a].y.min(x[b].y), x[a].x.max(x[b].x), x[a].y.max(x[b].y)];
+                let s = bounding_box([[x[a].x, x[a].y], [x[b].x, x[b].y]].into_iter());
                 overlaps[label[a]].iter().any(|o| boxes_meet(&s, o))
             })
             .collect();
