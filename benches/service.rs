@@ -12,9 +12,8 @@
 //! a `postgres://` URL (an empty database: the bench fills it).
 //! `cargo bench --bench service` (`-- short`: the overhead tables, the claim and the batch rate).
 
-use shapeflow::flow::Progress;
 use shapeflow::jobs::{parse_spec, prepare, result_files, run_prepared, run_with_frames};
-use shapeflow::service::store::{self, ClaimPolicy, JobStatus};
+use shapeflow::service::store::ClaimPolicy;
 use shapeflow::service::{Service, ServiceConfig};
 use std::io::BufRead;
 use std::io::{Read, Write};
@@ -22,6 +21,9 @@ use std::net::{SocketAddr, TcpStream};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+
+#[path = "service/store_rates.rs"]
+mod store_rates;
 
 /// A job that keeps a worker busy for a while.
 const BUSY: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 2000},
@@ -161,7 +163,7 @@ fn main() {
     }
 
     rt.block_on(service.stop());
-    rt.block_on(claims(&database, dir.path()));
+    rt.block_on(store_rates::claims(&database, dir.path()));
 }
 
 /// POST and GET latency with 50 pollers, then 100 event streams and 20 pollers,
@@ -282,100 +284,6 @@ fn until_status_event(addr: SocketAddr, id: &str) {
         }
     }
     panic!("the stream of {id} ended without a status event");
-}
-
-/// Claim latency with 100,000 finished jobs in the table (bulk-inserted with SQL),
-/// through the store with no workers running: 50 accepted jobs claimed one by one.
-async fn claims(database: &str, dir: &std::path::Path) {
-    let blobs = shapeflow::service::blobs::Blobs::local(&dir.join("blobs")).unwrap();
-    let st = store::open(database, blobs).await.unwrap();
-    let bulk = if st.backend() == "postgres" {
-        "INSERT INTO jobs (id, status, spec, created_at) \
-         SELECT 'done-' || x, 'successful', '{}', '2026-01-01T00:00:00Z' FROM generate_series(1, 100000) x \
-         ON CONFLICT DO NOTHING"
-    } else {
-        "INSERT INTO jobs (id, seq, status, spec, created_at) \
-         WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c WHERE x < 100000) \
-         SELECT 'done-' || x, 1000000 + x, 'successful', '{}', '2026-01-01T00:00:00Z' FROM c"
-    };
-    if database.starts_with("postgres") {
-        let pool = sqlx::PgPool::connect(database).await.unwrap();
-        sqlx::query(bulk).execute(&pool).await.unwrap();
-    } else {
-        let pool = sqlx::SqlitePool::connect(&format!("sqlite:{database}")).await.unwrap();
-        sqlx::query(bulk).execute(&pool).await.unwrap();
-    }
-    let mut ids = Vec::new();
-    for k in 0..50 {
-        let id = format!("claim-{}-{k}", std::process::id());
-        st.insert_job(&id, SHORT, &Default::default()).await.unwrap();
-        ids.push(id);
-    }
-    let policy = ClaimPolicy::default();
-    let mut lat = Vec::new();
-    for _ in 0..50 {
-        let t = Instant::now();
-        let c = st.claim_next("bench", &policy).await.unwrap().expect("an accepted job");
-        lat.push(t.elapsed().as_secs_f64() * 1e3);
-        st.finish(&c.job.id, Some(&c.lease), JobStatus::Successful, None, None, None).await.unwrap();
-    }
-    println!();
-    println!("| claim with 100,000 finished jobs in the table | count | p50 | p99 |");
-    println!("|---|---|---|---|");
-    println!(
-        "| claim_next | 50 | {:.2} ms | {:.2} ms |",
-        percentile(&mut lat.clone(), 0.5),
-        percentile(&mut lat, 0.99)
-    );
-    batch_rate(&st, &policy).await;
-}
-
-/// History batches as workers write them (`JobStore::record`: the fence, 64
-/// history rows, the notification), from 1, 4 and 16 writers at once for 3 s, each
-/// on a running job of its own: how many batches and rows per second the database
-/// takes.
-async fn batch_rate(st: &store::Store, policy: &ClaimPolicy) {
-    println!();
-    println!("| history batches of 64 rows, 3 s | batches/s | rows/s | p50 | p99 |");
-    println!("|---|---|---|---|---|");
-    for writers in [1, 4, 16] {
-        let mut tasks = Vec::new();
-        for k in 0..writers {
-            st.insert_job(&format!("batch-{}-{writers}-{k}", std::process::id()), SHORT, &Default::default())
-                .await
-                .unwrap();
-            let c = st.claim_next("bench", policy).await.unwrap().expect("an accepted job");
-            let st = st.clone();
-            tasks.push(tokio::spawn(async move {
-                let (mut lat, mut iteration, start) = (Vec::new(), 0, Instant::now());
-                while start.elapsed() < Duration::from_secs(3) {
-                    let rows: Vec<Progress> = (0..64)
-                        .map(|_| {
-                            iteration += 1;
-                            Progress { iteration, time: 0.0, tau: 1e-3, energy: 1.0, vertices: 256, components: 1 }
-                        })
-                        .collect();
-                    let t = Instant::now();
-                    st.record(&c.job.id, &c.lease, &rows, &[]).await.unwrap();
-                    lat.push(t.elapsed().as_secs_f64() * 1e3);
-                }
-                st.finish(&c.job.id, Some(&c.lease), JobStatus::Successful, None, None, None).await.unwrap();
-                lat
-            }));
-        }
-        let mut lat = Vec::new();
-        for t in tasks {
-            lat.extend(t.await.unwrap());
-        }
-        let rate = lat.len() as f64 / 3.0;
-        println!(
-            "| {writers} writer{} | {rate:.0} | {:.0} | {:.2} ms | {:.2} ms |",
-            if writers > 1 { "s" } else { "" },
-            64.0 * rate,
-            percentile(&mut lat.clone(), 0.5),
-            percentile(&mut lat, 0.99)
-        );
-    }
 }
 
 /// Follow a job's event stream until `stop`: ms to the first event, the number of
