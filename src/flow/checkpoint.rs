@@ -87,6 +87,11 @@ pub struct Checkpoint {
     /// `lambda_final`); 0 for the first, and left out of the JSON then.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub stage: usize,
+    /// The state is of a job's coarse start (segmentation of a volume: the surface
+    /// converges on coarse edges first, then on the default ones); left out of the
+    /// JSON when false.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub coarse: bool,
     /// The `τ` of the last step that the flow's own limits set, which decides
     /// whether a step doubling back after a short one is judged for convergence
     /// ([`Flow`](super::Flow)); 0 (none yet) is left out of the JSON.
@@ -101,6 +106,10 @@ pub struct Checkpoint {
 
 fn is_zero(s: &usize) -> bool {
     *s == 0
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 fn is_zero_f64(x: &f64) -> bool {

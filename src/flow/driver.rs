@@ -139,6 +139,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             energy: self.energy,
             mesh: MeshData::from(&self.mesh),
             stage: 0,
+            coarse: false,
             settled_tau: self.settled_tau,
             recent_energies: self.recent.clone(),
         }

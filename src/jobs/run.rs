@@ -47,12 +47,15 @@ pub fn run_prepared(
 ) -> Result<JobOutcome, Box<JobFailure>> {
     match &job.mesh {
         AnyMesh::Curve(m) => {
-            let manager = || job.curve_manager.map(|c| Box::new(c.watched()) as Box<dyn MeshManager<2>>);
+            let manager = |_| job.curve_manager.map(|c| Box::new(c.watched()) as Box<dyn MeshManager<2>>);
             let dim = Dimension { problem: &|p| Ok(p.curve_problem()), manager: &manager };
             run_stages::<2>(job, m, &dim, resume, cancel, events)
         }
         AnyMesh::Surface(m) => {
-            let manager = || job.surface_manager.map(|c| Box::new(c) as Box<dyn MeshManager<3>>);
+            let manager = |phase: Phase| {
+                let m = if phase.coarse { job.coarse_manager } else { job.surface_manager };
+                m.map(|c| Box::new(c) as Box<dyn MeshManager<3>>)
+            };
             let dim = Dimension { problem: &ProblemKind::surface_problem, manager: &manager };
             run_stages::<3>(job, m, &dim, resume, cancel, events)
         }
@@ -63,11 +66,25 @@ pub fn run_prepared(
 type MakeProblem<const D: usize> = dyn Fn(&ProblemKind) -> Result<Box<dyn Problem<D>>, FlowError>;
 
 /// What a run needs in its dimension: the run of a stage's problem and a fresh
-/// mesh manager.
+/// mesh manager for a phase.
 struct Dimension<'a, const D: usize> {
     problem: &'a MakeProblem<D>,
-    manager: &'a dyn Fn() -> Option<Box<dyn MeshManager<D>>>,
+    manager: &'a dyn Fn(Phase) -> Option<Box<dyn MeshManager<D>>>,
 }
+
+/// Where a run is: the stage (its problem) and, in the first stage, whether the
+/// surface still converges on coarse edges ([`PreparedJob::coarse_manager`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Phase {
+    stage: usize,
+    coarse: bool,
+}
+
+/// How much looser the coarse start's convergence test is than the job's: the
+/// coarse surface only has to come near the result, which the default edges
+/// then refine (on the nuclei volume the coarse start converging at the job's
+/// tolerance took 61 steps where 40 do).
+const COARSE_TOLERANCE: f64 = 10.0;
 
 fn run_stages<const D: usize>(
     job: &PreparedJob,
@@ -78,16 +95,32 @@ fn run_stages<const D: usize>(
     events: &mut dyn RunEvents,
 ) -> Result<JobOutcome, Box<JobFailure>> {
     let mut start = resume.cloned();
-    let mut stage = resume.map_or(0, |c| c.stage.min(usize::from(job.second_stage.is_some())));
+    let stage = resume.map_or(0, |c| c.stage.min(usize::from(job.second_stage.is_some())));
+    let coarse = stage == 0 && job.coarse_manager.is_some() && resume.is_none_or(|c| c.coarse);
+    let mut phase = Phase { stage, coarse };
     // the state a later stage starts from was reported as the end of the one before
     let mut reported = false;
     let mut splits = 0;
     loop {
-        let out = run_stage::<D>(job, stage, mesh, dim, start.as_ref(), reported, cancel, events)?;
-        if stage == 0 && job.second_stage.is_some() && out.stop == StopReason::Converged {
+        let out = run_stage::<D>(job, phase, mesh, dim, start.as_ref(), reported, cancel, events)?;
+        if phase.coarse && matches!(out.stop, StopReason::Converged | StopReason::TauMin) {
+            // the coarse surface came near the result (or can go no further on its
+            // edges): the default edges go on from there, with a fresh step and
+            // their convergence judged afresh
+            let fine = Checkpoint {
+                coarse: false,
+                tau: job.settings.tau,
+                settled_tau: 0.0,
+                recent_energies: Vec::new(),
+                ..out.last
+            };
+            (start, phase.coarse, reported) = (Some(fine), false, true);
+            continue;
+        }
+        if phase.stage == 0 && job.second_stage.is_some() && out.stop == StopReason::Converged {
             // the second stage is another problem: its convergence is judged afresh
             let first = Checkpoint { stage: 1, recent_energies: Vec::new(), ..out.last };
-            (start, stage, reported) = (Some(first), 1, true);
+            (start, phase.stage, reported) = (Some(first), 1, true);
             continue;
         }
         if out.stop == StopReason::Converged && splits < MAX_NECK_SPLITS {
@@ -129,12 +162,12 @@ fn split_at_necks<const D: usize>(job: &PreparedJob, dim: &Dimension<'_, D>, las
     })
 }
 
-/// One stage of [`run_prepared`]: the flow of the stage's problem from `start`
+/// One phase of [`run_prepared`]: the flow of the stage's problem from `start`
 /// (the job's initial mesh if `None`); `reported`: `start` was already reported.
 #[allow(clippy::too_many_arguments)]
 fn run_stage<const D: usize>(
     job: &PreparedJob,
-    stage: usize,
+    phase: Phase,
     mesh: &Mesh<D>,
     dim: &Dimension<'_, D>,
     start: Option<&Checkpoint>,
@@ -150,15 +183,19 @@ fn run_stage<const D: usize>(
             tau: job.settings.tau,
             energy: f64::NAN,
             mesh: mesh.into(),
-            stage,
+            stage: phase.stage,
+            coarse: phase.coarse,
             settled_tau: 0.0,
             recent_energies: Vec::new(),
         })
     };
-    let mut problem = (dim.problem)(job.stage_problem(stage)).map_err(|e| fail(e, start_of(start)))?;
-    let tagged = |c: Checkpoint| Checkpoint { stage, ..c };
+    let mut problem = (dim.problem)(job.stage_problem(phase.stage)).map_err(|e| fail(e, start_of(start)))?;
+    let tagged = |c: Checkpoint| Checkpoint { stage: phase.stage, coarse: phase.coarse, ..c };
     let mut settings = job.settings.clone();
-    if let (1.., Some(cp)) = (stage, start) {
+    if phase.coarse {
+        settings.tolerance *= COARSE_TOLERANCE;
+    }
+    if let (1.., Some(cp)) = (phase.stage, start) {
         // a later stage converges on the scale of the first stage's energy at the
         // same shape: without the balloon term the energy of a segmentation is a few
         // hundred times smaller, and re-meshing noise would keep it from converging
@@ -180,7 +217,7 @@ fn run_stage<const D: usize>(
         None => Flow::new(&mut *problem, mesh.clone(), settings),
     }
     .map_err(|e| fail(e, start_of(start)))?;
-    if let Some(m) = (dim.manager)() {
+    if let Some(m) = (dim.manager)(phase) {
         flow = flow.with_mesh_manager(m);
     }
     let every = job.checkpoint_every.max(1);

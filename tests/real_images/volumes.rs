@@ -1,36 +1,89 @@
 //! Volumes: NRRD, NIfTI and TIFF stacks, touching objects in 3D.
 
 use super::*;
+use shapeflow::flow::Checkpoint;
+use shapeflow::jobs::RunEvents;
 
 /// Two overlapping balls (examples/data/balls.nrrd: radius 8.5, centres 15 apart,
 /// 48³) at defaults: the threshold's surface is split at the neck, and the two
 /// objects keep the union's volume. The surface's edges are kept between half
-/// a voxel and one voxel.
+/// a voxel and one voxel, after a coarse start on edges of one to two voxels:
+/// its checkpoints say so, and one of them resumes in it to the same end.
 #[test]
 fn two_overlapping_balls_are_two_objects() {
     let inputs: HashMap<String, Vec<u8>> =
         [("image".to_string(), include_bytes!("../../examples/data/balls.nrrd").to_vec())].into();
-    let job = prepare(parse_spec(DEFAULTS).unwrap(), &inputs).unwrap();
+    let every_step =
+        r#"{"problem": {"type": "segmentation", "image": "input:image"}, "output": {"checkpoint_every": 1}}"#;
+    let job = prepare(parse_spec(every_step).unwrap(), &inputs).unwrap();
     let sizes = job.surface_manager.unwrap().params;
     let voxel = 1.0 / 48.0;
     assert!(sizes.h_max <= voxel && sizes.h_min >= 0.5 * voxel, "{sizes:?}");
-    // an h_min the spec gives stays, and h_max keeps at least twice it
+    let coarse = job.coarse_manager.expect("a coarse start").params;
+    assert_eq!((coarse.h_min, coarse.h_max), (2.0 * sizes.h_min, 2.0 * sizes.h_max));
     // a surface's length term weighs half a curve's (its mean curvature sums two)
     let setup = job.segmentation.as_ref().unwrap();
     assert_eq!(setup.mu, shapeflow::jobs::default_mu(setup.noise) / 2.0);
-    let given = r#"{"problem": {"type": "segmentation", "image": "input:image"}, "mesh": {"h_min": 0.012}}"#;
-    let other = prepare(parse_spec(given).unwrap(), &inputs).unwrap().surface_manager.unwrap().params;
+    // an h_min the spec gives stays, and h_max keeps at least twice it; the sizes
+    // given, or the coarse start turned off, the run has no coarse start
+    let with = |mesh: &str| {
+        let spec = format!(r#"{{"problem": {{"type": "segmentation", "image": "input:image"}}, "mesh": {mesh}}}"#);
+        prepare(parse_spec(&spec).unwrap(), &inputs).unwrap()
+    };
+    let given = with(r#"{"h_min": 0.012}"#);
+    let other = given.surface_manager.unwrap().params;
     assert!(other.h_min == 0.012 && other.h_max >= 0.024, "{other:?}");
-    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
+    assert!(given.coarse_manager.is_none());
+    assert!(with(r#"{"coarse_start": false}"#).coarse_manager.is_none());
+
+    let mut cps = Checkpoints::default();
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut cps).unwrap();
     let img = job.image.as_deref().unwrap();
     let (_, rows) = objects(img, &result_state(&job, &out.last).mesh);
     let volume: f64 = rows.iter().map(|r| r.size).sum();
     let (r, d) = (8.5f64, 15.0f64);
     let lens = std::f64::consts::PI * (2.0 * r - d).powi(2) * (d * d + 4.0 * d * r) / (12.0 * d);
     let exact = 2.0 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) - lens;
-    eprintln!("balls: {} objects, volume {volume:.1} (exact {exact:.1})", rows.len());
+    // the coarse start: the first checkpoints, then none; its edges about twice
+    // as long as the end's
+    let switch = cps.0.iter().position(|c| !c.coarse).expect("the run goes on at the default sizes");
+    let last_coarse = &cps.0[switch - 1];
+    let (e_coarse, e_end) = (mean_edge(last_coarse), mean_edge(&out.last));
+    eprintln!(
+        "balls: {} objects, volume {volume:.1} (exact {exact:.1}); coarse until iteration {} (mean edge {:.2} voxels), \
+         converged after {} (mean edge {:.2} voxels)",
+        rows.len(),
+        last_coarse.iteration,
+        e_coarse / voxel,
+        out.last.iteration,
+        e_end / voxel
+    );
     assert_eq!(rows.len(), 2);
     assert!((volume / exact - 1.0).abs() < 0.05, "{volume} {exact}");
+    assert!(cps.0[..switch].iter().all(|c| c.coarse) && cps.0[switch..].iter().all(|c| !c.coarse));
+    assert!(switch > 1 && !out.last.coarse && out.last.iteration > last_coarse.iteration);
+    assert!(e_coarse > 1.3 * e_end && e_end <= voxel, "{e_coarse} {e_end}");
+    // a checkpoint of the coarse start resumes in it and ends where the run did
+    let resumed = run_prepared(&job, Some(&cps.0[switch / 2]), &AtomicBool::new(false), &mut ()).unwrap();
+    assert_eq!((resumed.stop, resumed.last.iteration), (out.stop, out.last.iteration));
+    assert!((resumed.last.energy / out.last.energy - 1.0).abs() < 1e-9, "{} {}", resumed.last.energy, out.last.energy);
+}
+
+/// Every checkpoint a run reports.
+#[derive(Default)]
+struct Checkpoints(Vec<Checkpoint>);
+impl RunEvents for Checkpoints {
+    fn checkpoint(&mut self, c: &Checkpoint) {
+        self.0.push(c.clone());
+    }
+}
+
+/// The mean edge length of a checkpoint's surface.
+fn mean_edge(c: &Checkpoint) -> f64 {
+    let p = &c.mesh.positions;
+    let d = |a: usize, b: usize| (0..3).map(|k| (p[a][k] - p[b][k]).powi(2)).sum::<f64>().sqrt();
+    let sum: f64 = c.mesh.elements.iter().map(|t| d(t[0], t[1]) + d(t[1], t[2]) + d(t[2], t[0])).sum();
+    sum / (3 * c.mesh.elements.len()) as f64
 }
 
 /// A NIfTI-1 volume (gzip, float32) with slices twice as far apart as its pixels:

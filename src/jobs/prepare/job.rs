@@ -76,6 +76,9 @@ pub struct PreparedJob {
     pub curve_manager: Option<CurveManager>,
     /// Mesh management of surfaces, likewise.
     pub surface_manager: Option<SurfaceManager>,
+    /// (Addition) the surface's management while it converges on coarse edges
+    /// first (`mesh.coarse_start`), before [`PreparedJob::surface_manager`]'s.
+    pub coarse_manager: Option<SurfaceManager>,
     /// The decoded input image of a segmentation job (for masks and overlays).
     pub image: Option<Arc<Grid>>,
     /// (Addition) the edge field the results are refined onto: segmentation with

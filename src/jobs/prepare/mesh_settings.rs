@@ -61,6 +61,28 @@ pub(super) fn surface_manager(
     Ok(Some(SurfaceManager { regularize: m.regularize, sweeps, adapt: m.adapt, params, pinch_curvature }))
 }
 
+/// The management of a coarse start ([`MeshSpec::coarse_start`]): a surface
+/// traced from the image whose sizes the spec leaves to the defaults first
+/// converges with its edge bounds doubled (one to two voxels), on about a quarter
+/// of the vertices, then goes on with `fine`. Off without adaptivity (the edges
+/// could not be refined afterwards) or without a tolerance (the coarse run would
+/// not end before the job does).
+pub(super) fn coarse_manager(
+    m: &MeshSpec,
+    fine: Option<&SurfaceManager>,
+    traced_voxel: Option<f64>,
+    tolerance: f64,
+) -> Option<SurfaceManager> {
+    let fine = fine.filter(|f| f.adapt)?;
+    let traced = traced_voxel.is_some() && m.h_min.is_none() && m.h_max.is_none();
+    (m.coarse_start && traced && tolerance > 0.0).then(|| {
+        let mut coarse = *fine;
+        coarse.params.h_min *= 2.0;
+        coarse.params.h_max *= 2.0;
+        coarse
+    })
+}
+
 pub(super) fn curve_manager(m: &MeshSpec, initial: &CurveMesh) -> Result<Option<CurveManager>, SpecError> {
     if !(m.regularize || m.adapt || m.topology_changes) {
         return Ok(None);

@@ -29,7 +29,7 @@ use crate::jobs::spec::{
 use crate::problems::{CurvatureFlow, StressedFilm, SurfaceDiffusion};
 use checks::{finite, positive};
 use flow_settings::flow_settings;
-use mesh_settings::{curve_manager, surface_manager};
+use mesh_settings::{coarse_manager, curve_manager, surface_manager};
 use shapes::build_initial;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -103,6 +103,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             ));
         }
     }
+    let mut traced_voxel = None;
     let (mut curve_manager, surface_manager) = match &mesh {
         AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
         AnyMesh::Surface(m) => {
@@ -110,8 +111,8 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             // a surface traced from the image (not a shape the spec gives) keeps
             // its edges near the voxel size
             let traced = matches!(spec.initial, None | Some(InitialSpec::Threshold(ThresholdShape {})));
-            let voxel = image.as_ref().filter(|_| traced).map(|g| 1.0 / g.scale());
-            (None, surface_manager(&spec.mesh, m, pinch_off, voxel)?)
+            traced_voxel = image.as_ref().filter(|_| traced).map(|g| 1.0 / g.scale());
+            (None, surface_manager(&spec.mesh, m, pinch_off, traced_voxel)?)
         }
     };
     if let (Some(m), Some(setup), Some(grid), None) =
@@ -174,6 +175,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         _ => early.expect("every other problem is built from its fields"),
     };
     let settings = flow_settings(&spec.flow, &problem)?;
+    let coarse_manager = coarse_manager(&spec.mesh, surface_manager.as_ref(), traced_voxel, settings.tolerance);
     if let Some(m) = curve_manager.as_mut() {
         m.params.keep_area = settings.scalar_product == ScalarProduct::HMinus1;
         // a pocket of Ω closed off by Γ would have no Dirichlet boundary
@@ -205,6 +207,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         checkpoint_every,
         curve_manager,
         surface_manager,
+        coarse_manager,
         image,
         edges,
         segmentation,

@@ -153,6 +153,11 @@ pub struct MeshSpec {
     /// Surfaces: stop with `pinch_off` when a neck radius falls below `h_min/2`
     /// (default on, except for segmentation, whose creases are not necks).
     pub pinch_off: Option<bool>,
+    /// A surface traced from the image, with neither `h_min` nor `h_max` given,
+    /// first converges with its edges between one and two voxels (at ten times
+    /// `flow.tolerance`), then goes on at the default sizes (half a voxel to one)
+    /// to convergence. Off: the default sizes from the start.
+    pub coarse_start: bool,
 }
 
 impl Default for MeshSpec {
@@ -168,6 +173,7 @@ impl Default for MeshSpec {
             min_area: None,
             max_angle: 120.0,
             pinch_off: None,
+            coarse_start: true,
         }
     }
 }
