@@ -35,6 +35,10 @@ fn two_overlapping_balls_are_two_objects() {
     assert!(other.h_min == 0.012 && other.h_max >= 0.024, "{other:?}");
     assert!(given.coarse_manager.is_none());
     assert!(with(r#"{"coarse_start": false}"#).coarse_manager.is_none());
+    assert!(with(r#"{"adapt": false}"#).coarse_manager.is_none());
+    let timed =
+        r#"{"problem": {"type": "segmentation", "image": "input:image"}, "flow": {"end_time": 1, "tolerance": 1e-5}}"#;
+    assert!(prepare(parse_spec(timed).unwrap(), &inputs).unwrap().coarse_manager.is_none());
 
     let mut cps = Checkpoints::default();
     let out = run_prepared(&job, None, &AtomicBool::new(false), &mut cps).unwrap();

@@ -2,7 +2,7 @@
 //! the initial mesh.
 
 use super::checks::positive;
-use crate::flow::{CurveManager, SurfaceManager};
+use crate::flow::{CurveManager, FlowSettings, SurfaceManager};
 use crate::geometry::{CurveMesh, SurfaceMesh};
 use crate::jobs::spec::bounds::{MAX_ANGLE, SWEEPS};
 use crate::jobs::spec::{MeshSpec, SpecError};
@@ -65,17 +65,18 @@ pub(super) fn surface_manager(
 /// traced from the image whose sizes the spec leaves to the defaults first
 /// converges with its edge bounds doubled (one to two voxels), on about a quarter
 /// of the vertices, then goes on with `fine`. Off without adaptivity (the edges
-/// could not be refined afterwards) or without a tolerance (the coarse run would
-/// not end before the job does).
+/// could not be refined afterwards), without a tolerance or with an end time (the
+/// coarse run would not end before the job does).
 pub(super) fn coarse_manager(
     m: &MeshSpec,
     fine: Option<&SurfaceManager>,
     traced_voxel: Option<f64>,
-    tolerance: f64,
+    flow: &FlowSettings,
 ) -> Option<SurfaceManager> {
     let fine = fine.filter(|f| f.adapt)?;
     let traced = traced_voxel.is_some() && m.h_min.is_none() && m.h_max.is_none();
-    (m.coarse_start && traced && tolerance > 0.0).then(|| {
+    let converges = flow.tolerance > 0.0 && flow.end_time.is_none();
+    (m.coarse_start && traced && converges).then(|| {
         let mut coarse = *fine;
         coarse.params.h_min *= 2.0;
         coarse.params.h_max *= 2.0;

@@ -175,7 +175,7 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         _ => early.expect("every other problem is built from its fields"),
     };
     let settings = flow_settings(&spec.flow, &problem)?;
-    let coarse_manager = coarse_manager(&spec.mesh, surface_manager.as_ref(), traced_voxel, settings.tolerance);
+    let coarse_manager = coarse_manager(&spec.mesh, surface_manager.as_ref(), traced_voxel, &settings);
     if let Some(m) = curve_manager.as_mut() {
         m.params.keep_area = settings.scalar_product == ScalarProduct::HMinus1;
         // a pocket of Ω closed off by Γ would have no Dirichlet boundary
