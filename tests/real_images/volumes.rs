@@ -7,7 +7,7 @@ use shapeflow::jobs::RunEvents;
 /// Two overlapping balls (examples/data/balls.nrrd: radius 8.5, centres 15 apart,
 /// 48³) at defaults: the threshold's surface is split at the neck, and the two
 /// objects keep the union's volume. The surface's edges are kept between half
-/// a voxel and one voxel, after a coarse start on edges of one to two voxels:
+/// a voxel and one voxel, after a coarse start on edges of ¾ voxel to two:
 /// its checkpoints say so, and one of them resumes in it to the same end.
 #[test]
 fn two_overlapping_balls_are_two_objects() {
@@ -20,7 +20,7 @@ fn two_overlapping_balls_are_two_objects() {
     let voxel = 1.0 / 48.0;
     assert!(sizes.h_max <= voxel && sizes.h_min >= 0.5 * voxel, "{sizes:?}");
     let coarse = job.coarse_manager.expect("a coarse start").params;
-    assert_eq!((coarse.h_min, coarse.h_max), (2.0 * sizes.h_min, 2.0 * sizes.h_max));
+    assert_eq!((coarse.h_min, coarse.h_max), (1.5 * sizes.h_min, 2.0 * sizes.h_max));
     // a surface's length term weighs half a curve's (its mean curvature sums two)
     let setup = job.segmentation.as_ref().unwrap();
     assert_eq!(setup.mu, shapeflow::jobs::default_mu(setup.noise) / 2.0);

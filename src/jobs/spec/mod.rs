@@ -154,9 +154,9 @@ pub struct MeshSpec {
     /// (default on, except for segmentation, whose creases are not necks).
     pub pinch_off: Option<bool>,
     /// A surface traced from the image, with neither `h_min` nor `h_max` given,
-    /// first converges with its edges between one and two voxels (at ten times
-    /// `flow.tolerance`), then goes on at the default sizes (half a voxel to one)
-    /// to convergence. Off: the default sizes from the start.
+    /// first converges with its edges between ¾ voxel and two voxels (at ten
+    /// times `flow.tolerance`), then goes on at the default sizes (half a voxel to
+    /// one) to convergence. Off: the default sizes from the start.
     pub coarse_start: bool,
 }
 
