@@ -64,10 +64,10 @@ pub(super) fn surface_manager(
 /// The management of a coarse start ([`MeshSpec::coarse_start`]): a surface
 /// traced from the image whose sizes the spec leaves to the defaults first
 /// converges on longer edges ([`COARSE_H_MIN`], [`COARSE_H_MAX`] times the
-/// default bounds: ¾ voxel to two voxels), on about a third of the vertices, then
-/// goes on with `fine`. Off without adaptivity (the edges could not be refined
-/// afterwards), without a tolerance or with an end time (the coarse run would not
-/// end before the job does).
+/// default bounds: ¾ voxel to two voxels), on a quarter to a half of the
+/// vertices, then goes on with `fine`. Off without adaptivity (the edges could
+/// not be refined afterwards), without a tolerance or with an end time (the
+/// coarse run would not end before the job does).
 pub(super) fn coarse_manager(
     m: &MeshSpec,
     fine: Option<&SurfaceManager>,
