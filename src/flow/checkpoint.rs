@@ -104,6 +104,15 @@ pub struct Checkpoint {
     pub recent_energies: Vec<f64>,
 }
 
+impl Checkpoint {
+    /// This state, to be gone on from with the step `tau` as a new run would: the
+    /// step size, the settled step and the energies of the convergence test of the
+    /// run before it are dropped (a coarse start's end, a split at necks).
+    pub fn with_fresh_step(self, tau: f64) -> Checkpoint {
+        Checkpoint { tau, settled_tau: 0.0, recent_energies: Vec::new(), ..self }
+    }
+}
+
 fn is_zero(s: &usize) -> bool {
     *s == 0
 }

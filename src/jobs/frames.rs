@@ -276,20 +276,13 @@ mod tests {
     use super::*;
     use crate::jobs::{parse_spec, prepare};
 
-    struct Kept(Vec<Checkpoint>);
-    impl RunEvents for Kept {
-        fn checkpoint(&mut self, c: &Checkpoint) {
-            self.0.push(c.clone());
-        }
-    }
-
     /// A curvature flow of a 48-gon with a checkpoint every 5 of its 20 steps, and
     /// its checkpoints.
-    fn short_run() -> (PreparedJob, Kept) {
+    fn short_run() -> (PreparedJob, Vec<Checkpoint>) {
         let spec = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 48},
           "flow": {"tau": 1e-3, "end_time": 0.02, "tolerance": 0}, "output": {"checkpoint_every": 5}}"#;
         let job = prepare(parse_spec(spec).unwrap(), &Default::default()).unwrap();
-        let mut kept = Kept(Vec::new());
+        let mut kept = Vec::new();
         run_prepared(&job, None, &AtomicBool::new(false), &mut kept).unwrap();
         (job, kept)
     }
@@ -299,7 +292,7 @@ mod tests {
     #[test]
     fn a_fill_computed_ahead_draws_the_same() {
         let (job, kept) = short_run();
-        let now: Vec<Frame> = kept.0.iter().map(|c| Frame::of(&job, c)).collect();
+        let now: Vec<Frame> = kept.iter().map(|c| Frame::of(&job, c)).collect();
         let ahead: Vec<Frame> = now.iter().cloned().map(Frame::with_fill).collect();
         assert!(now.len() > 2 && ahead.iter().all(|f| matches!(f.fill.as_deref(), Some(Some(_)))));
         let context = GlbContext::of(&job);
@@ -307,11 +300,11 @@ mod tests {
         assert_eq!(context.frame_glb(&ahead[1]), context.frame_glb(&now[1]));
         // made on a second thread during the run: the same frames, in order, and
         // the events passed on
-        let mut heard = Kept(Vec::new());
+        let mut heard = Vec::new();
         let (result, during) = run_with_frames(&job, None, &AtomicBool::new(false), &mut heard);
-        assert_eq!(result.unwrap().last, *kept.0.last().unwrap());
-        assert_eq!(heard.0, kept.0);
-        assert_eq!(during.iter().map(|f| &f.state).collect::<Vec<_>>(), kept.0.iter().collect::<Vec<_>>());
+        assert_eq!(result.unwrap().last, *kept.last().unwrap());
+        assert_eq!(heard, kept);
+        assert_eq!(during.iter().map(|f| &f.state).collect::<Vec<_>>(), kept.iter().collect::<Vec<_>>());
         assert_eq!(context.evolution_glb(&during), context.evolution_glb(&now));
     }
 
@@ -320,13 +313,13 @@ mod tests {
     #[test]
     fn frames_are_drawn_ahead_while_they_fit() {
         let (job, kept) = short_run();
-        let one = glb_bytes(&kept.0[0].mesh);
+        let one = glb_bytes(&kept[0].mesh);
         let mut maker = FrameMaker { bytes: 0, budget: 2 * one + one / 2 };
-        let made: Vec<Frame> = kept.0.iter().map(|c| maker.make(&job, c)).collect();
+        let made: Vec<Frame> = kept.iter().map(|c| maker.make(&job, c)).collect();
         let drawn: Vec<bool> = made.iter().map(|f| f.fill.is_some()).collect();
         assert_eq!(drawn[..3], [true, true, false]);
         assert!(drawn[3..].iter().all(|d| !d));
-        let all: Vec<Frame> = kept.0.iter().map(|c| Frame::of(&job, c).with_fill()).collect();
+        let all: Vec<Frame> = kept.iter().map(|c| Frame::of(&job, c).with_fill()).collect();
         let context = GlbContext::of(&job);
         assert_eq!(context.evolution_glb(&made), context.evolution_glb(&all));
     }

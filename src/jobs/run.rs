@@ -17,6 +17,13 @@ pub trait RunEvents {
 
 impl RunEvents for () {}
 
+/// Keeps every checkpoint, in the order reported.
+impl RunEvents for Vec<Checkpoint> {
+    fn checkpoint(&mut self, c: &Checkpoint) {
+        self.push(c.clone());
+    }
+}
+
 /// How a run ended.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JobOutcome {
@@ -108,13 +115,7 @@ fn run_stages<const D: usize>(
             // the coarse surface came near the result (or can go no further on its
             // edges): the default edges go on from there, with a fresh step and
             // their convergence judged afresh
-            let fine = Checkpoint {
-                coarse: false,
-                tau: job.settings.tau,
-                settled_tau: 0.0,
-                recent_energies: Vec::new(),
-                ..out.last
-            };
+            let fine = Checkpoint { coarse: false, ..out.last.with_fresh_step(job.settings.tau) };
             (start, phase.coarse, reported) = (Some(fine), false, true);
             continue;
         }
@@ -154,12 +155,9 @@ fn split_at_necks<const D: usize>(job: &PreparedJob, dim: &Dimension<'_, D>, las
     let energy = (dim.problem)(job.stage_problem(last.stage)).ok()?.energy(&mesh.to_mesh_unvalidated::<D>()?).ok()?;
     energy.is_finite().then(|| Checkpoint {
         iteration: last.iteration + 1,
-        tau: job.settings.tau,
         energy,
         mesh,
-        settled_tau: 0.0,
-        recent_energies: Vec::new(),
-        ..last.clone()
+        ..last.clone().with_fresh_step(job.settings.tau)
     })
 }
 

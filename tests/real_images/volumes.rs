@@ -2,7 +2,6 @@
 
 use super::*;
 use shapeflow::flow::Checkpoint;
-use shapeflow::jobs::RunEvents;
 
 /// Two overlapping balls (examples/data/balls.nrrd: radius 8.5, centres 15 apart,
 /// 48³) at defaults: the threshold's surface is split at the neck, and the two
@@ -40,7 +39,7 @@ fn two_overlapping_balls_are_two_objects() {
         r#"{"problem": {"type": "segmentation", "image": "input:image"}, "flow": {"end_time": 1, "tolerance": 1e-5}}"#;
     assert!(prepare(parse_spec(timed).unwrap(), &inputs).unwrap().coarse_manager.is_none());
 
-    let mut cps = Checkpoints::default();
+    let mut cps: Vec<Checkpoint> = Vec::new();
     let out = run_prepared(&job, None, &AtomicBool::new(false), &mut cps).unwrap();
     let img = job.image.as_deref().unwrap();
     let (_, rows) = objects(img, &result_state(&job, &out.last).mesh);
@@ -50,8 +49,8 @@ fn two_overlapping_balls_are_two_objects() {
     let exact = 2.0 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) - lens;
     // the coarse start: the first checkpoints, then none; its edges about twice
     // as long as the end's
-    let switch = cps.0.iter().position(|c| !c.coarse).expect("the run goes on at the default sizes");
-    let last_coarse = &cps.0[switch - 1];
+    let switch = cps.iter().position(|c| !c.coarse).expect("the run goes on at the default sizes");
+    let last_coarse = &cps[switch - 1];
     let (e_coarse, e_end) = (mean_edge(last_coarse), mean_edge(&out.last));
     eprintln!(
         "balls: {} objects, volume {volume:.1} (exact {exact:.1}); coarse until iteration {} (mean edge {:.2} voxels), \
@@ -64,30 +63,18 @@ fn two_overlapping_balls_are_two_objects() {
     );
     assert_eq!(rows.len(), 2);
     assert!((volume / exact - 1.0).abs() < 0.05, "{volume} {exact}");
-    assert!(cps.0[..switch].iter().all(|c| c.coarse) && cps.0[switch..].iter().all(|c| !c.coarse));
+    assert!(cps[..switch].iter().all(|c| c.coarse) && cps[switch..].iter().all(|c| !c.coarse));
     assert!(switch > 1 && !out.last.coarse && out.last.iteration > last_coarse.iteration);
     assert!(e_coarse > 1.3 * e_end && e_end <= voxel, "{e_coarse} {e_end}");
     // a checkpoint of the coarse start resumes in it and ends where the run did
-    let resumed = run_prepared(&job, Some(&cps.0[switch / 2]), &AtomicBool::new(false), &mut ()).unwrap();
+    let resumed = run_prepared(&job, Some(&cps[switch / 2]), &AtomicBool::new(false), &mut ()).unwrap();
     assert_eq!((resumed.stop, resumed.last.iteration), (out.stop, out.last.iteration));
     assert!((resumed.last.energy / out.last.energy - 1.0).abs() < 1e-9, "{} {}", resumed.last.energy, out.last.energy);
 }
 
-/// Every checkpoint a run reports.
-#[derive(Default)]
-struct Checkpoints(Vec<Checkpoint>);
-impl RunEvents for Checkpoints {
-    fn checkpoint(&mut self, c: &Checkpoint) {
-        self.0.push(c.clone());
-    }
-}
-
 /// The mean edge length of a checkpoint's surface.
 fn mean_edge(c: &Checkpoint) -> f64 {
-    let p = &c.mesh.positions;
-    let d = |a: usize, b: usize| (0..3).map(|k| (p[a][k] - p[b][k]).powi(2)).sum::<f64>().sqrt();
-    let sum: f64 = c.mesh.elements.iter().map(|t| d(t[0], t[1]) + d(t[1], t[2]) + d(t[2], t[0])).sum();
-    sum / (3 * c.mesh.elements.len()) as f64
+    shapeflow::geometry::edge_statistics(&c.mesh.to_mesh::<3>().unwrap()).0
 }
 
 /// A NIfTI-1 volume (gzip, float32) with slices twice as far apart as its pixels:

@@ -31,7 +31,7 @@ fn a_second_stage_without_balloon_force_sharpens_the_contour() {
         &history[switch..switch + 2]
     );
     // a checkpoint of the second stage resumes in it
-    let mut cps = Checkpoints::default();
+    let mut cps: Vec<Checkpoint> = Vec::new();
     let job = prepare(
         parse_spec(
             r#"{"initial": {"shape": "inscribed"}, "problem": {"type": "segmentation", "image": "input:image", "model": "geodesic"}, "output": {"checkpoint_every": 1}}"#,
@@ -41,8 +41,7 @@ fn a_second_stage_without_balloon_force_sharpens_the_contour() {
     )
     .unwrap();
     run_prepared(&job, None, &AtomicBool::new(false), &mut cps).unwrap();
-    let mid =
-        cps.0.iter().find(|c| c.stage == 1 && c.iteration > switch + 1).expect("a checkpoint in the second stage");
+    let mid = cps.iter().find(|c| c.stage == 1 && c.iteration > switch + 1).expect("a checkpoint in the second stage");
     let resumed = run_prepared(&job, Some(mid), &AtomicBool::new(false), &mut ()).unwrap();
     assert_eq!(resumed.last.stage, 1);
     assert!(
@@ -51,14 +50,6 @@ fn a_second_stage_without_balloon_force_sharpens_the_contour() {
         resumed.last.energy,
         out.last.energy
     );
-}
-
-#[derive(Default)]
-struct Checkpoints(Vec<Checkpoint>);
-impl RunEvents for Checkpoints {
-    fn checkpoint(&mut self, c: &Checkpoint) {
-        self.0.push(c.clone());
-    }
 }
 
 /// Paper Figure 1: on a C-shaped object both flows find the object; the Newton-type

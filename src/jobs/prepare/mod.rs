@@ -103,15 +103,15 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
             ));
         }
     }
-    let mut traced_voxel = None;
+    // a surface traced from the image (not a shape the spec gives) keeps its
+    // edges near the voxel size
+    let traced = matches!(spec.initial, None | Some(InitialSpec::Threshold(ThresholdShape {})));
+    let traced_voxel =
+        image.as_ref().filter(|_| traced && matches!(mesh, AnyMesh::Surface(_))).map(|g| 1.0 / g.scale());
     let (mut curve_manager, surface_manager) = match &mesh {
         AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
         AnyMesh::Surface(m) => {
             let pinch_off = spec.mesh.pinch_off.unwrap_or(!matches!(spec.problem, ProblemSpec::Segmentation(_)));
-            // a surface traced from the image (not a shape the spec gives) keeps
-            // its edges near the voxel size
-            let traced = matches!(spec.initial, None | Some(InitialSpec::Threshold(ThresholdShape {})));
-            traced_voxel = image.as_ref().filter(|_| traced).map(|g| 1.0 / g.scale());
             (None, surface_manager(&spec.mesh, m, pinch_off, traced_voxel)?)
         }
     };
