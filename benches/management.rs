@@ -38,6 +38,7 @@ fn l2_step_time<const D: usize>(mesh: &shapeflow::geometry::Mesh<D>) -> (f64, f6
             product: &product,
             tau: 1e-4,
             bending: 0.0,
+            limits: None,
         };
         black_box(step.velocity(&sys).unwrap());
     };

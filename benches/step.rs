@@ -57,6 +57,7 @@ fn case<const D: usize>(mesh: &Mesh<D>, product: &str, bending: f64) -> f64 {
             product: &weights,
             tau,
             bending,
+            limits: None,
         };
         black_box(step.velocity(&sys).unwrap());
     })

@@ -190,6 +190,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             tau = tau.min(left);
         }
         let lin = self.linearize()?;
+        let limits = self.problem.step_limits(&self.mesh);
         let s = &self.settings;
         let matrices = &self.matrices;
         let (ax, grad, product) = (&lin.ax, &lin.grad, &lin.product);
@@ -225,6 +226,7 @@ impl<'p, const D: usize> Flow<'p, D> {
                 product,
                 tau,
                 bending: self.problem.bending(),
+                limits: limits.as_deref(),
             };
             let vel = self.solver.velocity(&sys)?;
             let advanced = advanced(&self.mesh, &vel.vector, tau);
@@ -271,6 +273,7 @@ impl<'p, const D: usize> Flow<'p, D> {
                     (tau, candidate, energy, report.contact) = (t, c, e, true);
                 }
             }
+            tracing::trace!(tau, energy, current = self.energy, "trial");
             if !report.contact {
                 let verdict = rules::energy(self.energy, energy, s.backtracking, tau);
                 if let Some(shorter) = report.retry(verdict) {

@@ -65,6 +65,7 @@ impl<const D: usize> Flow<'_, D> {
     /// moves) and the problem's own field, if it has one.
     pub fn vertex_fields(&mut self) -> Result<VertexFields, FlowError> {
         let lin = self.linearize()?;
+        let limits = self.problem.step_limits(&self.mesh);
         let sys = LinearSystem {
             mesh: &self.mesh,
             pattern: &self.pattern,
@@ -75,6 +76,7 @@ impl<const D: usize> Flow<'_, D> {
             product: &lin.product,
             tau: self.tau,
             bending: self.problem.bending(),
+            limits: limits.as_deref(),
         };
         let vel = self.solver.velocity(&sys)?;
         let state = SurfaceState {

@@ -3,10 +3,12 @@
 //! geometric time-step control, backtracking and the driver loop.
 
 mod acceptance;
+mod active_set;
 mod checkpoint;
 mod contact;
 mod driver;
 mod error;
+mod limits;
 mod linearize;
 mod managed;
 mod mesh_management;
@@ -21,6 +23,7 @@ mod system;
 pub use crate::linalg::{gmres, solve_cyclic_tridiagonal, GmresOutcome, SparseCholesky};
 pub use driver::{Checkpoint, Flow, MeshData};
 pub use error::FlowError;
+pub use limits::{Confinement, StepLimits};
 pub use linearize::VertexFields;
 pub use mesh_management::{CurveManager, Managed, MeshManager, SurfaceManager, WatchedCurveManager};
 pub(crate) use problem::curvature_and_normals;

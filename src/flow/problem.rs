@@ -121,6 +121,14 @@ pub trait Problem<const D: usize>: Send {
     fn bending(&self) -> f64 {
         0.0
     }
+    /// Limits on where a step from `mesh` may take each vertex (segmentation: the
+    /// image's box and the objects' territories), which the step's solve keeps by
+    /// an active set (the lumped solver with the L2 and H1 products; see
+    /// [`super::StepLimits`]); [`Problem::constrain_step`] then enforces what is
+    /// left. `None` by default.
+    fn step_limits(&self, _mesh: &Mesh<D>) -> Option<Box<dyn super::StepLimits<D>>> {
+        None
+    }
     /// A trial step's shape with the problem's constraints enforced (stressed film:
     /// the wetting layer as an obstacle); by default unchanged.
     fn constrain(&self, candidate: Mesh<D>) -> Mesh<D> {

@@ -1,7 +1,8 @@
 //! One semi-implicit step: the normal velocity `V` and the vector velocity `V⃗` on
 //! `Γ_n` for a given `τ`, through either Schur path.
 
-use super::system::LinearSystem;
+use super::active_set::solve_limited;
+use super::system::{LinearSystem, ProductWeights};
 use super::{ConsistentSolver, FlowError, LumpedSolver};
 use crate::geometry::Point;
 use serde::{Deserialize, Serialize};
@@ -51,7 +52,12 @@ impl SemiImplicitStep {
     pub fn velocity<const D: usize>(&mut self, sys: &LinearSystem<'_, D>) -> Result<Velocity<D>, FlowError> {
         let (normal, vector) = match self.kind {
             SolverKind::Lumped => {
-                let v = self.lumped.solve(sys)?;
+                let v = match sys.limits {
+                    Some(limits) if !matches!(sys.product, ProductWeights::HMinus1) => {
+                        solve_limited(&mut self.lumped, sys, limits)?
+                    }
+                    _ => self.lumped.solve(sys)?,
+                };
                 let m = &sys.matrices.lumped_mass;
                 let nn = &sys.matrices.lumped_normal;
                 let vec = (0..v.len()).map(|i| nn[i] * (v[i] / m[i])).collect();

@@ -1,5 +1,6 @@
 //! The data of one semi-implicit step: the linear system (74) of the paper on `Γ_n`.
 
+use super::limits::StepLimits;
 use crate::fem::{Matrices, Pattern, Weight};
 use crate::geometry::{Mesh, Point};
 use serde::{Deserialize, Serialize};
@@ -55,4 +56,8 @@ pub struct LinearSystem<'a, const D: usize> {
     pub tau: f64,
     /// `ε` of the bending energy (0: none); `H^{-1}` on curves only.
     pub bending: f64,
+    /// Limits on where the step may take each vertex, kept by the solve
+    /// ([`super::Problem::step_limits`]; the lumped solver with the L2 and H1
+    /// products), if any.
+    pub limits: Option<&'a dyn StepLimits<D>>,
 }

@@ -116,6 +116,16 @@ impl LumpedSolver {
 
     /// Solve for the scalar normal velocity `V`.
     pub fn solve<const D: usize>(&mut self, sys: &LinearSystem<'_, D>) -> Result<Vec<f64>, FlowError> {
+        self.solve_fixed(sys, &[])
+    }
+
+    /// Solve for `V` with the values `fixed[i] = Some(v)` held (an empty `fixed`
+    /// holds none; the L2 and H1 products only: `H^{-1}` ignores it).
+    pub fn solve_fixed<const D: usize>(
+        &mut self,
+        sys: &LinearSystem<'_, D>,
+        fixed: &[Option<f64>],
+    ) -> Result<Vec<f64>, FlowError> {
         if let ProductWeights::HMinus1 = sys.product {
             if let Some(v) = self.solve_h_minus_1(sys)? {
                 return Ok(v);
@@ -123,7 +133,10 @@ impl LumpedSolver {
             let s = self.assemble_h_minus_1(sys);
             return self.solve_lu(s);
         }
-        let s = assemble_l2_h1(sys);
+        let mut s = assemble_l2_h1(sys);
+        if !fixed.is_empty() {
+            fix_unknowns(sys.pattern, &mut s.values, &mut s.rhs, fixed);
+        }
         if D == 2 {
             if let Some(v) = self.solve_cyclic(sys, &s) {
                 return Ok(v);
@@ -310,7 +323,7 @@ fn cyclic_components<const D: usize>(sys: &LinearSystem<'_, D>) -> Vec<CyclicCom
         .collect()
 }
 
-fn assemble_l2_h1<const D: usize>(sys: &LinearSystem<'_, D>) -> SchurMatrix {
+pub(crate) fn assemble_l2_h1<const D: usize>(sys: &LinearSystem<'_, D>) -> SchurMatrix {
     let p = sys.pattern;
     let mx = sys.matrices;
     let n = p.size();
@@ -336,4 +349,34 @@ fn assemble_l2_h1<const D: usize>(sys: &LinearSystem<'_, D>) -> SchurMatrix {
     let g0 = sys.g[0];
     let symmetric = g0 >= 0.0 && sys.g.iter().all(|&g| g == g0);
     SchurMatrix { values, rhs, symmetric }
+}
+
+/// Fix the unknowns `fixed[i] = Some(v)` of the system with `values` on `pattern`
+/// and right-hand side `rhs`: their columns' other entries move to the right-hand
+/// side (`r_j −= S_ji v`) and are zeroed with their rows', so that the others are
+/// solved with them held (a symmetric matrix stays symmetric); their own rows read
+/// `S_ii V_i = S_ii v`.
+fn fix_unknowns<const D: usize>(pattern: &Pattern<D>, values: &mut [f64], rhs: &mut [f64], fixed: &[Option<f64>]) {
+    let (col_ptr, row_idx, diag) = (pattern.col_ptr(), pattern.row_idx(), pattern.diag());
+    for k in 0..pattern.size() {
+        for e in col_ptr[k]..col_ptr[k + 1] {
+            let r = row_idx[e];
+            if r == k {
+                continue;
+            }
+            if let Some(v) = fixed[k] {
+                if fixed[r].is_none() {
+                    rhs[r] -= values[e] * v;
+                }
+                values[e] = 0.0;
+            } else if fixed[r].is_some() {
+                values[e] = 0.0;
+            }
+        }
+    }
+    for (i, v) in fixed.iter().enumerate() {
+        if let Some(v) = v {
+            rhs[i] = values[diag[i]] * v;
+        }
+    }
 }

@@ -11,4 +11,6 @@ mod lumped;
 mod lumped_iterative;
 
 pub use consistent::ConsistentSolver;
+#[cfg(test)]
+pub(crate) use lumped::assemble_l2_h1;
 pub use lumped::LumpedSolver;

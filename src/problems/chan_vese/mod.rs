@@ -22,7 +22,8 @@
 use super::Segmentation;
 use crate::fem::Weight;
 use crate::flow::{
-    FlowDefaults, H1Weights, OwnField, Problem, ProblemError, ScalarProduct, ShapeGradient, SurfaceState,
+    Confinement, FlowDefaults, H1Weights, OwnField, Problem, ProblemError, ScalarProduct, ShapeGradient, StepLimits,
+    SurfaceState,
 };
 use crate::geometry::{Mesh, Point};
 use crate::imaging::EdgeField;
@@ -99,6 +100,12 @@ impl ChanVese {
 
     fn check_dimension<const D: usize>(&self) -> Result<(), ProblemError> {
         super::check_image_dimension::<D>(self.intensity.dimension())
+    }
+
+    /// The image's box in the unit-square coordinates of the flow.
+    fn image_box<const D: usize>(&self) -> Confinement<D> {
+        let (l, dims) = (self.intensity.scale(), self.intensity.dims());
+        Confinement { lo: Point::<D>::zeros(), hi: Point::<D>::from_fn(|a, _| dims[a] as f64 / l) }
     }
 
     /// The object of every component of `mesh` (holes and cavities belong to the
@@ -315,18 +322,17 @@ impl<const D: usize> Problem<D> for ChanVeseRun {
 
     /// The objects stay in the image box `D` (outside it there is no data: the
     /// spline is continued by the border samples, and an object cut by the border
-    /// would grow out of it).
-    fn constrain(&self, mut candidate: Mesh<D>) -> Mesh<D> {
-        let l = self.cv.intensity.scale();
-        let dims = self.cv.intensity.dims();
-        let extent: [f64; 3] = std::array::from_fn(|a| dims[a] as f64 / l);
-        let outside = candidate.positions().iter().any(|x| (0..D).any(|a| x[a] < 0.0 || x[a] > extent[a]));
-        if outside {
-            let clamped =
-                candidate.positions().iter().map(|x| Point::<D>::from_fn(|a, _| x[a].clamp(0.0, extent[a]))).collect();
-            candidate.set_positions(clamped);
-        }
-        candidate
+    /// would grow out of it). The territories of surfaces' objects are kept after
+    /// the solve ([`Problem::constrain_step`]): kept in the solve as well, they
+    /// made the nuclei volumes slower and their energies higher.
+    fn step_limits(&self, _mesh: &Mesh<D>) -> Option<Box<dyn StepLimits<D>>> {
+        Some(Box::new(self.cv.image_box::<D>()))
+    }
+
+    /// What the step's solve left outside the box ([`Problem::confinement`]) moved
+    /// back onto it.
+    fn constrain(&self, candidate: Mesh<D>) -> Mesh<D> {
+        self.cv.image_box().clamp(candidate)
     }
 }
 

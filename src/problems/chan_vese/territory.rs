@@ -37,7 +37,11 @@ impl Territories {
     /// `candidate` with every vertex that would enter the territory of another
     /// object than its component's held at its position in `current` (the same
     /// connectivity). A component's object is the territory most of its vertices
-    /// of `current` lie in.
+    /// of `current` lie in. A vertex already in another territory (put there by
+    /// the mesh management, which follows the shape rather than the territories)
+    /// may move back through it, against its normal, but is held if it would
+    /// advance: held wherever it went, it was pinned there for good, and the
+    /// step of its neighbours around it raised `J` however short it was.
     pub(super) fn hold<const D: usize>(&self, grid: &EdgeField, current: &Mesh<D>, candidate: Mesh<D>) -> Mesh<D> {
         let (component, count) = current.component_labels();
         let here: Vec<u32> = current.positions().iter().map(|x| self.at(grid, x)).collect();
@@ -57,11 +61,20 @@ impl Territories {
         }
         let mut x = candidate.positions().to_vec();
         let mut held = false;
+        let mut normals: Option<Vec<Point<D>>> = None;
         for (v, p) in x.iter_mut().enumerate() {
-            let t = self.at(grid, p);
             let mine = own[component[v]];
-            if t != 0 && mine != 0 && t != mine {
-                *p = current.positions()[v];
+            let foreign = |t: u32| t != 0 && mine != 0 && t != mine;
+            if !foreign(self.at(grid, p)) {
+                continue;
+            }
+            let from = current.positions()[v];
+            // a vertex already in another territory (left there by the mesh
+            // management) may retreat through it, but not advance
+            let hold = !foreign(self.at(grid, &from))
+                || (*p - from).dot(&normals.get_or_insert_with(|| current.vertex_normals())[v]) > 0.0;
+            if hold {
+                *p = from;
                 held = true;
             }
         }
@@ -103,5 +116,35 @@ mod tests {
             }
         }
         assert!(held > 0 && held < ball.num_vertices(), "{held}");
+    }
+
+    /// A ball of radius 3 at x = 8 on the same grid reaches a sample past the
+    /// border at x = 10: its vertices there may retreat through the other
+    /// territory (the ball shrinking) but not advance into it (the ball growing).
+    #[test]
+    fn a_vertex_in_another_territory_may_only_retreat() {
+        let dims = [20, 10, 10];
+        let grid = EdgeField::from_coefficients(3, dims, vec![0.0; 2000]);
+        let l = grid.scale();
+        let territories = Territories::new((0..2000).map(|p| if p % 20 < 10 { 1 } else { 2 }).collect());
+        let centre = Point::<3>::new(8.0 / l, 5.0 / l, 5.0 / l);
+        let ball = icosphere([centre[0], centre[1], centre[2]], 3.0 / l, 2).unwrap();
+        let scaled = |k: f64| ball.with_positions(ball.positions().iter().map(|x| centre + (x - centre) * k).collect());
+        let inside = |x: &Point<3>| x[0] * l >= 10.0;
+        let across = ball.positions().iter().filter(|x| inside(x)).count();
+        assert!(across > 0);
+        // shrinking: every vertex moves, also those that stay across the border
+        let shrunk = scaled(0.95);
+        assert!(shrunk.positions().iter().filter(|x| inside(x)).count() > 0);
+        assert_eq!(territories.hold(&grid, &ball, shrunk.clone()).positions(), shrunk.positions());
+        // growing: the vertices across the border, and those that would cross it,
+        // stay; the others move
+        let grown = scaled(1.05);
+        let held = territories.hold(&grid, &ball, grown.clone());
+        for k in 0..ball.num_vertices() {
+            let stays = inside(&grown.positions()[k]);
+            let expected = if stays { ball.positions()[k] } else { grown.positions()[k] };
+            assert_eq!(held.positions()[k], expected, "vertex {k}");
+        }
     }
 }
