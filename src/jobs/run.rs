@@ -116,6 +116,7 @@ fn run_stages<const D: usize>(
             // edges): the default edges go on from there, with a fresh step and
             // their convergence judged afresh
             let fine = Checkpoint { coarse: false, ..out.last.with_fresh_step(job.settings.tau) };
+            tracing::debug!(iteration = fine.iteration, stop = ?out.stop, "coarse start over, on to the default edges");
             (start, phase.coarse, reported) = (Some(fine), false, true);
             continue;
         }
