@@ -93,6 +93,40 @@ fn a_ring_keeps_its_hole() {
     assert!((rows[0].size / exact - 1.0).abs() < 0.03, "area {} against {exact}", rows[0].size);
 }
 
+/// Two discs cut by the image's edges (one by the right edge, one at the lower
+/// left corner), contrast 130, Gaussian noise of 40: each step keeps the image's
+/// box in its solve, the contours run along the edges, and the objects' areas are
+/// their parts inside the image.
+#[test]
+fn discs_cut_by_the_image_edges() {
+    let (w, h) = (128usize, 128usize);
+    let discs = [(128.0, 48.0, 30.0), (0.0, 128.0, 40.0)];
+    let mut noise = gaussian(31);
+    let mut pixels = vec![0u8; w * h];
+    let mut truth = vec![false; w * h];
+    for r in 0..h {
+        for c in 0..w {
+            let (x, y) = (c as f64 + 0.5, r as f64 + 0.5);
+            let inside = discs.iter().any(|&(cx, cy, rad)| (x - cx).hypot(y - cy) < rad);
+            truth[c + w * r] = inside;
+            let v = 60.0 + if inside { 130.0 } else { 0.0 } + 40.0 * noise();
+            pixels[c + w * r] = v.round().clamp(0.0, 255.0) as u8;
+        }
+    }
+    let (got, rows, _) = segment_objects(DEFAULTS, png_gray8(&pixels, w, h));
+    let d = dice(&got, &truth, w, h);
+    let mut areas: Vec<f64> = rows.iter().map(|r| r.size).collect();
+    areas.sort_by(f64::total_cmp);
+    // a quarter of the second disc, half of the first
+    let exact = [0.25 * std::f64::consts::PI * 1600.0, 0.5 * std::f64::consts::PI * 900.0];
+    eprintln!("discs cut by the edges: dice {d:.4}, areas {areas:?} (exact {exact:?})");
+    assert!(d >= 0.99, "dice {d}");
+    assert_eq!(areas.len(), 2);
+    for (a, e) in areas.iter().zip(exact) {
+        assert!((a / e - 1.0).abs() < 0.02, "area {a} against {e}");
+    }
+}
+
 /// Standard normal samples (approximately: the sum of 12 uniform ones, less 6)
 /// from [`uniform`] started at `seed`.
 fn gaussian(seed: u64) -> impl FnMut() -> f64 {
