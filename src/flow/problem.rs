@@ -122,8 +122,7 @@ pub trait Problem<const D: usize>: Send {
         0.0
     }
     /// Limits on where a step from `mesh` may take each vertex (segmentation: the
-    /// image's box and the objects' territories), which the step's solve keeps by
-    /// an active set (the lumped solver with the L2 and H1 products; see
+    /// image's box), which the step's solve keeps by an active set (the lumped solver with the L2 and H1 products; see
     /// [`super::StepLimits`]); [`Problem::constrain_step`] then enforces what is
     /// left. `None` by default.
     fn step_limits(&self, _mesh: &Mesh<D>) -> Option<Box<dyn super::StepLimits<D>>> {

@@ -329,8 +329,8 @@ impl<const D: usize> Problem<D> for ChanVeseRun {
         Some(Box::new(self.cv.image_box::<D>()))
     }
 
-    /// What the step's solve left outside the box ([`Problem::confinement`]) moved
-    /// back onto it.
+    /// What the step's solve left outside the box ([`Problem::step_limits`])
+    /// moved back onto it.
     fn constrain(&self, candidate: Mesh<D>) -> Mesh<D> {
         self.cv.image_box().clamp(candidate)
     }

@@ -40,8 +40,8 @@ impl Territories {
     /// of `current` lie in. A vertex already in another territory (put there by
     /// the mesh management, which follows the shape rather than the territories)
     /// may move back through it, against its normal, but is held if it would
-    /// advance: held wherever it went, it was pinned there for good, and the
-    /// step of its neighbours around it raised `J` however short it was.
+    /// advance: held wherever it went, it stayed there for good (a volume's run
+    /// held about 690 such vertices at every `τ` down to 1e-6).
     pub(super) fn hold<const D: usize>(&self, grid: &EdgeField, current: &Mesh<D>, candidate: Mesh<D>) -> Mesh<D> {
         let (component, count) = current.component_labels();
         let here: Vec<u32> = current.positions().iter().map(|x| self.at(grid, x)).collect();
