@@ -16,7 +16,7 @@
 //! instead leaves their neighbours where a step with those vertices moving on
 //! put them. Where a volume's surfaces lie flat on the image's box and are pushed
 //! out of it (the nuclei volumes: a quarter of their vertices), their runs took
-//! 1.2–1.8 times the steps that way (docs/segmentation-real-images.md).
+//! 1.5–1.8 times the steps that way (docs/segmentation-real-images.md).
 
 use super::limits::StepLimits;
 use super::schur::LumpedSolver;
