@@ -46,14 +46,21 @@ fn many_objects_of_different_contrast_some_touching() {
 /// contrast 130, Gaussian noise of 65 from a fixed xorshift generator, clipped to
 /// 8 bits): the PNG and the truth (file order).
 fn snr_2_picture(w: usize, h: usize, inside: impl Fn(f64, f64) -> bool) -> (Vec<u8>, Vec<bool>) {
-    let mut noise = gaussian(5);
+    noisy_picture(w, h, 65.0, 5, inside)
+}
+
+/// A picture of `w × h` with the shape `inside(x, y)` (background 60, contrast
+/// 130, Gaussian noise of `sigma` from the generator started at `seed`, clipped to
+/// 8 bits): the PNG and the truth (file order).
+fn noisy_picture(w: usize, h: usize, sigma: f64, seed: u64, inside: impl Fn(f64, f64) -> bool) -> (Vec<u8>, Vec<bool>) {
+    let mut noise = gaussian(seed);
     let mut pixels = vec![0u8; w * h];
     let mut truth = vec![false; w * h];
     for r in 0..h {
         for c in 0..w {
             let inside = inside(c as f64 + 0.5, r as f64 + 0.5);
             truth[c + w * r] = inside;
-            let v = 60.0 + if inside { 130.0 } else { 0.0 } + 65.0 * noise();
+            let v = 60.0 + if inside { 130.0 } else { 0.0 } + sigma * noise();
             pixels[c + w * r] = v.round().clamp(0.0, 255.0) as u8;
         }
     }
@@ -101,19 +108,9 @@ fn a_ring_keeps_its_hole() {
 fn discs_cut_by_the_image_edges() {
     let (w, h) = (128usize, 128usize);
     let discs = [(128.0, 48.0, 30.0), (0.0, 128.0, 40.0)];
-    let mut noise = gaussian(31);
-    let mut pixels = vec![0u8; w * h];
-    let mut truth = vec![false; w * h];
-    for r in 0..h {
-        for c in 0..w {
-            let (x, y) = (c as f64 + 0.5, r as f64 + 0.5);
-            let inside = discs.iter().any(|&(cx, cy, rad)| (x - cx).hypot(y - cy) < rad);
-            truth[c + w * r] = inside;
-            let v = 60.0 + if inside { 130.0 } else { 0.0 } + 40.0 * noise();
-            pixels[c + w * r] = v.round().clamp(0.0, 255.0) as u8;
-        }
-    }
-    let (got, rows, _) = segment_objects(DEFAULTS, png_gray8(&pixels, w, h));
+    let (png, truth) =
+        noisy_picture(w, h, 40.0, 31, |x, y| discs.iter().any(|&(cx, cy, rad)| (x - cx).hypot(y - cy) < rad));
+    let (got, rows, _) = segment_objects(DEFAULTS, png);
     let d = dice(&got, &truth, w, h);
     let mut areas: Vec<f64> = rows.iter().map(|r| r.size).collect();
     areas.sort_by(f64::total_cmp);
