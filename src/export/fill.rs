@@ -126,7 +126,7 @@ pub fn region_triangles(points: &[[f64; 2]], loops: &[Vec<usize>]) -> Option<Vec
     let around: Vec<Vec<usize>> = (0..loops.len())
         .map(|i| {
             let p = points[loops[i][0]];
-            let candidates = grid.at(p).iter().copied();
+            let candidates = grid.at(p);
             candidates
                 .filter(|&j| j != i && in_box(&boxes[j], p) && winding_number(&[&rings[j]], at[loops[i][0]]) != 0)
                 .collect()

@@ -35,12 +35,14 @@ pub fn in_box(b: &Rect, p: [f64; 2]) -> bool {
 }
 
 /// Boxes binned on a grid of about as many cells over them all: every box is
-/// listed in each cell it meets.
+/// listed in each cell it meets (the lists one after the other, a cell's from
+/// `start[c]` to `start[c + 1]`).
 pub struct BoxGrid {
     origin: [f64; 2],
     cell: [f64; 2],
     side: usize,
-    cells: Vec<Vec<usize>>,
+    start: Vec<u32>,
+    listed: Vec<u32>,
 }
 
 impl BoxGrid {
@@ -48,12 +50,34 @@ impl BoxGrid {
         let all = bounding_box(boxes.iter().flat_map(|b| [[b[0], b[1]], [b[2], b[3]]]));
         let side = ((boxes.len() as f64).sqrt().ceil() as usize).clamp(1, 256);
         let cell = [((all[2] - all[0]) / side as f64).max(1e-300), ((all[3] - all[1]) / side as f64).max(1e-300)];
-        let mut grid = BoxGrid { origin: [all[0], all[1]], cell, side, cells: vec![Vec::new(); side * side] };
-        for (k, b) in boxes.iter().enumerate() {
-            let (lo, hi) = (grid.index([b[0], b[1]]), grid.index([b[2], b[3]]));
-            for y in lo[1]..=hi[1] {
-                for x in lo[0]..=hi[0] {
-                    grid.cells[y * side + x].push(k);
+        let mut grid =
+            BoxGrid { origin: [all[0], all[1]], cell, side, start: vec![0; side * side + 1], listed: Vec::new() };
+        // count the boxes of each cell, then list them in place
+        let ranges: Vec<[usize; 4]> = boxes
+            .iter()
+            .map(|b| {
+                let (lo, hi) = (grid.index([b[0], b[1]]), grid.index([b[2], b[3]]));
+                [lo[0], lo[1], hi[0], hi[1]]
+            })
+            .collect();
+        for &[x0, y0, x1, y1] in &ranges {
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    grid.start[y * side + x + 1] += 1;
+                }
+            }
+        }
+        for c in 0..side * side {
+            grid.start[c + 1] += grid.start[c];
+        }
+        let mut next: Vec<u32> = grid.start[..side * side].to_vec();
+        grid.listed = vec![0; grid.start[side * side] as usize];
+        for (k, &[x0, y0, x1, y1]) in ranges.iter().enumerate() {
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let c = y * side + x;
+                    grid.listed[next[c] as usize] = k as u32;
+                    next[c] += 1;
                 }
             }
         }
@@ -65,18 +89,23 @@ impl BoxGrid {
         [at(0), at(1)]
     }
 
+    fn cell(&self, c: usize) -> &[u32] {
+        &self.listed[self.start[c] as usize..self.start[c + 1] as usize]
+    }
+
     /// The boxes listed in the cell of `p` (every box that holds `p` among them).
-    pub fn at(&self, p: [f64; 2]) -> &[usize] {
+    pub fn at(&self, p: [f64; 2]) -> impl Iterator<Item = usize> + '_ {
         let [x, y] = self.index(p);
-        &self.cells[y * self.side + x]
+        self.cell(y * self.side + x).iter().map(|&k| k as usize)
     }
 
     /// The boxes listed in the cells that `b` meets (every box that meets `b`
     /// among them), a box once for each such cell.
     pub fn near(&self, b: &Rect) -> impl Iterator<Item = usize> + '_ {
         let (lo, hi) = (self.index([b[0], b[1]]), self.index([b[2], b[3]]));
-        (lo[1]..=hi[1])
-            .flat_map(move |y| (lo[0]..=hi[0]).flat_map(move |x| self.cells[y * self.side + x].iter().copied()))
+        (lo[1]..=hi[1]).flat_map(move |y| {
+            (lo[0]..=hi[0]).flat_map(move |x| self.cell(y * self.side + x).iter().map(|&k| k as usize))
+        })
     }
 }
 
@@ -101,7 +130,7 @@ mod tests {
             let all: Vec<usize> = (0..boxes.len()).filter(|&j| boxes_meet(b, &boxes[j])).collect();
             assert_eq!(found, all, "box {i}");
             let p = [b[0] + 0.25, b[1] + 0.25];
-            let mut holding: Vec<usize> = grid.at(p).iter().copied().filter(|&j| in_box(&boxes[j], p)).collect();
+            let mut holding: Vec<usize> = grid.at(p).filter(|&j| in_box(&boxes[j], p)).collect();
             holding.sort_unstable();
             assert_eq!(holding, (0..boxes.len()).filter(|&j| in_box(&boxes[j], p)).collect::<Vec<_>>());
         }

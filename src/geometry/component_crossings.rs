@@ -3,9 +3,11 @@
 //! component's segment lies in the overlap of the two boxes, so the segments
 //! elsewhere (most of them, for objects that touch only here and there) need no
 //! test. The hits are those of [`Mesh::crossings`] that join two components.
+//! While a few vertices move back along their steps, only the segments whose
+//! swept boxes meet theirs need a test ([`SweptSegments`]).
 
 use super::boxes::{bounding_box, boxes_meet, grown, overlap, EMPTY};
-use super::{find_segment_intersections, BoxGrid, Mesh, Rect, SegmentHit};
+use super::{find_segment_intersections, segment_pair_hit, BoxGrid, Mesh, Point, Rect, SegmentHit};
 
 impl Mesh<2> {
     /// The crossings of segments of two different components (`a < b`, in the
@@ -57,8 +59,52 @@ impl Mesh<2> {
     }
 }
 
+/// The segments of a curve whose vertices may be anywhere on the straight paths
+/// between two positions, each with the box it can sweep, binned on a grid: the
+/// segments that a segment may meet, wherever along their paths both lie.
+pub struct SweptSegments {
+    boxes: Vec<Rect>,
+    grid: BoxGrid,
+}
+
+impl SweptSegments {
+    /// The segments `elements` between the positions `from` and `to`.
+    pub fn new(elements: &[[usize; 2]], from: &[Point<2>], to: &[Point<2>]) -> SweptSegments {
+        let boxes: Vec<Rect> = elements
+            .iter()
+            .map(|e| bounding_box(e.iter().flat_map(|&v| [[from[v].x, from[v].y], [to[v].x, to[v].y]])))
+            .collect();
+        let grid = BoxGrid::new(&boxes);
+        SweptSegments { boxes, grid }
+    }
+
+    /// The crossings of two different components of `mesh` (whose vertices lie on
+    /// their paths) in which one of `segments` (element indices) takes part: each
+    /// of them is tested against the segments whose swept boxes meet its own.
+    /// Sorted by `(a, b)`, as [`Mesh::component_crossings`].
+    pub fn crossings_of(&self, mesh: &Mesh<2>, segments: impl Iterator<Item = usize>) -> Vec<SegmentHit> {
+        let (label, _) = mesh.component_labels();
+        let (x, els) = (mesh.positions(), mesh.elements());
+        let mut hits = Vec::new();
+        for s in segments {
+            let b = &self.boxes[s];
+            for j in self.grid.near(b) {
+                if label[els[s][0]] == label[els[j][0]] || !boxes_meet(b, &self.boxes[j]) {
+                    continue;
+                }
+                let (a, c) = (s.min(j), s.max(j));
+                hits.extend(segment_pair_hit(x, els[a], els[c], (a, c)));
+            }
+        }
+        hits.sort_by_key(|h| (h.a, h.b));
+        hits.dedup_by_key(|h| (h.a, h.b));
+        hits
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    use super::SweptSegments;
     use crate::geometry::{circle, CurveMesh, Mesh, Point};
 
     /// The circles side by side in one mesh, crossings allowed.
@@ -101,5 +147,47 @@ mod tests {
         let bow = Mesh::from_trusted_parts(x, vec![[0, 1], [1, 2], [2, 3], [3, 0]]);
         assert!(!bow.crossings().is_empty());
         assert!(bow.component_crossings().is_empty());
+    }
+
+    /// Vertices anywhere on their paths between two states: the swept search
+    /// finds exactly the crossings of the full search (every segment asked), and
+    /// those of one segment among them.
+    #[test]
+    fn the_swept_search_finds_the_crossings_on_the_way() {
+        let from = together(&[circle([0.0, 0.0], 1.0, 48).unwrap(), circle([2.1, 0.0], 1.0, 40).unwrap()]);
+        // the first circle moves right by 0.3, the second left by 0.1: they meet
+        let to: Vec<Point<2>> = from
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| if i < 48 { *p + Point::<2>::new(0.3, 0.0) } else { *p - Point::<2>::new(0.1, 0.0) })
+            .collect();
+        let swept = SweptSegments::new(from.elements(), from.positions(), &to);
+        let mut mesh = from.clone();
+        let (mut seed, mut crossed) = (7u64, 0);
+        for _ in 0..20 {
+            let x: Vec<Point<2>> = from
+                .positions()
+                .iter()
+                .zip(&to)
+                .map(|(a, b)| {
+                    seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    let t = (seed >> 11) as f64 / (1u64 << 53) as f64;
+                    *a + (*b - *a) * t
+                })
+                .collect();
+            mesh.set_positions(x);
+            let full: Vec<(usize, usize)> = mesh.component_crossings().iter().map(|h| (h.a, h.b)).collect();
+            let found: Vec<(usize, usize)> =
+                swept.crossings_of(&mesh, 0..mesh.num_elements()).iter().map(|h| (h.a, h.b)).collect();
+            assert_eq!(found, full);
+            if let Some(&(a, b)) = full.first() {
+                crossed += 1;
+                let one = swept.crossings_of(&mesh, [a].into_iter());
+                assert!(one.iter().any(|h| (h.a, h.b) == (a, b)));
+                assert!(one.iter().all(|h| h.a == a || h.b == a));
+            }
+        }
+        assert!(crossed >= 5, "{crossed} of 20 states crossed");
     }
 }

@@ -5,6 +5,7 @@
 mod any_mesh;
 mod boxes;
 mod component_crossings;
+pub use component_crossings::SweptSegments;
 mod crossing_watch;
 mod curve_loop;
 pub use any_mesh::AnyMesh;
@@ -31,7 +32,7 @@ pub use curve_pass::{manage_curve, manage_curve_holding, Hold};
 pub use curve_remesh::{adapt_curve, regularize_curve, CurveRemeshSettings};
 pub use curve_topology::{resolve_crossings, resolve_intersections};
 pub use curves::{all_loops_below, circle, curves_from_loops, drop_small_loops, ellipse, polygon, rectangle};
-pub use intersect::{find_periodic_intersections, find_segment_intersections, SegmentHit};
+pub use intersect::{find_periodic_intersections, find_segment_intersections, segment_pair_hit, SegmentHit};
 pub use measures::{vertex_normals, MeshQuality};
 pub use mesh::{components, segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};
 pub use objects::Objects;

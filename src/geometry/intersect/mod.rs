@@ -230,6 +230,13 @@ fn find_at_depth(
     hits
 }
 
+/// The intersection of the segments `a` and `b` (index pairs into `points`), if
+/// any, as [`find_segment_intersections`] reports it (`a` and `b` as given).
+pub fn segment_pair_hit(points: &[Point<2>], a: [usize; 2], b: [usize; 2], ids: (usize, usize)) -> Option<SegmentHit> {
+    let seg = |s: [usize; 2]| Seg { p: points[s[0]], q: points[s[1]], id: s };
+    intersect_pair(&seg(a), &seg(b), ids.0, ids.1)
+}
+
 /// The scalar cross product `u × v`.
 pub(super) fn cross(u: Point<2>, v: Point<2>) -> f64 {
     u.x * v.y - u.y * v.x

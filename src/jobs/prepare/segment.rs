@@ -176,7 +176,8 @@ pub(super) fn prepare_segmentation(
 struct ImageInitial {
     mesh: Option<AnyMesh>,
     objects: usize,
-    /// Samples between touching objects, and the background level they get.
+    /// Samples between touching objects, and the background level they get
+    /// (volumes).
     cut: Vec<usize>,
     background: Option<f64>,
     /// Volumes with several objects: the territory of every object (the contact
@@ -275,9 +276,13 @@ fn functional(
         return Ok((ProblemKind::Segmentation(problem.clone()), second, edges, edge_contrast));
     }
     let mut values = data.values.clone();
-    if let Some(bg) = start.background {
-        // the samples between touching objects get the background level, so that
-        // their contours stay apart
+    if let (Some(bg), 3) = (start.background, d) {
+        // surfaces: the samples between touching objects get the background level,
+        // so that the surfaces stay apart. The territories hold vertices, not
+        // triangles: without this, two touching balls' volumes summed to 14 % more
+        // than their union. Curves' contact rule tests the segments themselves, and
+        // their samples are left as they are, so that touching contours close in on
+        // each other
         for &p in &start.cut {
             values[p] = bg;
         }

@@ -27,12 +27,14 @@ use crate::flow::{
 };
 use crate::geometry::{Mesh, Point};
 use crate::imaging::EdgeField;
+use contact::{keep_apart, objects_cross};
 use moments::{accumulate_moments, Moments};
 pub use run::ChanVeseRun;
 use run::Objects;
 use std::sync::Arc;
 pub use territory::Territories;
 
+mod contact;
 mod moments;
 mod run;
 mod territory;
@@ -158,49 +160,6 @@ impl ChanVese {
     }
 }
 
-/// Whether two different components of a curve mesh cross.
-fn objects_cross<const D: usize>(mesh: &Mesh<D>) -> bool {
-    !crossing_vertices(mesh).is_empty()
-}
-
-/// The vertices of the segments where two different components of a curve mesh
-/// cross (and of their neighbouring segments, so that the held stretch is not
-/// folded by the step around it).
-fn crossing_vertices<const D: usize>(mesh: &Mesh<D>) -> Vec<usize> {
-    // the curve itself (its component labels are cached with its connectivity)
-    let copy;
-    let curve = match (mesh as &dyn std::any::Any).downcast_ref::<Mesh<2>>() {
-        Some(curve) => curve,
-        None => {
-            let pts = mesh.positions().iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
-            copy = Mesh::<2>::from_trusted_parts(pts, mesh.elements().iter().map(|e| [e[0], e[D - 1]]).collect());
-            &copy
-        }
-    };
-    let hits = curve.component_crossings();
-    if hits.is_empty() {
-        return Vec::new();
-    }
-    let els = curve.elements();
-    let mut prev = vec![usize::MAX; mesh.num_vertices()];
-    let mut next = vec![usize::MAX; mesh.num_vertices()];
-    for e in els {
-        next[e[0]] = e[1];
-        prev[e[1]] = e[0];
-    }
-    let mut out = Vec::new();
-    for h in hits {
-        for s in [h.a, h.b] {
-            for v in els[s] {
-                out.extend([v, prev[v], next[v]].into_iter().filter(|&u| u != usize::MAX));
-            }
-        }
-    }
-    out.sort_unstable();
-    out.dedup();
-    out
-}
-
 impl<const D: usize> Problem<D> for ChanVeseRun {
     fn name(&self) -> &'static str {
         "segmentation"
@@ -290,9 +249,8 @@ impl<const D: usize> Problem<D> for ChanVeseRun {
     }
 
     /// With `separate`: where two objects would cross, the vertices of the
-    /// crossing segments keep their positions of `current` (a contact holds the
-    /// contours where they meet, and the rest of the step goes on), repeated while
-    /// new crossings appear (at most 8 rounds; what is left is inadmissible).
+    /// crossing segments go part of their step, or none ([`keep_apart`]: a contact
+    /// holds the contours where they meet, and the rest of the step goes on).
     /// Surfaces: the vertices that would enter another object's territory keep
     /// theirs ([`Territories::hold`]).
     fn constrain_step(&self, current: &Mesh<D>, candidate: Mesh<D>) -> Mesh<D> {
@@ -306,16 +264,9 @@ impl<const D: usize> Problem<D> for ChanVeseRun {
                 None => candidate,
             };
         }
-        for _ in 0..8 {
-            let held = crossing_vertices(&candidate);
-            if held.is_empty() {
-                break;
-            }
-            let mut x = candidate.positions().to_vec();
-            for v in held {
-                x[v] = current.positions()[v];
-            }
-            candidate.set_positions(x);
+        let curves = (current as &dyn std::any::Any).downcast_ref::<Mesh<2>>();
+        if let (Some(current), Some(candidate)) = (curves, (&mut candidate as &mut dyn std::any::Any).downcast_mut()) {
+            keep_apart(current, candidate);
         }
         candidate
     }

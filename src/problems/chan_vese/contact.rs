@@ -1,0 +1,126 @@
+//! The contact rule of curves: objects that start separate stay separate. Where a
+//! step would make two objects' contours cross, the vertices of the crossing
+//! segments (and their neighbours) go only a quarter of their step, then a quarter
+//! of that, up to [`SHORTENINGS`] times, and then keep their positions; the rest
+//! of the step goes on. The contours thus close in on each other where they meet, rather than
+//! stopping at the gap that the step which first crossed left between them.
+
+use crate::geometry::{Mesh, Point, SegmentHit, SweptSegments};
+
+/// Rounds in which the crossing vertices' steps are shortened, each time by
+/// [`SHORTENING`] (down to 1/64). Halving six times instead ended at the same Dice
+/// on touching discs and took a fifth longer on the nuclei image.
+pub(super) const SHORTENINGS: usize = 3;
+
+/// What a round leaves of a crossing vertex's step.
+const SHORTENING: f64 = 0.25;
+
+/// Further rounds in which the vertices still crossing keep their positions;
+/// whatever crosses after them is inadmissible.
+pub(super) const HOLDS: usize = 8;
+
+/// Whether two different components of a curve mesh cross.
+pub(super) fn objects_cross<const D: usize>(mesh: &Mesh<D>) -> bool {
+    let copy;
+    let curve = match (mesh as &dyn std::any::Any).downcast_ref::<Mesh<2>>() {
+        Some(curve) => curve,
+        None => {
+            let pts = mesh.positions().iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
+            copy = Mesh::<2>::from_trusted_parts(pts, mesh.elements().iter().map(|e| [e[0], e[D - 1]]).collect());
+            &copy
+        }
+    };
+    !curve.component_crossings().is_empty()
+}
+
+/// `candidate`, a step from `current` with the same vertices, with the crossing
+/// vertices' steps shortened until no two objects cross, or the rounds are over.
+pub(super) fn keep_apart(current: &Mesh<2>, candidate: &mut Mesh<2>) {
+    let mut hits = candidate.component_crossings();
+    if hits.is_empty() {
+        return;
+    }
+    let (from, to) = (current.positions(), candidate.positions().to_vec());
+    let els = candidate.elements().to_vec();
+    let n = to.len();
+    let (mut prev, mut next) = (vec![usize::MAX; n], vec![usize::MAX; n]);
+    let mut segments_of = vec![[usize::MAX; 2]; n];
+    for (k, e) in els.iter().enumerate() {
+        next[e[0]] = e[1];
+        prev[e[1]] = e[0];
+        segments_of[e[0]][1] = k;
+        segments_of[e[1]][0] = k;
+    }
+    let swept = SweptSegments::new(&els, from, &to);
+    let mut fraction = vec![1.0; n];
+    for round in 0..SHORTENINGS + HOLDS {
+        // the vertices of the crossing segments and their neighbours
+        let held = held_vertices(&hits, &els, &prev, &next);
+        let mut x = candidate.positions().to_vec();
+        for &v in &held {
+            fraction[v] = if round < SHORTENINGS { SHORTENING * fraction[v] } else { 0.0 };
+            x[v] = from[v] + (to[v] - from[v]) * fraction[v];
+        }
+        candidate.set_positions(x);
+        // only the segments of the vertices just moved can cross anew, and only the
+        // segments whose paths meet theirs
+        let mut segments: Vec<usize> = held.iter().flat_map(|&v| segments_of[v]).filter(|&k| k != usize::MAX).collect();
+        segments.sort_unstable();
+        segments.dedup();
+        hits = swept.crossings_of(candidate, segments.into_iter());
+        if hits.is_empty() {
+            return;
+        }
+    }
+}
+
+/// The vertices of the segments of `hits` and of their neighbouring segments, so
+/// that the held stretch is not folded by the step around it.
+fn held_vertices(hits: &[SegmentHit], els: &[[usize; 2]], prev: &[usize], next: &[usize]) -> Vec<usize> {
+    let mut out = Vec::new();
+    for h in hits {
+        for s in [h.a, h.b] {
+            for v in els[s] {
+                out.extend([v, prev[v], next[v]].into_iter().filter(|&u| u != usize::MAX));
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::circle;
+
+    /// Two circles 0.1 apart; a step moves the first 0.2 towards the second. The
+    /// crossing vertices go a quarter of their step: no two objects cross, the gap
+    /// halves (holding them where they were kept it at 0.1), and the vertices
+    /// away from the contact go all the way.
+    #[test]
+    fn contours_close_in_where_they_meet() {
+        let (a, b) = (circle([0.0, 0.0], 1.0, 64).unwrap(), circle([2.1, 0.0], 1.0, 64).unwrap());
+        let x: Vec<Point<2>> = a.positions().iter().chain(b.positions()).copied().collect();
+        let elements: Vec<[usize; 2]> =
+            a.elements().iter().copied().chain(b.elements().iter().map(|&[p, q]| [p + 64, q + 64])).collect();
+        let current = Mesh::<2>::from_trusted_parts(x.clone(), elements);
+        let step = Point::<2>::new(0.2, 0.0);
+        let moved: Vec<Point<2>> = x.iter().enumerate().map(|(i, p)| if i < 64 { *p + step } else { *p }).collect();
+        let mut candidate = current.clone();
+        candidate.set_positions(moved.clone());
+        assert!(objects_cross(&candidate));
+        keep_apart(&current, &mut candidate);
+        assert!(!objects_cross(&candidate));
+        let y = candidate.positions();
+        let rightmost = (0..64).map(|i| y[i].x).fold(f64::NEG_INFINITY, f64::max);
+        assert!((rightmost - 1.05).abs() < 1e-12, "the gap is {}", 1.1 - rightmost);
+        // the left half of the first circle moved the whole step
+        for i in 0..64 {
+            if x[i].x < 0.0 {
+                assert!((y[i] - moved[i]).norm() < 1e-15);
+            }
+        }
+    }
+}
