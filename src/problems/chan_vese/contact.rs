@@ -2,22 +2,23 @@
 //! step would make two objects' contours cross, the vertices of the crossing
 //! segments (and their neighbours) go only a quarter of their step, then a quarter
 //! of that, up to [`SHORTENINGS`] times, and then keep their positions; the rest
-//! of the step goes on. The contours thus close in on each other where they meet, rather than
-//! stopping at the gap that the step which first crossed left between them.
+//! of the step goes on. The contours thus close in on each other where they meet,
+//! rather than stopping at the gap that the step which first crossed left between
+//! them.
 
 use crate::geometry::{Mesh, Point, SegmentHit, SweptSegments};
 
 /// Rounds in which the crossing vertices' steps are shortened, each time by
 /// [`SHORTENING`] (down to 1/64). Halving six times instead ended at the same Dice
-/// on touching discs and took a fifth longer on the nuclei image.
-pub(super) const SHORTENINGS: usize = 3;
+/// on touching discs and took 1.15 times as long on the nuclei image.
+const SHORTENINGS: usize = 3;
 
 /// What a round leaves of a crossing vertex's step.
 const SHORTENING: f64 = 0.25;
 
 /// Further rounds in which the vertices still crossing keep their positions;
 /// whatever crosses after them is inadmissible.
-pub(super) const HOLDS: usize = 8;
+const HOLDS: usize = 8;
 
 /// Whether two different components of a curve mesh cross.
 pub(super) fn objects_cross<const D: usize>(mesh: &Mesh<D>) -> bool {
