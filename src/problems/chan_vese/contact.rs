@@ -6,7 +6,7 @@
 //! rather than stopping at the gap that the step which first crossed left between
 //! them.
 
-use crate::geometry::{Mesh, Point, SegmentHit, SweptSegments};
+use crate::geometry::{Mesh, SegmentHit, SweptSegments};
 
 /// Rounds in which the crossing vertices' steps are shortened, each time by
 /// [`SHORTENING`] (down to 1/64). Halving six times instead ended at the same Dice
@@ -20,18 +20,10 @@ const SHORTENING: f64 = 0.25;
 /// whatever crosses after them is inadmissible.
 const HOLDS: usize = 8;
 
-/// Whether two different components of a curve mesh cross.
+/// Whether two different components of a curve mesh cross (never, for a mesh
+/// that is not a curve in the plane).
 pub(super) fn objects_cross<const D: usize>(mesh: &Mesh<D>) -> bool {
-    let copy;
-    let curve = match (mesh as &dyn std::any::Any).downcast_ref::<Mesh<2>>() {
-        Some(curve) => curve,
-        None => {
-            let pts = mesh.positions().iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
-            copy = Mesh::<2>::from_trusted_parts(pts, mesh.elements().iter().map(|e| [e[0], e[D - 1]]).collect());
-            &copy
-        }
-    };
-    !curve.component_crossings().is_empty()
+    (mesh as &dyn std::any::Any).downcast_ref::<Mesh<2>>().is_some_and(|c| !c.component_crossings().is_empty())
 }
 
 /// `candidate`, a step from `current` with the same vertices, with the crossing
@@ -44,11 +36,9 @@ pub(super) fn keep_apart(current: &Mesh<2>, candidate: &mut Mesh<2>) {
     let (from, to) = (current.positions(), candidate.positions().to_vec());
     let els = candidate.elements().to_vec();
     let n = to.len();
-    let (mut prev, mut next) = (vec![usize::MAX; n], vec![usize::MAX; n]);
+    // the segments ending and starting at each vertex
     let mut segments_of = vec![[usize::MAX; 2]; n];
     for (k, e) in els.iter().enumerate() {
-        next[e[0]] = e[1];
-        prev[e[1]] = e[0];
         segments_of[e[0]][1] = k;
         segments_of[e[1]][0] = k;
     }
@@ -56,7 +46,7 @@ pub(super) fn keep_apart(current: &Mesh<2>, candidate: &mut Mesh<2>) {
     let mut fraction = vec![1.0; n];
     for round in 0..SHORTENINGS + HOLDS {
         // the vertices of the crossing segments and their neighbours
-        let held = held_vertices(&hits, &els, &prev, &next);
+        let held = held_vertices(&hits, &els, &segments_of);
         let mut x = candidate.positions().to_vec();
         for &v in &held {
             fraction[v] = if round < SHORTENINGS { SHORTENING * fraction[v] } else { 0.0 };
@@ -77,13 +67,11 @@ pub(super) fn keep_apart(current: &Mesh<2>, candidate: &mut Mesh<2>) {
 
 /// The vertices of the segments of `hits` and of their neighbouring segments, so
 /// that the held stretch is not folded by the step around it.
-fn held_vertices(hits: &[SegmentHit], els: &[[usize; 2]], prev: &[usize], next: &[usize]) -> Vec<usize> {
+fn held_vertices(hits: &[SegmentHit], els: &[[usize; 2]], segments_of: &[[usize; 2]]) -> Vec<usize> {
     let mut out = Vec::new();
     for h in hits {
-        for s in [h.a, h.b] {
-            for v in els[s] {
-                out.extend([v, prev[v], next[v]].into_iter().filter(|&u| u != usize::MAX));
-            }
+        for v in [els[h.a], els[h.b]].into_iter().flatten() {
+            out.extend(segments_of[v].iter().filter(|&&k| k != usize::MAX).flat_map(|&k| els[k]));
         }
     }
     out.sort_unstable();
@@ -94,7 +82,7 @@ fn held_vertices(hits: &[SegmentHit], els: &[[usize; 2]], prev: &[usize], next: 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::circle;
+    use crate::geometry::{circle, Point};
 
     /// Two circles 0.1 apart; a step moves the first 0.2 towards the second. The
     /// crossing vertices go a quarter of their step: no two objects cross, the gap
