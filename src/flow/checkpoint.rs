@@ -37,9 +37,19 @@ impl MeshData {
         {
             return None;
         }
-        let positions = self.positions.iter().map(|p| Point::<D>::from_iterator(p.iter().copied())).collect();
-        let elements = self.elements.iter().map(|e| std::array::from_fn(|k| e[k])).collect();
-        Some(Mesh::from_trusted_parts(positions, elements))
+        let positions: Vec<Point<D>> =
+            self.positions.iter().map(|p| Point::<D>::from_iterator(p.iter().copied())).collect();
+        let elements: Vec<[usize; D]> = self.elements.iter().map(|e| std::array::from_fn(|k| e[k])).collect();
+        match self.period {
+            None => Some(Mesh::from_trusted_parts(positions, elements)),
+            Some(period) => {
+                // a periodic curve (D = 2, checked above through the data's shape)
+                let points = positions.iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
+                let segments = elements.iter().map(|e| [e[0], e[1]]).collect();
+                let curve: Box<dyn std::any::Any> = Box::new(Mesh::<2>::periodic_trusted(points, segments, period));
+                curve.downcast::<Mesh<D>>().ok().map(|m| *m)
+            }
+        }
     }
 
     /// Rebuild a validated mesh of dimension `D`.

@@ -2,7 +2,6 @@
 
 use super::intersect::cross;
 use super::{simplex, Mesh, MeshError, Point};
-use std::collections::HashMap;
 
 pub(super) fn validate<const D: usize>(positions: &[Point<D>], elements: &[[usize; D]]) -> Result<(), MeshError> {
     basic_checks(positions, elements, |el| std::array::from_fn(|k| positions[el[k]]))?;
@@ -89,16 +88,25 @@ fn basic_checks<const D: usize>(
     if let Some(vertex) = used.iter().position(|u| !u) {
         return Err(MeshError::UnusedVertex { vertex });
     }
-    let mut seen: HashMap<[usize; D], usize> = HashMap::with_capacity(elements.len());
-    for (e, el) in elements.iter().enumerate() {
-        let mut key = *el;
-        key.sort_unstable();
-        if let Some(&other) = seen.get(&key) {
-            return Err(MeshError::Duplicate { element: e, other });
-        }
-        seen.insert(key, e);
+    // duplicates: equal sorted vertex lists; the error names the earliest element
+    // that repeats one before it, and the first of those
+    let mut keys: Vec<([usize; D], usize)> = elements
+        .iter()
+        .enumerate()
+        .map(|(e, el)| {
+            let mut key = *el;
+            key.sort_unstable();
+            (key, e)
+        })
+        .collect();
+    keys.sort_unstable();
+    // within a run of equal keys the indices ascend, so the smallest later index
+    // of a pair is a run's second element, paired with the run's first
+    let repeat = keys.windows(2).filter(|w| w[0].0 == w[1].0).map(|w| (w[1].1, w[0].1)).min();
+    match repeat {
+        Some((element, other)) => Err(MeshError::Duplicate { element, other }),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// The measure (length, area) at or below which an element of a mesh with these
@@ -154,23 +162,8 @@ fn validate_curve<const D: usize>(n: usize, elements: &[[usize; D]]) -> Result<(
 }
 
 fn validate_surface<const D: usize>(n: usize, elements: &[[usize; D]]) -> Result<(), MeshError> {
-    let mut half: HashMap<(usize, usize), usize> = HashMap::with_capacity(3 * elements.len());
-    for el in elements {
-        for k in 0..3 {
-            *half.entry((el[k], el[(k + 1) % 3])).or_insert(0) += 1;
-        }
-    }
-    let mut keys: Vec<_> = half.iter().map(|(&k, &c)| (k, c)).collect();
-    keys.sort_unstable();
-    for &((a, b), count) in &keys {
-        if count > 1 {
-            return Err(MeshError::InconsistentEdge { a, b, count });
-        }
-        if !half.contains_key(&(b, a)) {
-            return Err(MeshError::OpenEdge { a, b });
-        }
-    }
-    // Vertex stars: the links (a -> b for triangle (v, a, b)) must form one cycle.
+    // Vertex stars: the links (a -> b for triangle (v, a, b)); the directed edges
+    // out of `v` are `v -> a` for its links' first vertices.
     let mut star_start = vec![0usize; n + 1];
     for el in elements {
         for &v in el {
@@ -189,15 +182,37 @@ fn validate_surface<const D: usize>(n: usize, elements: &[[usize; D]]) -> Result
             fill[v] += 1;
         }
     }
+    let star = |v: usize| &links[star_start[v]..star_start[v + 1]];
+    // each directed edge once, and its reverse present (in the order of (a, b))
+    let mut out: Vec<usize> = Vec::new();
+    for a in 0..n {
+        out.clear();
+        out.extend(star(a).iter().map(|l| l.0));
+        out.sort_unstable();
+        for (i, &b) in out.iter().enumerate() {
+            if i > 0 && out[i - 1] == b {
+                continue;
+            }
+            let count = out[i..].iter().take_while(|&&c| c == b).count();
+            if count > 1 {
+                return Err(MeshError::InconsistentEdge { a, b, count });
+            }
+            if !star(b).iter().any(|l| l.0 == a) {
+                return Err(MeshError::OpenEdge { a, b });
+            }
+        }
+    }
+    // the links of each star must form one cycle
     for v in 0..n {
-        let star = &links[star_start[v]..star_start[v + 1]];
-        let next: HashMap<usize, usize> = star.iter().copied().collect();
+        let star = star(v);
+        // a star holds a handful of links: a linear search is the fastest map
+        let next = |a: usize| star.iter().find(|l| l.0 == a).map(|l| l.1);
         let (first, _) = star[0];
         let mut a = first;
         let mut steps = 0;
         loop {
-            a = match next.get(&a) {
-                Some(&b) => b,
+            a = match next(a) {
+                Some(b) => b,
                 None => return Err(MeshError::NonManifoldVertex { vertex: v }),
             };
             steps += 1;

@@ -3,12 +3,12 @@
 //! needs ([`GlbContext`]). With both, any glb of the job (a checkpoint, the
 //! evolution) is encoded without preparing the job again or solving anything.
 
-use super::run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
+use super::run::{run_prepared, run_vertex_fields, vertex_fields, JobFailure, JobOutcome, RunEvents};
 use super::spec::ColorBy;
 use super::{PreparedJob, ProblemKind};
 use crate::bulk::Polygon;
 use crate::export::{evolution_glb, shape_glb, ColorField, DomainOutline, Filled, GltfFrame};
-use crate::flow::{Checkpoint, MeshData, Progress, VertexFields};
+use crate::flow::{Checkpoint, FlowError, MeshData, Progress, VertexFields};
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 use std::sync::atomic::AtomicBool;
@@ -57,8 +57,18 @@ impl Frame {
     /// solve of the job's problem); zeros where they cannot be computed (e.g. the
     /// last state of a failed run), so that the geometry is still shown.
     pub fn of(job: &PreparedJob, state: &Checkpoint) -> Frame {
+        Frame::with_fields(state, vertex_fields(job, state))
+    }
+
+    /// [`Frame::of`] a state that this process's run produced (its mesh is not
+    /// validated again, [`run_vertex_fields`]).
+    pub fn of_run(job: &PreparedJob, state: &Checkpoint) -> Frame {
+        Frame::with_fields(state, run_vertex_fields(job, state))
+    }
+
+    fn with_fields(state: &Checkpoint, fields: Result<VertexFields, FlowError>) -> Frame {
         let n = state.mesh.positions.len();
-        let fields = match vertex_fields(job, state) {
+        let fields = match fields {
             Ok(f) if f.curvature.len() == n && f.normal_velocity.len() == n => f,
             _ => VertexFields { curvature: vec![0.0; n], normal_velocity: vec![0.0; n], own: None },
         };
@@ -197,9 +207,9 @@ impl Default for FrameMaker {
 }
 
 impl FrameMaker {
-    /// The frame of `state`, drawn if the frames so far fit.
+    /// The frame of `state`, a state of this process's run, drawn if the frames so far fit.
     pub fn make(&mut self, job: &PreparedJob, state: &Checkpoint) -> Frame {
-        let frame = Frame::of(job, state);
+        let frame = Frame::of_run(job, state);
         self.bytes += glb_bytes(&frame.state.mesh);
         if self.bytes <= self.budget {
             frame.with_fill()
@@ -236,7 +246,7 @@ pub fn run_with_frames(
         Err(f) => &f.last,
     };
     if frames.last().map(|f| &f.state) != Some(last) {
-        frames.push(Frame::of(job, last).with_fill());
+        frames.push(Frame::of_run(job, last).with_fill());
     }
     (result, frames)
 }

@@ -22,7 +22,7 @@ pub use frames::{
 pub use necks::NeckSplit;
 pub use prepare::{default_min_size, default_mu, default_mu_in, prepare, PreparedJob, ProblemKind, SegmentationSetup};
 pub use results::{image_result_names, result_files, result_state, ResultFile, StateResults, GLB};
-pub use run::{run_prepared, vertex_fields, JobFailure, JobOutcome, RunEvents};
+pub use run::{run_prepared, run_vertex_fields, vertex_fields, JobFailure, JobOutcome, RunEvents};
 pub use schema::{job_spec_schema, openapi_schemas};
 pub use schema_doc::job_spec_reference;
 pub use spec::{

@@ -183,7 +183,7 @@ fn state_files(job: &PreparedJob, context: &GlbContext, frames: &[Frame]) -> (Ve
     let last = frames.last().expect("a frame");
     let shown = result_state(job, &last.state);
     // the fields of the shown state: the last frame's, unless the contour moved
-    let shown_frame = if shown == last.state { last.clone() } else { Frame::of(job, &shown) };
+    let shown_frame = if shown == last.state { last.clone() } else { Frame::of_run(job, &shown) };
     let results = StateResults::new(job, &shown);
     let json = serde_json::to_vec_pretty(&results.shape_document()).expect("shape.json serializes");
     let shape = vec![

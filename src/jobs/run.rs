@@ -256,19 +256,37 @@ fn run_stage<const D: usize>(
 
 /// Per-vertex output fields of a state of `job`: the discrete curvature, the
 /// normal velocity of the next step and the problem's own field (see
-/// [`Flow::vertex_fields`]).
+/// [`Flow::vertex_fields`]). The state's mesh is validated: it may come from
+/// storage.
 pub fn vertex_fields(job: &PreparedJob, state: &Checkpoint) -> Result<VertexFields, FlowError> {
+    fields_in_dim(job, state, false)
+}
+
+/// [`vertex_fields`] of a state that this process's own run produced, whose mesh
+/// the flow keeps valid: not validated again (see [`Flow::continue_from`]).
+pub fn run_vertex_fields(job: &PreparedJob, state: &Checkpoint) -> Result<VertexFields, FlowError> {
+    fields_in_dim(job, state, true)
+}
+
+fn fields_in_dim(job: &PreparedJob, state: &Checkpoint, own: bool) -> Result<VertexFields, FlowError> {
     fn in_dim<const D: usize>(
         mut problem: Box<dyn Problem<D>>,
         job: &PreparedJob,
         state: &Checkpoint,
+        own: bool,
     ) -> Result<VertexFields, FlowError> {
-        Flow::resume(&mut *problem, state, job.settings.clone())?.vertex_fields()
+        let settings = job.settings.clone();
+        let mut flow = if own {
+            Flow::continue_from(&mut *problem, state, settings)?
+        } else {
+            Flow::resume(&mut *problem, state, settings)?
+        };
+        flow.vertex_fields()
     }
     let kind = job.stage_problem(state.stage);
     match state.mesh.dimension {
-        2 => in_dim::<2>(kind.curve_problem(), job, state),
-        3 => in_dim::<3>(kind.surface_problem()?, job, state),
+        2 => in_dim::<2>(kind.curve_problem(), job, state, own),
+        3 => in_dim::<3>(kind.surface_problem()?, job, state, own),
         d => Err(FlowError::Checkpoint(format!("dimension {d}"))),
     }
 }
