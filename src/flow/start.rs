@@ -39,10 +39,11 @@ impl<'p, const D: usize> Flow<'p, D> {
         Self::from_checkpoint(problem, checkpoint, mesh, settings)
     }
 
-    /// Continue a state this process's own flow produced (the next stage of a job)
-    /// with another problem: like [`Flow::resume`], without validating the mesh
-    /// again (the flow keeps its meshes valid up to the tolerances of its own
-    /// checks, which are not those of a file read from outside).
+    /// Continue a state this process's own flow produced (the next stage of a job,
+    /// with another problem; the fields of a checkpoint's frame): like
+    /// [`Flow::resume`], without validating the mesh again (the flow keeps its
+    /// meshes valid up to the tolerances of its own checks, which are not those of
+    /// a file read from outside).
     pub fn continue_from(
         problem: &'p mut dyn Problem<D>,
         checkpoint: &Checkpoint,
