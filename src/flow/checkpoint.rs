@@ -37,19 +37,15 @@ impl MeshData {
         {
             return None;
         }
-        let positions: Vec<Point<D>> =
-            self.positions.iter().map(|p| Point::<D>::from_iterator(p.iter().copied())).collect();
-        let elements: Vec<[usize; D]> = self.elements.iter().map(|e| std::array::from_fn(|k| e[k])).collect();
-        match self.period {
-            None => Some(Mesh::from_trusted_parts(positions, elements)),
-            Some(period) => {
-                // a periodic curve (D = 2, checked above through the data's shape)
-                let points = positions.iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
-                let segments = elements.iter().map(|e| [e[0], e[1]]).collect();
-                let curve: Box<dyn std::any::Any> = Box::new(Mesh::<2>::periodic_trusted(points, segments, period));
-                curve.downcast::<Mesh<D>>().ok().map(|m| *m)
-            }
+        if let Some(period) = self.period {
+            // a periodic curve (D = 2; for another D the downcast says no)
+            let points = self.positions.iter().map(|p| Point::<2>::new(p[0], p[1])).collect();
+            let segments = self.elements.iter().map(|e| [e[0], e[1]]).collect();
+            return of_dimension(Mesh::<2>::periodic_trusted(points, segments, period));
         }
+        let positions = self.positions.iter().map(|p| Point::<D>::from_iterator(p.iter().copied())).collect();
+        let elements = self.elements.iter().map(|e| std::array::from_fn(|k| e[k])).collect();
+        Some(Mesh::from_trusted_parts(positions, elements))
     }
 
     /// Rebuild a validated mesh of dimension `D`.
@@ -77,11 +73,16 @@ impl MeshData {
                 let to_2d = |p: Point<D>| Point::<2>::new(p[0], p.get(1).copied().unwrap_or(f64::NAN));
                 let segments = elements.iter().map(|e| [e[0], e.get(1).copied().unwrap_or(usize::MAX)]).collect();
                 let curve = Mesh::<2>::new_periodic(positions.into_iter().map(to_2d).collect(), segments, period)?;
-                let any: Box<dyn std::any::Any> = Box::new(curve);
-                any.downcast::<Mesh<D>>().map(|m| *m).map_err(|_| MeshError::BadPeriod { period })
+                of_dimension(curve).ok_or(MeshError::BadPeriod { period })
             }
         }
     }
+}
+
+/// A periodic curve as a mesh of dimension `D`: itself if `D` is 2.
+fn of_dimension<const D: usize>(curve: Mesh<2>) -> Option<Mesh<D>> {
+    let any: Box<dyn std::any::Any> = Box::new(curve);
+    any.downcast::<Mesh<D>>().ok().map(|m| *m)
 }
 
 /// The driver state after an accepted step.
@@ -133,4 +134,28 @@ fn is_false(b: &bool) -> bool {
 
 fn is_zero_f64(x: &f64) -> bool {
     *x == 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A periodic curve (a film's surface over one period) read back with and
+    /// without validation keeps its period and its vertices.
+    #[test]
+    fn a_periodic_curve_keeps_its_period() {
+        let n = 8;
+        let points: Vec<Point<2>> = (0..n)
+            .map(|i| Point::<2>::new(i as f64 / n as f64, 0.5 + 0.1 * (6.0 * i as f64 / n as f64).sin()))
+            .collect();
+        let curve = Mesh::<2>::new_periodic(points, (0..n).map(|i| [i, (i + 1) % n]).collect(), 1.0).unwrap();
+        let data = MeshData::from(&curve);
+        let trusted = data.to_mesh_unvalidated::<2>().unwrap();
+        let validated = data.to_mesh::<2>().unwrap();
+        for m in [&trusted, &validated] {
+            assert_eq!(m.period(), Some(1.0));
+            assert_eq!(m.positions(), curve.positions());
+        }
+        assert!(data.to_mesh_unvalidated::<3>().is_none());
+    }
 }
