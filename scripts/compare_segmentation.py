@@ -11,7 +11,7 @@ build (`cargo build --release`). Usage:
 Images: tests/data/nuclei.png with its manual annotation (Dice and object count),
 tests/data/coins.png (count only: 24 coins, no annotation), tests/data/cell.png (a
 quantitative phase image; its truth is the disc through the cell's half-maximum
-edge, as in tests/real_images/), two synthetic pictures with known masks
+edge, as in tests/engine/real_images/), two synthetic pictures with known masks
 generated here (the twelve discs of different contrast on an illumination
 gradient, and the five-armed star at SNR 2), and a 3D brain MR: the ICBM152 2009a
 T1 template (skull-stripped) that ships in the nilearn wheel, averaged over 4×4×4

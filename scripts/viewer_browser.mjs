@@ -1,5 +1,5 @@
 // Drive the viewer page in headless Chromium (playwright-core, Debian's chromium;
-// run by tests/viewer.rs): with the server's token unknown, the page must show the
+// run by tests/service/viewer.rs): with the server's token unknown, the page must show the
 // 401 message; with the token typed in, submit SPEC through the form, wait for the
 // job to end, and report what the page drew (energy points and ink, rendered
 // meshes and ink of the 3D canvas). Then an image job: the example EXAMPLE picked

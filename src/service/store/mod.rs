@@ -12,6 +12,7 @@
 //! partitioned) changes nothing. A job whose lease expired is claimed again by
 //! any node and resumes from its last checkpoint.
 
+mod migrations;
 mod postgres;
 mod sqlite;
 mod types;

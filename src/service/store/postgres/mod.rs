@@ -7,8 +7,8 @@
 mod listen;
 
 use super::{
-    now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
-    JobStore, Lease, StoreError, StoreResult, Which,
+    migrations, now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow,
+    JobRow, JobStatus, JobStore, Lease, StoreError, StoreResult, Which,
 };
 use crate::flow::Progress;
 use sqlx::postgres::{PgConnectOptions, PgPool, PgPoolOptions, PgRow};
@@ -74,7 +74,7 @@ impl PgStore {
             .test_before_acquire(true)
             .connect_with(options)
             .await?;
-        sqlx::migrate!("./migrations/postgres").run(&pool).await?;
+        migrations::migrator(migrations::POSTGRES).run(&pool).await?;
         Ok(PgStore { pool, blobs })
     }
 }

@@ -5,8 +5,8 @@
 //! queue.
 
 use super::{
-    now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus,
-    JobStore, Lease, StoreResult, Which,
+    migrations, now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow,
+    JobRow, JobStatus, JobStore, Lease, StoreResult, Which,
 };
 use crate::flow::Progress;
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous};
@@ -93,7 +93,7 @@ impl SqliteStore {
             .test_before_acquire(false)
             .connect_with(options.clone())
             .await?;
-        sqlx::migrate!("./migrations/sqlite").run(&pool).await?;
+        migrations::migrator(migrations::SQLITE).run(&pool).await?;
         let reader = SqlitePoolOptions::new()
             .max_connections(READERS)
             .test_before_acquire(false)

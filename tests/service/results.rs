@@ -5,10 +5,8 @@
 //! job without stored files (an older version's, or one whose nodes kept dying)
 //! gets them on the first request.
 
-mod common;
-
-use common::server::*;
-use common::validate_gltf;
+use crate::common::server::*;
+use crate::common::validate_gltf;
 use std::path::{Path, PathBuf};
 
 const CIRCLE: &str = r#"{"problem": {"type": "curvature_flow"},

@@ -2,9 +2,7 @@
 //! Khronos glTF-Validator (npm `gltf-validator`, installed by `npm ci`) reporting no
 //! errors and no warnings on every file we write.
 
-mod common;
-
-use common::validate_gltf;
+use crate::common::validate_gltf;
 use serde_json::Value;
 use shapeflow::flow::Checkpoint;
 use shapeflow::jobs::{

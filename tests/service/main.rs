@@ -1,10 +1,16 @@
-//! The HTTP service over real HTTP on 127.0.0.1 against a temporary SQLite file.
+//! The HTTP service over real HTTP on 127.0.0.1 against a temporary SQLite file:
+//! a job's life through the API, requests and their errors, event streams, where
+//! the bytes of results live, and the viewer page in a headless browser. One test
+//! binary: each binary that starts the service compiles its HTTP stack again (about
+//! a minute of CI's build per binary).
 
 #[path = "../common/mod.rs"]
 mod common;
 mod lifecycle;
 mod requests;
+mod results;
 mod streams;
+mod viewer;
 
 use common::server::*;
 use common::validate_gltf;

@@ -66,10 +66,10 @@ mod volumes;
 /// Dice 0.84–0.89 with 73–88 components (scripts/compare_segmentation.py).
 #[test]
 fn nuclei_at_defaults() {
-    let labels = image::load_from_memory(include_bytes!("../data/nuclei_labels.png")).unwrap().to_luma16();
+    let labels = image::load_from_memory(include_bytes!("../../data/nuclei_labels.png")).unwrap().to_luma16();
     let (w, h) = (labels.width() as usize, labels.height() as usize);
     let truth: Vec<bool> = labels.pixels().map(|p| p.0[0] > 0).collect();
-    let (got, n, job) = segment(DEFAULTS, include_bytes!("../data/nuclei.png").to_vec());
+    let (got, n, job) = segment(DEFAULTS, include_bytes!("../../data/nuclei.png").to_vec());
     let d = dice(&got, &truth, w, h);
     eprintln!("nuclei: dice {d:.4}, {n} objects (125 annotated); {:?}", job.segmentation);
     assert!(d >= 0.91, "dice {d}");
@@ -83,7 +83,7 @@ fn nuclei_at_defaults() {
 /// nothing else (the bright band along the photograph's top edge is background).
 #[test]
 fn coins_at_defaults() {
-    let (_, rows, job) = segment_objects(DEFAULTS, include_bytes!("../data/coins.png").to_vec());
+    let (_, rows, job) = segment_objects(DEFAULTS, include_bytes!("../../data/coins.png").to_vec());
     let setup = job.segmentation.as_ref().unwrap();
     let coins = rows.iter().filter(|r| r.size >= 500.0).count();
     let others: Vec<_> = rows.iter().filter(|r| r.size < 500.0).map(|r| (r.size, r.centroid.clone())).collect();
@@ -105,7 +105,7 @@ fn a_cell_in_a_phase_image() {
     let (w, h) = (550, 660);
     let truth: Vec<bool> =
         (0..w * h).map(|p| ((p % w) as f64 + 0.5 - 427.5).hypot((p / w) as f64 + 0.5 - 373.75) < 63.0).collect();
-    let (got, n, job) = segment(DEFAULTS, include_bytes!("../data/cell.png").to_vec());
+    let (got, n, job) = segment(DEFAULTS, include_bytes!("../../data/cell.png").to_vec());
     let d = dice(&got, &truth, w, h);
     eprintln!("cell: dice {d:.4}, {n} objects; {:?}", job.segmentation);
     assert_eq!(n, 1);
@@ -119,10 +119,10 @@ fn a_cell_in_a_phase_image() {
 /// against the silhouette (its dark pixels).
 #[test]
 fn a_silhouette_with_legs_and_a_tail_is_one_object() {
-    let horse = image::load_from_memory(include_bytes!("../data/horse.png")).unwrap().to_luma8();
+    let horse = image::load_from_memory(include_bytes!("../../data/horse.png")).unwrap().to_luma8();
     let (w, h) = (horse.width() as usize, horse.height() as usize);
     let truth: Vec<bool> = horse.pixels().map(|p| p.0[0] < 128).collect();
-    let (got, n, _) = segment(DEFAULTS, include_bytes!("../data/horse.png").to_vec());
+    let (got, n, _) = segment(DEFAULTS, include_bytes!("../../data/horse.png").to_vec());
     let d = dice(&got, &truth, w, h);
     eprintln!("horse: dice {d:.4}, {n} objects");
     assert_eq!(n, 1);
@@ -137,11 +137,11 @@ fn a_silhouette_with_legs_and_a_tail_is_one_object() {
 /// each light square one object.
 #[test]
 fn a_checkerboard_converges_with_its_32_squares() {
-    let board = image::load_from_memory(include_bytes!("../data/checkerboard.png")).unwrap().to_luma8();
+    let board = image::load_from_memory(include_bytes!("../../data/checkerboard.png")).unwrap().to_luma8();
     let (w, h) = (board.width() as usize, board.height() as usize);
     let truth: Vec<bool> = board.pixels().map(|p| p.0[0] > 127).collect();
     let inputs: HashMap<String, Vec<u8>> =
-        [("image".to_string(), include_bytes!("../data/checkerboard.png").to_vec())].into();
+        [("image".to_string(), include_bytes!("../../data/checkerboard.png").to_vec())].into();
     let job = prepare(parse_spec(DEFAULTS).unwrap(), &inputs).unwrap();
     let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ()).unwrap();
     let shown = result_state(&job, &out.last);

@@ -6,8 +6,8 @@
 //! `SHAPEFLOW_REQUIRE_BROWSER=1`; elsewhere the test is skipped, saying so, when no
 //! Chromium is installed.
 
+use crate::common::server::Server;
 use serde_json::Value;
-use shapeflow::service::Service;
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::path::{Path, PathBuf};
@@ -66,12 +66,8 @@ fn the_page_submits_a_job_and_draws_its_energy_and_shape() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     assert!(root.join("node_modules/playwright-core").exists(), "playwright-core is missing: run `npm ci` first");
     let dir = tempfile::tempdir().unwrap();
-    let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
-    let service = rt.block_on(Service::start(&dir.path().join("jobs.db"), 1, Some(TOKEN.into()))).unwrap();
-    let listener = rt.block_on(tokio::net::TcpListener::bind("127.0.0.1:0")).unwrap();
-    let addr = listener.local_addr().unwrap();
-    let app = service.router();
-    let server = rt.spawn(async move { axum::serve(listener, app).await.unwrap() });
+    let srv = Server::start_with(&dir.path().join("jobs.db"), 1, Some(TOKEN));
+    let addr = srv.addr;
 
     let spec_file = dir.path().join("spec.json");
     std::fs::write(&spec_file, SPEC).unwrap();
@@ -127,6 +123,5 @@ fn the_page_submits_a_job_and_draws_its_energy_and_shape() {
     assert_eq!(report["overlayWidth"].as_u64(), Some(star.0 as u64), "{report}");
     assert_eq!(report["errors"], serde_json::json!([]), "{report}");
 
-    rt.block_on(service.stop());
-    server.abort();
+    srv.stop();
 }

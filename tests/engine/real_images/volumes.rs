@@ -11,7 +11,7 @@ use shapeflow::flow::Checkpoint;
 #[test]
 fn two_overlapping_balls_are_two_objects() {
     let inputs: HashMap<String, Vec<u8>> =
-        [("image".to_string(), include_bytes!("../../examples/data/balls.nrrd").to_vec())].into();
+        [("image".to_string(), include_bytes!("../../../examples/data/balls.nrrd").to_vec())].into();
     let every_step =
         r#"{"problem": {"type": "segmentation", "image": "input:image"}, "output": {"checkpoint_every": 1}}"#;
     let job = prepare(parse_spec(every_step).unwrap(), &inputs).unwrap();
@@ -169,7 +169,7 @@ fn a_step_flattened_against_the_image_box_is_retried() {
     let spec = r#"{"problem": {"type": "segmentation", "image": "input:image", "lambda_in": 1000},
         "flow": {"step_control": 0}, "initial": {"shape": "seeds", "spacing": 30, "radius": 5}}"#;
     let inputs: HashMap<String, Vec<u8>> =
-        [("image".to_string(), include_bytes!("../../examples/data/balls.nrrd").to_vec())].into();
+        [("image".to_string(), include_bytes!("../../../examples/data/balls.nrrd").to_vec())].into();
     let job = prepare(parse_spec(spec).unwrap(), &inputs).unwrap();
     let out = run_prepared(&job, None, &AtomicBool::new(false), &mut ());
     let out = out.unwrap_or_else(|f| panic!("the run failed: {}", f.error));

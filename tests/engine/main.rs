@@ -1,0 +1,16 @@
+//! The engine's tests, from the library's API and the CLI's job runner: convergence
+//! orders and conserved quantities (numerics), mesh management and pinch-off,
+//! segmentation of generated and real images, shape design, validation of inputs,
+//! and the glTF results. One test binary: each binary compiles the library's
+//! generic code again at opt-level 2 (about a minute of CI's build for each).
+
+#[path = "../common/mod.rs"]
+mod common;
+mod gltf_results;
+mod mesh_management;
+mod numerics;
+mod pinch_off;
+mod real_images;
+mod segmentation;
+mod shape_design;
+mod validation;
