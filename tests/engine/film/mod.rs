@@ -3,9 +3,10 @@
 
 // libtest starts a binary's tests in the order of their names, two at a time on
 // CI's two cores. The wetting layer is the longest test that runs on one thread
-// (about 2.5 min of CPU): its module's name puts it first, so the other tests
-// (the two refinement studies run their resolutions on threads of their own)
-// share the second core beside it instead of leaving it idle at the end.
+// (about 2.5 min of CPU): its module's name puts it first in the engine's binary
+// (`film::layer::…`), so the other tests (the two refinement studies run their
+// resolutions on threads of their own, then the rest of the engine's tests) share
+// the second core beside it instead of leaving it idle at the end.
 mod layer;
 mod linear;
 mod voids;
