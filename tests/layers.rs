@@ -158,7 +158,7 @@ fn no_import_cycle_between_the_files_of_a_folder() {
                 match state.get(m.as_str()) {
                     Some(1) => {
                         let at = stack.iter().position(|s| s == m).unwrap();
-                        found.push([&stack[at..], &[m.clone()]].concat().join(" → "));
+                        found.push([&stack[at..], std::slice::from_ref(m)].concat().join(" → "));
                     }
                     Some(_) => {}
                     None => visit(m, graph, state, stack, found),

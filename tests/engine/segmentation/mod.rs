@@ -180,11 +180,6 @@ fn star_shaped_object_newton_h1() {
     assert!(hd <= 1.0, "hausdorff {hd} px");
 }
 
-/// The default second stage of 2D segmentation (`lambda_final` 0) moves the contour
-/// out to the edges the balloon force held it inside of; the iterations count on,
-/// the later checkpoints say `stage: 1`, and a run resumed from one of them
-/// continues the second stage.
-
 /// 16-bit and colour encodings of the same picture give the same contour.
 #[test]
 fn bit_depth_and_colour_do_not_change_the_result() {

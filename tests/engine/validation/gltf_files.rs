@@ -108,7 +108,9 @@ fn crafted_gltf_files_are_errors_not_panics_or_endless_work() {
         edit(&mut d);
         read_mesh_file("crafted.glb", &glb(&d, &bin)).expect_err("should be rejected").to_string()
     };
-    let cases: Vec<(&dyn Fn(&mut serde_json::Value), &str)> = vec![
+    // an edit of the document, and what the error must say
+    type Case<'a> = (&'a dyn Fn(&mut serde_json::Value), &'a str);
+    let cases: Vec<Case> = vec![
         // a node reached twice (2^64 visits if followed blindly)
         (
             &|d| {
