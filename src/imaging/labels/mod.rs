@@ -248,7 +248,7 @@ mod tests {
         let ring: Vec<bool> = (0..w * h)
             .map(|p| {
                 let r = ((p % w) as f64 + 0.5 - 15.0).hypot((p / w) as f64 + 0.5 - 15.0);
-                r < 10.0 && r >= 2.6
+                (2.6..10.0).contains(&r)
             })
             .collect();
         assert!(!clean_mask(&ring, [w, h, 1], 5, 0.05)[15 + w * 15]);

@@ -39,12 +39,12 @@ pub(super) fn flow_settings(f: &FlowSpec, problem: &ProblemKind) -> Result<FlowS
     let end_time = f.end_time.map(|t| positive("flow.end_time", t)).transpose()?;
     let step_control = match f.step_control {
         None => d.step_control,
-        Some(e) if e == 0.0 => None,
+        Some(0.0) => None,
         Some(e) => Some(positive("flow.step_control", e)?),
     };
     let conservation = match f.conservation {
         None => own.conservation,
-        Some(c) if c == 0.0 => None,
+        Some(0.0) => None,
         Some(c) => Some(positive("flow.conservation", c)?),
     };
     let alpha = f.alpha.unwrap_or(d.alpha);

@@ -238,6 +238,10 @@ struct ChanVeseWeights {
     merge: bool,
 }
 
+/// A segmentation's functional, its second stage, the edge field the results are
+/// refined onto, and that field's contrast scale.
+type Functional = (ProblemKind, Option<ProblemKind>, Option<Arc<EdgeField>>, Option<f64>);
+
 /// The functional of `model`, its second stage (geodesic with `lambda_final`) and
 /// the edge field the results are refined onto, if any.
 fn functional(
@@ -248,7 +252,7 @@ fn functional(
     start: &ImageInitial,
     w: &ChanVeseWeights,
     sigma: f64,
-) -> Result<(ProblemKind, Option<ProblemKind>, Option<Arc<EdgeField>>, Option<f64>), SpecError> {
+) -> Result<Functional, SpecError> {
     let (d, l) = (grid.dimension, grid.scale());
     // (the weights given in the spec are checked by the caller)
     let geodesic = match model {
