@@ -120,9 +120,14 @@ pub fn post_bytes(addr: SocketAddr, path: &str, ctype: &str, body: &[u8]) -> (u1
 
 /// GET `path` as bytes (for binary results; the server sends Content-Length).
 pub fn download(addr: SocketAddr, path: &str) -> (u16, String, Vec<u8>) {
+    download_with(addr, path, "")
+}
+
+/// [`download`] with extra header lines (each ending in `\r\n`).
+pub fn download_with(addr: SocketAddr, path: &str, headers: &str) -> (u16, String, Vec<u8>) {
     let mut s = TcpStream::connect(addr).unwrap();
     s.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
-    let req = format!("GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nContent-Length: 0\r\n\r\n");
+    let req = format!("GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n{headers}Content-Length: 0\r\n\r\n");
     s.write_all(req.as_bytes()).unwrap();
     let mut out = Vec::new();
     s.read_to_end(&mut out).unwrap();

@@ -6,10 +6,9 @@
 //! `SHAPEFLOW_REQUIRE_BROWSER=1`; elsewhere the test is skipped, saying so, when no
 //! Chromium is installed.
 
-use crate::common::server::Server;
+use crate::common::server::{download_with, Server};
 use serde_json::Value;
-use std::io::{Read, Write};
-use std::net::{SocketAddr, TcpStream};
+use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -28,16 +27,9 @@ fn chromium() -> Option<PathBuf> {
 
 /// `GET path` with the token: status and body bytes.
 fn get(addr: SocketAddr, path: &str) -> (u16, Vec<u8>) {
-    let mut s = TcpStream::connect(addr).unwrap();
-    let req =
-        format!("GET {path} HTTP/1.1\r\nHost: {addr}\r\nAuthorization: Bearer {TOKEN}\r\nConnection: close\r\n\r\n");
-    s.write_all(req.as_bytes()).unwrap();
-    let mut out = Vec::new();
-    s.read_to_end(&mut out).unwrap();
-    let cut = out.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
-    let head = String::from_utf8_lossy(&out[..cut]).to_string();
+    let (status, head, body) = download_with(addr, path, &format!("Authorization: Bearer {TOKEN}\r\n"));
     assert!(!head.to_ascii_lowercase().contains("transfer-encoding: chunked"), "{head}");
-    (head.split_whitespace().nth(1).unwrap().parse().unwrap(), out[cut + 4..].to_vec())
+    (status, body)
 }
 
 /// The number of primitives of a .glb: the meshes three.js draws for it.
