@@ -34,15 +34,23 @@ pub fn in_box(b: &Rect, p: [f64; 2]) -> bool {
     p[0] >= b[0] && p[0] <= b[2] && p[1] >= b[1] && p[1] <= b[3]
 }
 
+/// Boxes that meet more of a [`BoxGrid`]'s cells than this are not binned but
+/// kept in a list of their own, which every query returns: a few long steps of a
+/// segmentation's thousands of seeds, their boxes swept across the image, put
+/// every box in every cell (about 10⁹ entries, beyond the lists' `u32` indices).
+const LARGE: usize = 64;
+
 /// Boxes binned on a grid of about as many cells over them all: every box is
 /// listed in each cell it meets (the lists one after the other, a cell's from
-/// `start[c]` to `start[c + 1]`).
+/// `start[c]` to `start[c + 1]`), but a box that meets more than [`LARGE`] cells
+/// is listed once, apart, and returned by every query.
 pub struct BoxGrid {
     origin: [f64; 2],
     cell: [f64; 2],
     side: usize,
     start: Vec<u32>,
     listed: Vec<u32>,
+    large: Vec<u32>,
 }
 
 impl BoxGrid {
@@ -50,13 +58,25 @@ impl BoxGrid {
         let all = bounding_box(boxes.iter().flat_map(|b| [[b[0], b[1]], [b[2], b[3]]]));
         let side = ((boxes.len() as f64).sqrt().ceil() as usize).clamp(1, 256);
         let cell = [((all[2] - all[0]) / side as f64).max(1e-300), ((all[3] - all[1]) / side as f64).max(1e-300)];
-        let mut grid =
-            BoxGrid { origin: [all[0], all[1]], cell, side, start: vec![0; side * side + 1], listed: Vec::new() };
-        // count the boxes of each cell, then list them in place
+        let mut grid = BoxGrid {
+            origin: [all[0], all[1]],
+            cell,
+            side,
+            start: vec![0; side * side + 1],
+            listed: Vec::new(),
+            large: Vec::new(),
+        };
+        // count the boxes of each cell, then list them in place; a large box gets
+        // the empty range [1, 1, 0, 0] and goes to its own list
         let ranges: Vec<[usize; 4]> = boxes
             .iter()
-            .map(|b| {
+            .enumerate()
+            .map(|(k, b)| {
                 let (lo, hi) = (grid.index([b[0], b[1]]), grid.index([b[2], b[3]]));
+                if (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) > LARGE {
+                    grid.large.push(k as u32);
+                    return [1, 1, 0, 0];
+                }
                 [lo[0], lo[1], hi[0], hi[1]]
             })
             .collect();
@@ -93,19 +113,21 @@ impl BoxGrid {
         &self.listed[self.start[c] as usize..self.start[c + 1] as usize]
     }
 
-    /// The boxes listed in the cell of `p` (every box that holds `p` among them).
+    /// The boxes listed in the cell of `p` and the large ones (every box that
+    /// holds `p` among them).
     pub fn at(&self, p: [f64; 2]) -> impl Iterator<Item = usize> + '_ {
         let [x, y] = self.index(p);
-        self.cell(y * self.side + x).iter().map(|&k| k as usize)
+        self.large.iter().chain(self.cell(y * self.side + x)).map(|&k| k as usize)
     }
 
-    /// The boxes listed in the cells that `b` meets (every box that meets `b`
-    /// among them), a box once for each such cell.
+    /// The boxes listed in the cells that `b` meets, a box once for each such
+    /// cell, and the large ones once (every box that meets `b` among them).
     pub fn near(&self, b: &Rect) -> impl Iterator<Item = usize> + '_ {
         let (lo, hi) = (self.index([b[0], b[1]]), self.index([b[2], b[3]]));
-        (lo[1]..=hi[1]).flat_map(move |y| {
+        let binned = (lo[1]..=hi[1]).flat_map(move |y| {
             (lo[0]..=hi[0]).flat_map(move |x| self.cell(y * self.side + x).iter().map(|&k| k as usize))
-        })
+        });
+        self.large.iter().map(|&k| k as usize).chain(binned)
     }
 }
 
@@ -113,16 +135,26 @@ impl BoxGrid {
 mod tests {
     use super::*;
 
-    /// The boxes near a box are found by the grid exactly as by looking at all.
+    /// The boxes near a box are found by the grid exactly as by looking at all,
+    /// the large boxes (kept apart from the cells) among them.
     #[test]
     fn the_grid_finds_every_box_that_meets() {
-        let boxes: Vec<Rect> = (0..400)
+        let mut boxes: Vec<Rect> = (0..400)
             .map(|k| {
                 let (x, y) = ((k % 20) as f64 * 1.5, (k / 20) as f64 * 1.5 + 0.1 * (k % 3) as f64);
                 [x, y, x + 1.0 + 0.5 * (k % 4) as f64, y + 1.0]
             })
             .collect();
+        // across everything, along a row, down a column, and a quarter
+        boxes.extend([
+            [-1.0, -1.0, 40.0, 40.0],
+            [0.0, 7.2, 30.0, 7.4],
+            [12.1, 0.0, 12.2, 30.0],
+            [0.0, 0.0, 15.0, 15.0],
+        ]);
         let grid = BoxGrid::new(&boxes);
+        // (21 × 21 cells of about 2 × 2: the row and the column meet 16 each)
+        assert_eq!(grid.large, [400, 403]);
         for (i, b) in boxes.iter().enumerate() {
             let mut found: Vec<usize> = grid.near(b).filter(|&j| boxes_meet(b, &boxes[j])).collect();
             found.sort_unstable();

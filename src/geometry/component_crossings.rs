@@ -83,12 +83,30 @@ impl SweptSegments {
     /// of them is tested against the segments whose swept boxes meet its own.
     /// Sorted by `(a, b)`, as [`Mesh::component_crossings`].
     pub fn crossings_of(&self, mesh: &Mesh<2>, segments: impl Iterator<Item = usize>) -> Vec<SegmentHit> {
+        self.crossings_within(mesh, segments, usize::MAX).expect("no bound on the search")
+    }
+
+    /// [`Self::crossings_of`], or `None` once the search has looked at more than
+    /// `budget` swept boxes: after a long step, whose boxes cover much of the
+    /// curve, a search of the curve as it lies ([`Mesh::component_crossings`])
+    /// costs less.
+    pub fn crossings_within(
+        &self,
+        mesh: &Mesh<2>,
+        segments: impl Iterator<Item = usize>,
+        budget: usize,
+    ) -> Option<Vec<SegmentHit>> {
         let (label, _) = mesh.component_labels();
         let (x, els) = (mesh.positions(), mesh.elements());
         let mut hits = Vec::new();
+        let mut looked = 0usize;
         for s in segments {
             let b = &self.boxes[s];
             for j in self.grid.near(b) {
+                looked += 1;
+                if looked > budget {
+                    return None;
+                }
                 if label[els[s][0]] == label[els[j][0]] || !boxes_meet(b, &self.boxes[j]) {
                     continue;
                 }
@@ -98,7 +116,7 @@ impl SweptSegments {
         }
         hits.sort_by_key(|h| (h.a, h.b));
         hits.dedup_by_key(|h| (h.a, h.b));
-        hits
+        Some(hits)
     }
 }
 
@@ -181,6 +199,9 @@ mod tests {
             let found: Vec<(usize, usize)> =
                 swept.crossings_of(&mesh, 0..mesh.num_elements()).iter().map(|h| (h.a, h.b)).collect();
             assert_eq!(found, full);
+            let within = swept.crossings_within(&mesh, 0..mesh.num_elements(), 1 << 20);
+            assert_eq!(within.map(|h| h.iter().map(|h| (h.a, h.b)).collect::<Vec<_>>()), Some(full.clone()));
+            assert!(swept.crossings_within(&mesh, 0..mesh.num_elements(), 10).is_none());
             if let Some(&(a, b)) = full.first() {
                 crossed += 1;
                 let one = swept.crossings_of(&mesh, [a].into_iter());
