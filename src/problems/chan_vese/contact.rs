@@ -143,7 +143,7 @@ mod tests {
             elements.extend(c.elements().iter().map(|&[p, q]| [p + base, q + base]));
         }
         let current = Mesh::<2>::from_trusted_parts(x.clone(), elements);
-        // each vertex out from its loop's centre by 0.3 to 0.5, turned a little
+        // each vertex out to 0.6–1.0 from its loop's centre (the loops 1 apart), turned a little
         let moved: Vec<Point<2>> = x
             .iter()
             .enumerate()
