@@ -51,6 +51,14 @@ enum Command {
         #[command(flatten)]
         node: NodeArgs,
     },
+    /// Run one job sent on standard input (the process a worker starts for each
+    /// job under process isolation; not for use by hand).
+    #[command(hide = true)]
+    JobRunner {
+        /// The job's memory budget in bytes (RLIMIT_DATA).
+        #[arg(long)]
+        memory: Option<u64>,
+    },
     /// Print the JSON Schema of the job spec (api/job-spec.schema.json).
     Schema {
         /// Print the reference page generated from it instead
@@ -86,11 +94,38 @@ struct NodeArgs {
     /// job whose node stops renewing is taken over after it.
     #[arg(long, default_value_t = 15.0)]
     lease_seconds: f64,
+    /// Where each job runs: `process` (a process of its own, with its budgets
+    /// enforced by the kernel; a job that crashes ends only its own attempt) or
+    /// `thread` (on its worker's thread in this process: no memory budget).
+    #[arg(long, value_enum, default_value_t = IsolationArg::Process)]
+    isolation: IsolationArg,
+    /// Each job's memory budget (bytes, or with a suffix: 512MiB, 2GiB); default:
+    /// three quarters of the machine's memory shared by the workers, at least 1 GiB.
+    #[arg(long, value_parser = size_arg)]
+    job_memory: Option<u64>,
+    /// Each attempt's wall-clock budget in seconds (0: none).
+    #[arg(long, default_value_t = 86_400.0)]
+    job_seconds: f64,
+    /// What each job may store: checkpoints, result files and history (bytes,
+    /// or with a suffix).
+    #[arg(long, value_parser = size_arg, default_value = "16GiB")]
+    job_disk: u64,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum IsolationArg {
+    Process,
+    Thread,
+}
+
+fn size_arg(text: &str) -> Result<u64, String> {
+    shapeflow::service::isolation::parse_size(text)
 }
 
 impl NodeArgs {
     /// The configuration of a node, or why not.
     fn config(self, token: Option<String>, api: bool) -> Result<shapeflow::service::ServiceConfig> {
+        use shapeflow::service::isolation::{Budgets, Isolation};
         use shapeflow::service::store::ClaimPolicy;
         anyhow::ensure!(
             self.lease_seconds.is_finite() && (1.0..=30.0).contains(&self.lease_seconds),
@@ -113,6 +148,23 @@ impl NodeArgs {
         anyhow::ensure!(api || workers > 0, "a worker node needs --workers of at least 1");
         let policy =
             ClaimPolicy { lease: std::time::Duration::from_secs_f64(self.lease_seconds), ..ClaimPolicy::default() };
+        anyhow::ensure!(
+            self.job_seconds.is_finite() && self.job_seconds >= 0.0,
+            "--job-seconds must be a number of seconds (0: none), got {}",
+            self.job_seconds
+        );
+        let isolation = match self.isolation {
+            IsolationArg::Thread => Isolation::Thread,
+            IsolationArg::Process => Isolation::Process {
+                exe: std::env::current_exe().context("cannot find this program's file to run jobs with")?,
+            },
+        };
+        let defaults = Budgets::defaults(workers.max(1));
+        let budgets = Budgets {
+            memory: self.job_memory.or(defaults.memory),
+            seconds: (self.job_seconds > 0.0).then(|| std::time::Duration::from_secs_f64(self.job_seconds)),
+            disk: Some(self.job_disk),
+        };
         Ok(shapeflow::service::ServiceConfig {
             database,
             object_store: self.object_store,
@@ -120,6 +172,9 @@ impl NodeArgs {
             workers: workers.max(!api as usize),
             token,
             policy,
+            isolation,
+            budgets,
+            faults: Vec::new(),
         })
     }
 }
@@ -132,6 +187,7 @@ fn main() -> ExitCode {
         .init();
     let cli = Cli::parse();
     match cli.command {
+        Command::JobRunner { memory } => shapeflow::service::isolation::child::job_runner(memory),
         Command::Run { spec, out, inputs, resume } => match run(&spec, &out, &inputs, resume.as_deref()) {
             Ok(code) => code,
             Err(e) => {
@@ -318,13 +374,13 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
     // checkpoint.json keeps the flow's state for --resume
     let mut written = Vec::new();
     for file in result_files(&job, &frames) {
-        write(file.name, &file.bytes)?;
+        write(&file.name, &file.bytes)?;
         written.push(file.name);
     }
     write("energy.csv", energy_csv(&rep.history).as_bytes())?;
     write("energy.svg", energy_svg(&rep.history, &spec_path.display().to_string()).as_bytes())?;
     write("checkpoint.json", serde_json::to_string(&last)?.as_bytes())?;
-    written.extend(["energy.csv", "energy.svg", "checkpoint.json"]);
+    written.extend(["energy.csv", "energy.svg", "checkpoint.json"].map(std::borrow::Cow::from));
     say(format_args!("wrote {} in {}", written.join(", "), out.display()));
     say(format_args!(
         "took {:.3} s to prepare (inputs decoded, preprocessed, initial shape), {:.3} s to run, {:.3} s to write the results",

@@ -9,6 +9,7 @@ use crate::geometry::{loop_area, Point};
 use crate::imaging::{encode_nifti_labels, encode_nifti_mask, encode_nrrd_labels, encode_nrrd_mask, Grid};
 use crate::problems::refine_to_edges;
 use serde_json::Value;
+use std::borrow::Cow;
 use std::cell::OnceCell;
 
 /// The state a job's results show (shape.json, shape.glb, the mask and the overlay):
@@ -150,8 +151,8 @@ pub fn image_result_names(dimension: usize) -> &'static [(&'static str, &'static
 /// One result file: its name, media type and bytes.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ResultFile {
-    pub name: &'static str,
-    pub media_type: &'static str,
+    pub name: Cow<'static, str>,
+    pub media_type: Cow<'static, str>,
     pub bytes: Vec<u8>,
 }
 
@@ -172,7 +173,7 @@ pub fn result_files(job: &PreparedJob, frames: &[Frame]) -> Vec<ResultFile> {
         let state = state_files(job, &context, frames);
         (evolution.join().expect("evolution.glb panicked"), state)
     });
-    files.extend(evolution.map(|bytes| ResultFile { name: "evolution.glb", media_type: GLB, bytes }));
+    files.extend(evolution.map(|bytes| ResultFile { name: "evolution.glb".into(), media_type: GLB.into(), bytes }));
     files.extend(image_files);
     files
 }
@@ -187,14 +188,18 @@ fn state_files(job: &PreparedJob, context: &GlbContext, frames: &[Frame]) -> (Ve
     let results = StateResults::new(job, &shown);
     let json = serde_json::to_vec_pretty(&results.shape_document()).expect("shape.json serializes");
     let shape = vec![
-        ResultFile { name: "shape.json", media_type: "application/json", bytes: json },
-        ResultFile { name: "shape.glb", media_type: GLB, bytes: context.frame_glb(&shown_frame) },
+        ResultFile { name: "shape.json".into(), media_type: "application/json".into(), bytes: json },
+        ResultFile { name: "shape.glb".into(), media_type: GLB.into(), bytes: context.frame_glb(&shown_frame) },
     ];
     let names = job.image.as_deref().map_or(&[][..], |img| image_result_names(img.dimension));
     let images = names
         .iter()
         .filter_map(|&(name, media_type)| {
-            results.image_file(name).map(|(_, bytes)| ResultFile { name, media_type, bytes })
+            results.image_file(name).map(|(_, bytes)| ResultFile {
+                name: name.into(),
+                media_type: media_type.into(),
+                bytes,
+            })
         })
         .collect();
     (shape, images)

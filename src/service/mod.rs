@@ -8,8 +8,10 @@
 //! /v1/jobs/{id}/checkpoints` and `.../checkpoints/{n}.glb`, `GET /healthz`, `GET
 //! /v1/openapi.json`, and the viewer page (`/`, `/jobs/{id}`, `/ui/...`).
 
+mod attempt;
 pub mod blobs;
 mod error;
+pub mod isolation;
 mod recorder;
 mod routes;
 pub mod store;
@@ -18,6 +20,7 @@ pub mod worker;
 
 use axum::Router;
 pub use error::ApiError;
+use isolation::{Budgets, Isolation};
 pub use routes::{openapi_json, router, OPENAPI_YAML, ROUTES};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -58,6 +61,16 @@ pub struct ServiceConfig {
     /// With a token, every route but `/healthz` and the viewer page's needs it.
     pub token: Option<String>,
     pub policy: ClaimPolicy,
+    /// Where jobs run: in a process each (the default of `serve`) or on the
+    /// workers' threads.
+    pub isolation: Isolation,
+    /// What each job may use.
+    pub budgets: Budgets,
+    /// Faults injected into jobs by submission number (`panic@N`, `abort@N`,
+    /// `kill@N`, `grow@N`, `hang@N`): for the tests of isolation only; process
+    /// isolation only.
+    #[doc(hidden)]
+    pub faults: Vec<(i64, String)>,
 }
 
 /// A running service: the HTTP state and the worker threads.
@@ -69,7 +82,8 @@ pub struct Service {
 
 impl Service {
     /// [`Service::start_with`] on a SQLite file with `workers` (at least one) worker
-    /// threads and the default leases; blobs in the directory `blobs` beside it.
+    /// threads running jobs on themselves (thread isolation, no budgets) and the
+    /// default leases; blobs in the directory `blobs` beside it.
     pub async fn start(
         database: &std::path::Path,
         workers: usize,
@@ -85,6 +99,9 @@ impl Service {
             workers: workers.max(1),
             token,
             policy,
+            isolation: Isolation::Thread,
+            budgets: Budgets::default(),
+            faults: Vec::new(),
         })
         .await
     }
@@ -124,6 +141,7 @@ impl Service {
         });
         let shutdown = Arc::new(AtomicBool::new(false));
         let rt = tokio::runtime::Handle::current();
+        let faults = Arc::new(config.faults);
         let node = format!("{}-{}", std::process::id(), &uuid::Uuid::new_v4().simple().to_string()[..8]);
         let workers = (0..config.workers)
             .map(|k| {
@@ -136,6 +154,9 @@ impl Service {
                     events: state.events.clone(),
                     owner: format!("{node}/{k}"),
                     policy: config.policy,
+                    isolation: config.isolation.clone(),
+                    budgets: config.budgets,
+                    faults: faults.clone(),
                 };
                 std::thread::Builder::new()
                     .name(format!("worker-{k}"))

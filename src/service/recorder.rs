@@ -8,13 +8,15 @@
 //! the frames fit in evolution.glb ([`FrameMaker`]), so that the result files need
 //! little work when the run ends.
 //! The writer first stores the job's glb context, which the checkpoints' glb files
-//! need, while the run starts.
+//! need, while the run starts. Under process isolation the job's process makes
+//! the frames and the context, and the recorder only stores them
+//! ([`Recorder::made_checkpoint`]).
 //! A lost lease or a storage error stops the run (through its cancel flag) and is
 //! reported when the recorder is closed.
 
-use super::store::{Lease, Store, StoreError};
+use super::store::{Lease, MadeFrame, Store, StoreError};
 use crate::flow::{Checkpoint, Progress};
-use crate::jobs::{Frame, FrameMaker, GlbContext, PreparedJob, RunEvents};
+use crate::jobs::{FrameMaker, GlbContext, KeptFrames, PreparedJob, RunEvents};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -34,8 +36,9 @@ pub(super) struct WriteState {
     pub lost: bool,
     /// Another storage error.
     pub error: Option<String>,
-    /// The frames written, in order.
-    pub frames: Vec<Frame>,
+    /// The frames written (those the writer made), in order, as many as
+    /// evolution.glb may show ([`KeptFrames`]).
+    pub frames: KeptFrames,
 }
 
 /// `op` until it succeeds, fails for a reason other than an unreachable database,
@@ -57,7 +60,13 @@ pub(super) async fn retrying<T, F: std::future::Future<Output = Result<T, StoreE
 
 struct Batch {
     rows: Vec<Progress>,
-    checkpoint: Option<Checkpoint>,
+    checkpoint: Option<Pending>,
+}
+
+/// A checkpoint to store: a state whose frame the writer makes, or a frame made.
+enum Pending {
+    State(Checkpoint),
+    Made(MadeFrame),
 }
 
 /// The [`RunEvents`] of a job run by a worker.
@@ -70,13 +79,14 @@ pub(super) struct Recorder {
 }
 
 impl Recorder {
-    /// Start the writer of job `id` under `lease`, which stores the job's glb
-    /// context before any checkpoint; `cancel` is raised when the run must stop
+    /// Start the writer of job `id` under `lease`, which makes the frames of the
+    /// checkpoints of `job` (if given; it stores the job's glb context first) or
+    /// stores frames already made; `cancel` is raised when the run must stop
     /// (cancellation requested, lease lost, storage error); every written batch is
     /// announced on `events` (unless the store announces it to every node).
     pub(super) fn start(
         rt: &Handle,
-        job: Arc<PreparedJob>,
+        job: Option<Arc<PreparedJob>>,
         store: Store,
         id: &str,
         lease: &Lease,
@@ -88,35 +98,43 @@ impl Recorder {
         let writer = rt.spawn(async move {
             let mut state = WriteState::default();
             let mut maker = FrameMaker::default();
-            let context = GlbContext::of(&job);
-            if let Err(e) = retrying(|| store.put_context(&id, &context)).await {
-                state.error = Some(e.to_string());
-                cancel.store(true, Ordering::Relaxed);
+            if let Some(job) = &job {
+                let context = serde_json::to_vec(&GlbContext::of(job)).expect("contexts serialize");
+                if let Err(e) = retrying(|| store.put_context(&id, context.clone())).await {
+                    state.error = Some(e.to_string());
+                    cancel.store(true, Ordering::Relaxed);
+                }
             }
             while let Some(first) = rx.recv().await {
                 // the batches that queued while the last one was written go together,
                 // in one transaction: a writer that falls behind catches up
                 let mut rows = first.rows;
-                let mut checkpoints: Vec<Checkpoint> = first.checkpoint.into_iter().collect();
+                let mut pending: Vec<Pending> = first.checkpoint.into_iter().collect();
                 while let Ok(b) = rx.try_recv() {
                     rows.extend(b.rows);
-                    checkpoints.extend(b.checkpoint);
+                    pending.extend(b.checkpoint);
                 }
                 if state.lost || state.error.is_some() {
                     continue; // drain: nothing more is written
                 }
-                let frames = if checkpoints.is_empty() {
-                    Vec::new()
-                } else {
+                let (mut made, mut states) = (Vec::new(), Vec::new());
+                for p in pending {
+                    match p {
+                        Pending::Made(m) => made.push(m),
+                        Pending::State(c) => states.push(c),
+                    }
+                }
+                let mut frames = Vec::new();
+                if let (Some(job), false) = (&job, states.is_empty()) {
                     let (job, mut making) = (job.clone(), std::mem::take(&mut maker));
                     let fields = move || {
-                        let frames = checkpoints.iter().map(|cp| making.make(&job, cp)).collect::<Vec<_>>();
+                        let frames = states.iter().map(|cp| making.make(&job, cp)).collect::<Vec<_>>();
                         (frames, making)
                     };
                     match tokio::task::spawn_blocking(fields).await {
-                        Ok((frames, made)) => {
-                            maker = made;
-                            frames
+                        Ok((f, made_by)) => {
+                            maker = made_by;
+                            frames = f;
                         }
                         Err(e) => {
                             state.error = Some(format!("the fields of a checkpoint: {e}"));
@@ -124,10 +142,11 @@ impl Recorder {
                             continue;
                         }
                     }
-                };
-                match retrying(|| store.record(&id, &lease, &rows, &frames)).await {
+                }
+                made.extend(frames.iter().map(MadeFrame::of));
+                match retrying(|| store.record_made(&id, &lease, &rows, &made)).await {
                     Ok(cancelled) => {
-                        state.frames.extend(frames);
+                        frames.into_iter().for_each(|f| state.frames.push(f));
                         if !store.announces() {
                             let _ = events.send(Arc::from(id.as_str()));
                         }
@@ -150,7 +169,12 @@ impl Recorder {
         Recorder { rt: rt.clone(), rows: Vec::new(), last_flush: Instant::now(), queue: Some(tx), writer: Some(writer) }
     }
 
-    fn flush(&mut self, checkpoint: Option<Checkpoint>) {
+    /// A checkpoint whose frame the job's process made.
+    pub(super) fn made_checkpoint(&mut self, frame: MadeFrame) {
+        self.flush(Some(Pending::Made(frame)));
+    }
+
+    fn flush(&mut self, checkpoint: Option<Pending>) {
         let rows = std::mem::take(&mut self.rows);
         if let Some(q) = &self.queue {
             // fails only if the writer ended, which it does not before `close`
@@ -180,6 +204,6 @@ impl RunEvents for Recorder {
         }
     }
     fn checkpoint(&mut self, c: &Checkpoint) {
-        self.flush(Some(c.clone()));
+        self.flush(Some(Pending::State(c.clone())));
     }
 }

@@ -6,12 +6,16 @@
 //! loses its lease stops the run and writes nothing more. The result files are
 //! computed once, when the run ends ([`result_files`]), from the frames stored;
 //! their blobs are written first, and the row points to them in the transaction
-//! that records the outcome.
+//! that records the outcome. The run itself happens on the worker's thread or in
+//! a process of its own ([`Isolation`]; [`attempt`](super::attempt)); an attempt
+//! that ends abnormally (a panic, its process killed) is abandoned: the job goes
+//! on from its last checkpoint at its next claim, up to the policy's limit.
 
-use super::recorder::{retrying, Recorder};
-use super::store::{ClaimPolicy, Claimed, JobStatus, Lease, Store, StoreError, StoredResults, Which};
-use crate::flow::StopReason;
-use crate::jobs::{parse_spec, prepare, result_files, run_prepared};
+use super::attempt::{AttemptEnd, Results};
+use super::isolation::{Budgets, Isolation};
+use super::recorder::retrying;
+use super::store::{ClaimPolicy, Claimed, JobStatus, Lease, Store, StoreError, StoredResults};
+use crate::jobs::result_files;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -51,6 +55,10 @@ pub struct Worker {
     /// This node's name in the leases it holds.
     pub owner: String,
     pub policy: ClaimPolicy,
+    pub isolation: Isolation,
+    pub budgets: Budgets,
+    /// Faults injected into jobs by submission number (tests of isolation only).
+    pub faults: Arc<Vec<(i64, String)>>,
 }
 
 impl Worker {
@@ -143,69 +151,73 @@ impl Worker {
             let _ = self.events.send(Arc::from(job.id.as_str()));
             Ok(status)
         };
-        let finish = |status: JobStatus, stop: Option<&str>, msg: Option<&str>| finish_with(status, stop, msg, None);
         if claimed.takeover {
             tracing::info!(job = %job.id, "taking over a job whose lease expired");
-        }
-        let inputs = self.rt.block_on(self.store.inputs(&job.id))?;
-        let prepared = match parse_spec(&job.spec).and_then(|s| prepare(s, &inputs)) {
-            Ok(p) => Arc::new(p),
-            Err(e) => return finish(JobStatus::Failed, None, Some(&e.to_string())),
-        };
-        // the frames stored so far (a takeover), for evolution.glb
-        let mut frames = self.rt.block_on(self.store.frames(&job.id, Which::All))?;
-        let resume = frames.last().map(|f| f.state.clone());
-        if let Some(cp) = &resume {
-            self.rt.block_on(self.store.truncate_history(&job.id, lease, cp.iteration))?;
-            tracing::info!(job = %job.id, iteration = cp.iteration, "resuming from checkpoint");
         }
         let cancel = Arc::new(AtomicBool::new(false));
         let lost = Arc::new(AtomicBool::new(false));
         let done = Arc::new(Notify::new());
         self.heartbeat(&job.id, lease, done.clone(), lost.clone(), cancel.clone());
         self.registry.lock().unwrap().insert(job.id.clone(), cancel.clone());
-        let store = self.store.clone();
-        let mut rec =
-            Recorder::start(&self.rt, prepared.clone(), store, &job.id, lease, cancel.clone(), self.events.clone());
-        let result = run_prepared(&prepared, resume.as_ref(), &cancel, &mut rec);
-        let mut written = rec.close();
+        let attempt = match &self.isolation {
+            Isolation::Thread => self.in_thread(job, lease, &cancel),
+            Isolation::Process { exe } => {
+                let fault = self.faults.iter().find(|(seq, _)| *seq == job.seq).map(|(_, f)| f.clone());
+                self.in_process(exe, job, lease, &cancel, fault)
+            }
+        };
         done.notify_one();
         self.registry.lock().unwrap().remove(&job.id);
-        if written.lost || lost.load(Ordering::Relaxed) {
+        let attempt = attempt?;
+        if attempt.written.lost || lost.load(Ordering::Relaxed) {
             tracing::warn!(job = %job.id, "the job was taken over by another worker; this run's results are dropped");
             return Err(StoreError::LeaseLost(job.id.clone()));
         }
-        if let Some(e) = written.error {
-            return finish(JobStatus::Failed, None, Some(&format!("storage error: {e}")));
+        if let Some(e) = attempt.written.error {
+            tracing::error!(job = %job.id, "storage error: {e}");
+            let msg = "the job's history or checkpoints could not be stored (the data disk or the database failed); its checkpoints so far are kept";
+            return finish_with(JobStatus::Failed, None, Some(msg), None);
         }
-        let stopping = matches!(&result, Ok(o) if o.stop == StopReason::Cancelled)
+        let end = attempt.end;
+        if let AttemptEnd::Crashed(why) = &end {
+            tracing::warn!(job = %job.id, "attempt ended: {why}");
+            self.rt.block_on(retrying(|| self.store.abandon(&job.id, lease, why)))?;
+            let _ = self.events.send(Arc::from(job.id.as_str()));
+            return Ok(JobStatus::Running);
+        }
+        let stopping = end == AttemptEnd::Cancelled
             && self.shutdown.load(Ordering::Relaxed)
             && !self.rt.block_on(self.store.cancel_requested(&job.id))?;
         let mut stored = None;
         if !stopping {
-            // a resumed run's first frame repeats the last one stored before
-            let resumed_at = frames.last().map(|f| f.state.iteration);
-            frames.extend(written.frames.drain(..).filter(|f| Some(f.state.iteration) != resumed_at));
-            let files = result_files(&prepared, &frames);
-            match self.rt.block_on(retrying(|| self.store.store_results(&job.id, Some(lease), &files))) {
-                Ok(s) => stored = Some(s),
-                // written on the first request instead
-                Err(e) => tracing::warn!(job = %job.id, "cannot store the result files: {e}"),
+            let files = match attempt.results {
+                Results::None => Vec::new(),
+                Results::Files(files) => files,
+                Results::Frames(prepared, frames) => result_files(&prepared, &frames),
+            };
+            if !files.is_empty() {
+                match self.rt.block_on(retrying(|| self.store.store_results(&job.id, Some(lease), &files))) {
+                    Ok(s) => stored = Some(s),
+                    // written on the first request instead
+                    Err(e) => tracing::warn!(job = %job.id, "cannot store the result files: {e}"),
+                }
             }
         }
         let stored = stored.as_ref();
-        match result {
-            Ok(o) if o.stop == StopReason::Cancelled => {
-                if stopping {
-                    // stopped by a node shutdown: the job goes back to the queue
-                    // (PostgreSQL) or stays running to resume at the next start (SQLite)
-                    self.rt.block_on(self.store.release(&job.id, lease))?;
-                    return Ok(JobStatus::Running);
-                }
+        match end {
+            AttemptEnd::Cancelled if stopping => {
+                // stopped by a node shutdown: the job goes back to the queue
+                self.rt.block_on(self.store.release(&job.id, lease))?;
+                Ok(JobStatus::Running)
+            }
+            AttemptEnd::Cancelled => {
                 finish_with(JobStatus::Dismissed, Some("cancelled"), Some("cancelled by request"), stored)
             }
-            Ok(o) => finish_with(JobStatus::Successful, Some(o.stop.as_str()), o.note, stored),
-            Err(f) => finish_with(JobStatus::Failed, None, Some(&f.error.to_string()), stored),
+            AttemptEnd::Stopped { stop, note } => {
+                finish_with(JobStatus::Successful, Some(&stop), note.as_deref(), stored)
+            }
+            AttemptEnd::Failed(msg) => finish_with(JobStatus::Failed, None, Some(&msg), stored),
+            AttemptEnd::Crashed(_) => unreachable!("abandoned above"),
         }
     }
 }

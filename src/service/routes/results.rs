@@ -54,7 +54,7 @@ pub(super) async fn frames_to_draw(
         (GlbContext::of(&job), frames.collect::<Vec<_>>())
     })
     .await?;
-    state.store.put_context(id, &context).await?;
+    state.store.put_context(id, serde_json::to_vec(&context).expect("contexts serialize")).await?;
     Ok(Some((context, frames)))
 }
 

@@ -28,8 +28,8 @@ pub use postgres::PgStore;
 pub use sqlite::SqliteStore;
 pub(crate) use types::status_of;
 pub use types::{
-    CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus, Lease, ResultEntry, ResultIndex,
-    StoreError, StoreResult, StoredResults, Which,
+    CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus, Lease, MadeFrame, ResultEntry,
+    ResultIndex, StoreError, StoreResult, StoredResults, Which,
 };
 
 /// What every backend stores and how (see the module documentation). The
@@ -74,6 +74,11 @@ pub trait JobStore: Send + Sync + 'static {
     async fn renew(&self, id: &str, lease: &Lease, policy: &ClaimPolicy) -> StoreResult<bool>;
     /// Give a running job back to the queue (a node stopping); fenced.
     async fn release(&self, id: &str, lease: &Lease) -> StoreResult<()>;
+    /// End an attempt that went wrong (its process died, it panicked): the lease
+    /// expires now, so that the next claim takes the job over from its last
+    /// checkpoint and counts the attempt ([`ClaimPolicy::max_takeovers`]); the
+    /// job's message says why ([`ABANDONED`] and `why`); fenced.
+    async fn abandon(&self, id: &str, lease: &Lease, why: &str) -> StoreResult<()>;
     /// `(iteration, time)` of every checkpoint of a job, oldest first.
     async fn checkpoint_index(&self, id: &str) -> StoreResult<Vec<(i64, f64)>>;
     /// Checkpoint rows of a job, oldest first.
@@ -148,15 +153,21 @@ pub trait JobStore: Send + Sync + 'static {
     async fn frames(&self, id: &str, which: Which) -> StoreResult<Vec<Frame>> {
         let mut frames = Vec::new();
         for row in self.checkpoint_rows(id, which).await? {
-            let bytes = match &row.blob {
-                Some(key) => self.blobs().get_existing(&["jobs", id, "checkpoints", key]).await?,
-                None => row.data.into_bytes(),
-            };
+            let iteration = row.iteration;
+            let bytes = self.frame_json(id, row).await?;
             let frame = serde_json::from_slice(&bytes)
-                .map_err(|e| BlobError(format!("checkpoint {} of job {id} cannot be read: {e}", row.iteration)))?;
+                .map_err(|e| BlobError(format!("checkpoint {iteration} of job {id} cannot be read: {e}")))?;
             frames.push(frame);
         }
         Ok(frames)
+    }
+
+    /// The JSON of a stored checkpoint's frame.
+    async fn frame_json(&self, id: &str, row: CheckpointRow) -> StoreResult<Vec<u8>> {
+        Ok(match &row.blob {
+            Some(key) => self.blobs().get_existing(&["jobs", id, "checkpoints", key]).await?,
+            None => row.data.into_bytes(),
+        })
     }
 
     /// The newest checkpoint of a job.
@@ -168,12 +179,17 @@ pub trait JobStore: Send + Sync + 'static {
     /// under a key with the lease's epoch, then their rows), in one transaction:
     /// see [`JobStore::record_rows`].
     async fn record(&self, id: &str, lease: &Lease, rows: &[Progress], frames: &[Frame]) -> StoreResult<bool> {
+        let made: Vec<MadeFrame> = frames.iter().map(MadeFrame::of).collect();
+        self.record_made(id, lease, rows, &made).await
+    }
+
+    /// [`JobStore::record`] of frames already serialized.
+    async fn record_made(&self, id: &str, lease: &Lease, rows: &[Progress], frames: &[MadeFrame]) -> StoreResult<bool> {
         let mut keys = Vec::with_capacity(frames.len());
         for frame in frames {
-            let key = format!("{}.e{}.json", frame.state.iteration, lease.epoch);
-            let json = serde_json::to_vec(frame).expect("frames serialize");
-            self.blobs().put(&["jobs", id, "checkpoints", &key], json).await?;
-            keys.push(CheckpointKey { iteration: frame.state.iteration as i64, time: frame.state.time, key });
+            let key = format!("{}.e{}.json", frame.iteration, lease.epoch);
+            self.blobs().put(&["jobs", id, "checkpoints", &key], frame.json.clone()).await?;
+            keys.push(CheckpointKey { iteration: frame.iteration as i64, time: frame.time, key });
         }
         self.record_rows(id, lease, rows, &keys).await
     }
@@ -188,17 +204,19 @@ pub trait JobStore: Send + Sync + 'static {
         };
         // the files at once (on S3 each is a request), the row's current index beside them
         let set_ref = set.as_str();
-        let puts = files
-            .iter()
-            .map(|f| async move { self.blobs().put(&["jobs", id, "results", set_ref, f.name], f.bytes.clone()).await });
+        let puts = files.iter().map(|f| async move {
+            self.blobs().put(&["jobs", id, "results", set_ref, &f.name], f.bytes.clone()).await
+        });
         let (_, job) = futures_util::future::try_join(
             futures_util::future::try_join_all(puts).map_err(StoreError::from),
             self.job(id),
         )
         .await?;
         let before = job.and_then(|j| j.results).map(|b| b.set).filter(|b| *b != set);
-        let entries =
-            files.iter().map(|f| ResultEntry { name: f.name.into(), media_type: f.media_type.into() }).collect();
+        let entries = files
+            .iter()
+            .map(|f| ResultEntry { name: f.name.to_string(), media_type: f.media_type.to_string() })
+            .collect();
         let index = serde_json::to_string(&ResultIndex { set: set.clone(), files: entries }).expect("serializes");
         Ok(StoredResults { index, set, before })
     }
@@ -231,9 +249,8 @@ pub trait JobStore: Send + Sync + 'static {
         Ok(Some((entry.media_type.clone(), bytes)))
     }
 
-    /// Store what every glb of the job shares ([`GlbContext`]).
-    async fn put_context(&self, id: &str, context: &GlbContext) -> StoreResult<()> {
-        let json = serde_json::to_vec(context).expect("contexts serialize");
+    /// Store what every glb of the job shares ([`GlbContext`]), as its JSON.
+    async fn put_context(&self, id: &str, json: Vec<u8>) -> StoreResult<()> {
         Ok(self.blobs().put(&["jobs", id, "context.json"], json).await?)
     }
 
@@ -290,7 +307,15 @@ pub(crate) fn now() -> String {
     format!("{y:04}-{mo:02}-{d:02}T{h:02}:{m:02}:{s:06.3}Z")
 }
 
-/// The message of a job ended after too many takeovers.
-pub(crate) fn crash_message(takeovers: i64) -> String {
-    format!("the job's worker stopped without a trace {takeovers} times (a node crashed or was killed while running it); not tried again")
+/// The message of a job ended after too many attempts: `last`, the message its
+/// last abandoned attempt left ([`JobStore::abandon`]), if any.
+pub(crate) fn crash_message(takeovers: i64, last: Option<&str>) -> String {
+    let attempts = takeovers + 1;
+    match last.and_then(|m| m.strip_prefix(ABANDONED)) {
+        Some(why) => format!("the job ended abnormally on each of its {attempts} attempts, the last time: {why}; not tried again"),
+        None => format!("the job's worker stopped without a trace {takeovers} times (a node crashed or was killed while running it); not tried again"),
+    }
 }
+
+/// How the message of an abandoned attempt begins (the rest says why).
+pub(crate) const ABANDONED: &str = "attempt ended, going on from the last checkpoint: ";

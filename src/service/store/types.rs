@@ -63,6 +63,21 @@ pub struct JobRow {
     pub results: Option<ResultIndex>,
 }
 
+/// A checkpoint's frame, serialized: its iteration, time and JSON.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MadeFrame {
+    pub iteration: usize,
+    pub time: f64,
+    pub json: Vec<u8>,
+}
+
+impl MadeFrame {
+    pub fn of(frame: &crate::jobs::Frame) -> MadeFrame {
+        let json = serde_json::to_vec(frame).expect("frames serialize");
+        MadeFrame { iteration: frame.state.iteration, time: frame.state.time, json }
+    }
+}
+
 /// The lease a worker holds on a running job.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Lease {

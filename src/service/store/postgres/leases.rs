@@ -2,7 +2,7 @@
 //! transactions, renewals and the fence, all on the database's clock.
 
 use super::{job_from_row, CHANNEL};
-use crate::service::store::{crash_message, now, ClaimPolicy, Claimed, Lease, StoreError, StoreResult};
+use crate::service::store::{crash_message, now, ClaimPolicy, Claimed, Lease, StoreError, StoreResult, ABANDONED};
 use sqlx::postgres::PgPool;
 use sqlx::{Postgres, Row, Transaction};
 
@@ -26,7 +26,7 @@ pub(super) async fn claim_next(pool: &PgPool, owner: &str, policy: &ClaimPolicy)
     loop {
         let mut tx = pool.begin().await?;
         let pick = sqlx::query(concat!(
-            "SELECT id, status, takeovers FROM jobs WHERE status IN ('accepted', 'running') \
+            "SELECT id, status, takeovers, message FROM jobs WHERE status IN ('accepted', 'running') \
              AND (status = 'accepted' OR lease_expires < ",
             clock_ms!(),
             ") ORDER BY seq LIMIT 1 FOR UPDATE SKIP LOCKED"
@@ -43,7 +43,7 @@ pub(super) async fn claim_next(pool: &PgPool, owner: &str, policy: &ClaimPolicy)
                  lease_epoch = lease_epoch + 1, lease_expires = NULL WHERE id = $1",
             )
             .bind(&id)
-            .bind(crash_message(takeovers - 1))
+            .bind(crash_message(takeovers - 1, pick.get::<Option<String>, _>("message").as_deref()))
             .bind(now())
             .bind(takeovers as i32)
             .execute(&mut *tx)
@@ -97,4 +97,17 @@ pub(super) async fn release(pool: &PgPool, id: &str, lease: &Lease) -> StoreResu
         .await?;
     sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind("queue").execute(&mut *tx).await?;
     Ok(tx.commit().await?)
+}
+
+/// Expire the job's lease now, saying why ([`crate::service::store::JobStore::abandon`]); fenced.
+pub(super) async fn abandon(pool: &PgPool, id: &str, lease: &Lease, why: &str) -> StoreResult<()> {
+    let done = sqlx::query(
+        "UPDATE jobs SET lease_expires = 0, message = $3 WHERE id = $1 AND lease_epoch = $2 AND status = 'running'",
+    )
+    .bind(id)
+    .bind(lease.epoch)
+    .bind(format!("{ABANDONED}{why}"))
+    .execute(pool)
+    .await?;
+    (done.rows_affected() == 1).then_some(()).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
 }

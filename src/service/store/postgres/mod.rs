@@ -179,6 +179,10 @@ impl JobStore for PgStore {
         leases::release(&self.pool, id, lease).await
     }
 
+    async fn abandon(&self, id: &str, lease: &Lease, why: &str) -> StoreResult<()> {
+        leases::abandon(&self.pool, id, lease, why).await
+    }
+
     async fn checkpoint_index(&self, id: &str) -> StoreResult<Vec<(i64, f64)>> {
         let rows = sqlx::query("SELECT iteration, time FROM checkpoints WHERE job_id = $1 ORDER BY iteration")
             .bind(id)

@@ -3,7 +3,7 @@
 
 use super::job_from_row;
 use crate::flow::Progress;
-use crate::service::store::{crash_message, now, ClaimPolicy, Claimed, Lease, StoreError, StoreResult};
+use crate::service::store::{crash_message, now, ClaimPolicy, Claimed, Lease, StoreError, StoreResult, ABANDONED};
 use sqlx::sqlite::SqlitePool;
 use sqlx::{Row, Sqlite, Transaction};
 
@@ -52,7 +52,7 @@ pub(super) async fn claim_next(pool: &SqlitePool, owner: &str, policy: &ClaimPol
     loop {
         let mut tx = pool.begin_with("BEGIN IMMEDIATE").await?;
         let pick = sqlx::query(concat!(
-            "SELECT id, status, takeovers FROM jobs WHERE status IN ('accepted', 'running') \
+            "SELECT id, status, takeovers, message FROM jobs WHERE status IN ('accepted', 'running') \
              AND (status = 'accepted' OR lease_expires < ",
             clock_ms!(),
             ") ORDER BY seq LIMIT 1"
@@ -69,7 +69,7 @@ pub(super) async fn claim_next(pool: &SqlitePool, owner: &str, policy: &ClaimPol
                  lease_epoch = lease_epoch + 1 WHERE id = ?1",
             )
             .bind(&id)
-            .bind(crash_message(takeovers - 1))
+            .bind(crash_message(takeovers - 1, pick.get::<Option<String>, _>("message").as_deref()))
             .bind(now())
             .bind(takeovers)
             .execute(&mut *tx)
@@ -110,4 +110,44 @@ pub(super) async fn renew(pool: &SqlitePool, id: &str, lease: &Lease, policy: &C
     .execute(pool)
     .await?;
     Ok(done.rows_affected() == 1)
+}
+
+/// Give the job back to the queue (its node stops); fenced.
+pub(super) async fn release(pool: &SqlitePool, id: &str, lease: &Lease) -> StoreResult<()> {
+    let done = sqlx::query(
+        "UPDATE jobs SET status = 'accepted', lease_expires = NULL, lease_epoch = lease_epoch + 1 \
+         WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running'",
+    )
+    .bind(id)
+    .bind(lease.epoch)
+    .execute(pool)
+    .await?;
+    (done.rows_affected() == 1).then_some(()).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
+}
+
+/// Expire the job's lease now, saying why ([`crate::service::store::JobStore::abandon`]); fenced.
+pub(super) async fn abandon(pool: &SqlitePool, id: &str, lease: &Lease, why: &str) -> StoreResult<()> {
+    let done = sqlx::query(
+        "UPDATE jobs SET lease_expires = 0, message = ?3 WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running'",
+    )
+    .bind(id)
+    .bind(lease.epoch)
+    .bind(format!("{ABANDONED}{why}"))
+    .execute(pool)
+    .await?;
+    (done.rows_affected() == 1).then_some(()).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
+}
+
+/// Jobs left running by a process that stopped without giving them back (a
+/// crash, a kill): their leases expire now, so that their next claim counts an
+/// attempt; a process stopped gracefully gave its jobs back ([`release`]).
+pub(super) async fn requeue_running(pool: &SqlitePool) -> StoreResult<u64> {
+    let why = format!("{ABANDONED}the service stopped while the job ran (a crash or a kill of its process)");
+    Ok(sqlx::query(
+        "UPDATE jobs SET lease_expires = 0, lease_epoch = lease_epoch + 1, message = ?1 WHERE status = 'running'",
+    )
+    .bind(why)
+    .execute(pool)
+    .await?
+    .rows_affected())
 }

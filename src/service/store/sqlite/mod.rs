@@ -176,10 +176,7 @@ impl JobStore for SqliteStore {
 
     async fn requeue_running(&self) -> StoreResult<u64> {
         // the epoch moves on: a worker of the previous process can no longer write
-        Ok(sqlx::query("UPDATE jobs SET status = 'accepted', lease_epoch = lease_epoch + 1 WHERE status = 'running'")
-            .execute(&self.pool)
-            .await?
-            .rows_affected())
+        leases::requeue_running(&self.pool).await
     }
 
     async fn claim_next(&self, owner: &str, policy: &ClaimPolicy) -> StoreResult<Option<Claimed>> {
@@ -190,10 +187,12 @@ impl JobStore for SqliteStore {
         leases::renew(&self.pool, id, lease, policy).await
     }
 
-    /// One node: a stopped node's jobs stay `running` and go back to the queue at
-    /// its next start ([`JobStore::requeue_running`]).
-    async fn release(&self, _id: &str, _lease: &Lease) -> StoreResult<()> {
-        Ok(())
+    async fn release(&self, id: &str, lease: &Lease) -> StoreResult<()> {
+        leases::release(&self.pool, id, lease).await
+    }
+
+    async fn abandon(&self, id: &str, lease: &Lease, why: &str) -> StoreResult<()> {
+        leases::abandon(&self.pool, id, lease, why).await
     }
 
     async fn checkpoint_index(&self, id: &str) -> StoreResult<Vec<(i64, f64)>> {

@@ -1,0 +1,190 @@
+//! One attempt at a claimed job: on the worker's thread (a panic caught and
+//! turned into an abandoned attempt) or in a process of its own
+//! ([`super::isolation`]), its history and checkpoints written by a
+//! [`Recorder`] either way. What the worker does with the end is in
+//! [`super::worker`].
+
+use super::isolation::child::panic_text;
+use super::isolation::parent::{JobProcess, ProcessEnd};
+use super::isolation::protocol::{Report, Request, RunEnd};
+use super::recorder::{retrying, Recorder, WriteState};
+use super::store::{JobRow, Lease, MadeFrame, StoreError, Which};
+use super::worker::Worker;
+use crate::flow::StopReason;
+use crate::jobs::{parse_spec, prepare, run_prepared, Frame, KeptFrames, PreparedJob, ResultFile};
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+/// How an attempt ended.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) enum AttemptEnd {
+    /// The run stopped by its rules.
+    Stopped { stop: String, note: Option<String> },
+    /// Cancelled (by request, or by the node stopping).
+    Cancelled,
+    /// The job fails: a numeric failure, a spec that no longer prepares, a budget.
+    Failed(String),
+    /// The attempt ended abnormally (a panic, its process killed): the job is
+    /// tried again from its last checkpoint.
+    Crashed(String),
+}
+
+/// What the result files are made of.
+pub(super) enum Results {
+    None,
+    /// Made by the job's process.
+    Files(Vec<ResultFile>),
+    /// To be made from the frames of the run (thread isolation).
+    Frames(Arc<PreparedJob>, Vec<Frame>),
+}
+
+pub(super) struct Attempt {
+    pub end: AttemptEnd,
+    pub written: WriteState,
+    pub results: Results,
+}
+
+impl Attempt {
+    fn ended(end: AttemptEnd) -> Attempt {
+        Attempt { end, written: WriteState::default(), results: Results::None }
+    }
+}
+
+impl Worker {
+    /// The attempt on this thread.
+    pub(super) fn in_thread(
+        &self,
+        job: &JobRow,
+        lease: &Lease,
+        cancel: &Arc<AtomicBool>,
+    ) -> Result<Attempt, StoreError> {
+        let inputs = self.rt.block_on(self.store.inputs(&job.id))?;
+        let prepared = match parse_spec(&job.spec).and_then(|s| prepare(s, &inputs)) {
+            Ok(p) => Arc::new(p),
+            Err(e) => return Ok(Attempt::ended(AttemptEnd::Failed(e.to_string()))),
+        };
+        drop(inputs);
+        // the frames stored so far (a takeover), for evolution.glb
+        let mut kept = KeptFrames::default();
+        self.rt.block_on(self.store.frames(&job.id, Which::All))?.into_iter().for_each(|f| kept.push(f));
+        let resume = kept.last().map(|f| f.state.clone());
+        if let Some(cp) = &resume {
+            self.rt.block_on(self.store.truncate_history(&job.id, lease, cp.iteration))?;
+            tracing::info!(job = %job.id, iteration = cp.iteration, "resuming from checkpoint");
+        }
+        let mut rec = Recorder::start(
+            &self.rt,
+            Some(prepared.clone()),
+            self.store.clone(),
+            &job.id,
+            lease,
+            cancel.clone(),
+            self.events.clone(),
+        );
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            run_prepared(&prepared, resume.as_ref(), cancel, &mut rec)
+        }));
+        let mut written = rec.close();
+        let end = match result {
+            Err(panic) => AttemptEnd::Crashed(format!("panicked: {}", panic_text(panic.as_ref()))),
+            Ok(Ok(o)) if o.stop == StopReason::Cancelled => AttemptEnd::Cancelled,
+            Ok(Ok(o)) => AttemptEnd::Stopped { stop: o.stop.as_str().into(), note: o.note.map(String::from) },
+            Ok(Err(f)) => AttemptEnd::Failed(f.error.to_string()),
+        };
+        // a resumed run's first frame repeats the last one stored before
+        let resumed_at = resume.map(|c| c.iteration);
+        let frames = std::mem::take(&mut written.frames).into_frames();
+        frames.into_iter().filter(|f| Some(f.state.iteration) != resumed_at).for_each(|f| kept.push(f));
+        Ok(Attempt { end, written, results: Results::Frames(prepared, kept.into_frames()) })
+    }
+
+    /// The attempt in a process of its own (`exe job-runner`).
+    pub(super) fn in_process(
+        &self,
+        exe: &Path,
+        job: &JobRow,
+        lease: &Lease,
+        cancel: &Arc<AtomicBool>,
+        fault: Option<String>,
+    ) -> Result<Attempt, StoreError> {
+        let store = &self.store;
+        let inputs = self.rt.block_on(store.input_rows(&job.id))?;
+        let checkpoints = self.rt.block_on(store.checkpoint_rows(&job.id, Which::All))?;
+        if let Some(last) = checkpoints.last() {
+            self.rt.block_on(store.truncate_history(&job.id, lease, last.iteration as usize))?;
+            tracing::info!(job = %job.id, iteration = last.iteration, "resuming from checkpoint");
+        }
+        let request = Request {
+            spec: job.spec.clone(),
+            inputs: inputs.iter().map(|r| r.name.clone()).collect(),
+            resume: !checkpoints.is_empty(),
+            prior_frames: checkpoints.len(),
+            fault,
+        };
+        let mut process = match JobProcess::start(exe, self.budgets, &job.id, cancel.clone()) {
+            Ok(p) => p,
+            Err(e) => return Ok(Attempt::ended(AttemptEnd::Crashed(format!("the job's process cannot start: {e}")))),
+        };
+        // the payloads one at a time, read from the store as they are sent
+        let (mut inputs, mut checkpoints) = (inputs.into_iter(), checkpoints.into_iter());
+        let mut failed_read = None;
+        let mut payloads = || -> Option<Vec<u8>> {
+            let got = if let Some(row) = inputs.next() {
+                match row.in_blob {
+                    true => self
+                        .rt
+                        .block_on(store.blobs().get_existing(&super::blobs::input_key(&job.id, &row.name)))
+                        .map_err(StoreError::from),
+                    false => Ok(row.data),
+                }
+            } else {
+                self.rt.block_on(store.frame_json(&job.id, checkpoints.next()?))
+            };
+            got.map_err(|e| failed_read = Some(e)).ok()
+        };
+        let sent = process.send(&request, &mut payloads);
+        if let Some(e) = failed_read {
+            drop(process);
+            return Err(e);
+        }
+        if let Err(e) = sent {
+            tracing::debug!(job = %job.id, "the job's process took no request: {e}");
+        }
+        let mut rec =
+            Recorder::start(&self.rt, None, store.clone(), &job.id, lease, cancel.clone(), self.events.clone());
+        let (mut files, mut reported, mut context_error) = (Vec::new(), None, None);
+        use crate::jobs::RunEvents;
+        while let Some((report, payload)) = process.next() {
+            match report {
+                Report::Context => {
+                    if let Err(e) = self.rt.block_on(retrying(|| store.put_context(&job.id, payload.clone()))) {
+                        context_error = Some(e.to_string());
+                        cancel.store(true, std::sync::atomic::Ordering::Relaxed);
+                    }
+                }
+                Report::Progress(p) => rec.progress(&p),
+                Report::Checkpoint { iteration, time } => {
+                    rec.made_checkpoint(MadeFrame { iteration, time, json: payload })
+                }
+                Report::File { name, media_type } => {
+                    files.push(ResultFile { name: name.into(), media_type: media_type.into(), bytes: payload })
+                }
+                Report::Outcome(end) => reported = Some(end),
+            }
+        }
+        let mut written = rec.close();
+        if written.error.is_none() {
+            written.error = context_error;
+        }
+        let end = match process.finish(reported) {
+            ProcessEnd::Reported(RunEnd::Stopped { stop, note }) => AttemptEnd::Stopped { stop, note },
+            ProcessEnd::Reported(RunEnd::Cancelled) | ProcessEnd::Cancelled => AttemptEnd::Cancelled,
+            ProcessEnd::Reported(RunEnd::Failed { message }) => AttemptEnd::Failed(message),
+            ProcessEnd::Reported(RunEnd::Panicked { message }) => AttemptEnd::Crashed(format!("panicked: {message}")),
+            ProcessEnd::OverBudget(why) => AttemptEnd::Failed(format!("the job {why}")),
+            ProcessEnd::Died(why) => AttemptEnd::Crashed(why),
+        };
+        Ok(Attempt { end, written, results: Results::Files(files) })
+    }
+}

@@ -1,0 +1,191 @@
+//! The process of one job (`shapeflow job-runner`, started by a worker under
+//! process isolation): it reads its [`Request`] from standard input, limits its
+//! own data segment to the job's memory budget (`RLIMIT_DATA`, which the kernel
+//! enforces: an allocation past it fails and the process aborts), prepares and
+//! runs the job, and reports its history rows, checkpoints (each made into its
+//! frame on a second thread), result files and outcome on standard output
+//! ([`super::protocol`]). A [`Control::Cancel`], or the end of its standard input
+//! (the worker is gone), stops the run at its next step; the kernel ends the
+//! process with its parent's (`PR_SET_PDEATHSIG`). Nothing else is written to
+//! standard output; logs go to standard error, which the worker reads.
+
+use super::fault::Fault;
+use super::protocol::{read_message, write_message, Control, Report, Request, RunEnd};
+use crate::flow::{Checkpoint, Progress};
+use crate::jobs::{
+    parse_spec, prepare, result_files, run_prepared, Frame, FrameMaker, GlbContext, KeptFrames, RunEvents,
+};
+use std::collections::HashMap;
+use std::io::{BufWriter, Read, Stdout};
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+
+/// Run the job the worker sends on standard input; `memory`: its budget in bytes.
+pub fn job_runner(memory: Option<u64>) -> ExitCode {
+    die_with_parent();
+    if let Some(bytes) = memory {
+        if let Err(e) = rlimit::setrlimit(rlimit::Resource::DATA, bytes, bytes) {
+            eprintln!("cannot set the memory budget: {e}");
+            return ExitCode::from(3);
+        }
+    }
+    let mut stdin = std::io::stdin();
+    let (request, inputs, resume, prior) = match read_request(&mut stdin) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("cannot read the job's request: {e}");
+            return ExitCode::from(3);
+        }
+    };
+    let cancel = Arc::new(AtomicBool::new(false));
+    let flag = cancel.clone();
+    std::thread::spawn(move || {
+        // a cancel, or the worker gone: stop at the next step
+        let _ = read_message::<Control>(&mut stdin);
+        flag.store(true, Ordering::Relaxed);
+    });
+    let out = Reports { out: Mutex::new(BufWriter::new(std::io::stdout())), cancel: cancel.clone() };
+    let fault = request.fault.as_deref().and_then(Fault::parse);
+    let end = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        run(&request, &inputs, resume, prior, &cancel, &out, fault)
+    }))
+    .unwrap_or_else(|panic| RunEnd::Panicked { message: panic_text(panic.as_ref()) });
+    out.send(&Report::Outcome(end), &[]);
+    ExitCode::SUCCESS
+}
+
+/// The kernel ends this process with the worker's (Linux); if the worker is
+/// already gone, end now.
+fn die_with_parent() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: prctl(PR_SET_PDEATHSIG) only sets this process's parent-death signal.
+    unsafe {
+        libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+    }
+    #[cfg(unix)]
+    if std::os::unix::process::parent_id() == 1 {
+        std::process::exit(3);
+    }
+}
+
+type Inputs = HashMap<String, Vec<u8>>;
+
+fn read_request(r: &mut impl Read) -> std::io::Result<(Request, Inputs, Option<Checkpoint>, Vec<Frame>)> {
+    let bad = |what: &str| std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string());
+    let (request, _): (Request, _) = read_message(r)?.ok_or_else(|| bad("no request"))?;
+    let mut next = || -> std::io::Result<Vec<u8>> {
+        read_message::<()>(r)?.map(|(_, payload)| payload).ok_or_else(|| bad("the request ended early"))
+    };
+    let mut inputs = HashMap::new();
+    for name in &request.inputs {
+        inputs.insert(name.clone(), next()?);
+    }
+    let resume = match request.resume {
+        true => Some(serde_json::from_slice(&next()?).map_err(|e| bad(&format!("the checkpoint: {e}")))?),
+        false => None,
+    };
+    let prior = (0..request.prior_frames)
+        .map(|_| serde_json::from_slice(&next()?).map_err(|e| bad(&format!("a stored frame: {e}"))))
+        .collect::<std::io::Result<_>>()?;
+    Ok((request, inputs, resume, prior))
+}
+
+/// The reports, written one message at a time by the run's threads; a write that
+/// fails (the worker is gone) stops the run.
+struct Reports {
+    out: Mutex<BufWriter<Stdout>>,
+    cancel: Arc<AtomicBool>,
+}
+
+impl Reports {
+    fn send(&self, report: &Report, payload: &[u8]) {
+        let mut out = self.out.lock().unwrap_or_else(|e| e.into_inner());
+        if write_message(&mut *out, report, payload).is_err() {
+            self.cancel.store(true, Ordering::Relaxed);
+        }
+    }
+}
+
+fn run(
+    request: &Request,
+    inputs: &Inputs,
+    resume: Option<Checkpoint>,
+    prior: Vec<Frame>,
+    cancel: &AtomicBool,
+    out: &Reports,
+    fault: Option<Fault>,
+) -> RunEnd {
+    let job = match parse_spec(&request.spec).and_then(|s| prepare(s, inputs)) {
+        Ok(job) => job,
+        Err(e) => return RunEnd::Failed { message: e.to_string() },
+    };
+    out.send(&Report::Context, &serde_json::to_vec(&GlbContext::of(&job)).expect("contexts serialize"));
+    let mut kept = KeptFrames::default();
+    prior.into_iter().for_each(|f| kept.push(f));
+    // a resumed run's first checkpoint repeats the last one stored before
+    let resumed_at = kept.last().map(|f| f.state.iteration);
+    let (result, mut kept) = std::thread::scope(|scope| {
+        let (send, receive) = std::sync::mpsc::channel::<Checkpoint>();
+        let job = &job;
+        let maker = scope.spawn(move || {
+            let mut maker = FrameMaker::default();
+            for c in receive {
+                let frame = maker.make(job, &c);
+                let json = serde_json::to_vec(&frame).expect("frames serialize");
+                out.send(&Report::Checkpoint { iteration: c.iteration, time: c.time }, &json);
+                if Some(c.iteration) != resumed_at {
+                    kept.push(frame);
+                }
+            }
+            kept
+        });
+        let mut events = Events { out, frames: send, fault };
+        let result = run_prepared(job, resume.as_ref(), cancel, &mut events);
+        drop(events);
+        (result, maker.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+    });
+    let last = match &result {
+        Ok(o) => &o.last,
+        Err(f) => &f.last,
+    };
+    if kept.last().map(|f| &f.state) != Some(last) {
+        kept.push(Frame::of_run(&job, last).with_fill());
+    }
+    for file in result_files(&job, &kept.into_frames()) {
+        out.send(&Report::File { name: file.name.into(), media_type: file.media_type.into() }, &file.bytes);
+    }
+    match result {
+        Ok(o) if o.stop == crate::flow::StopReason::Cancelled => RunEnd::Cancelled,
+        Ok(o) => RunEnd::Stopped { stop: o.stop.as_str().into(), note: o.note.map(String::from) },
+        Err(f) => RunEnd::Failed { message: f.error.to_string() },
+    }
+}
+
+struct Events<'a> {
+    out: &'a Reports,
+    frames: std::sync::mpsc::Sender<Checkpoint>,
+    fault: Option<Fault>,
+}
+
+impl RunEvents for Events<'_> {
+    fn progress(&mut self, p: &Progress) {
+        self.out.send(&Report::Progress(*p), &[]);
+        if let Some(f) = &self.fault {
+            f.strike(p.iteration);
+        }
+    }
+
+    fn checkpoint(&mut self, c: &Checkpoint) {
+        let _ = self.frames.send(c.clone());
+    }
+}
+
+/// The message of a panic's payload.
+pub(crate) fn panic_text(panic: &(dyn std::any::Any + Send)) -> String {
+    panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a panic without a message".into())
+}

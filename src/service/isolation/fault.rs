@@ -1,0 +1,83 @@
+//! Faults a job's process can be told to commit, for the tests of isolation
+//! only: a service's configuration names them by the job's submission number
+//! ([`crate::service::ServiceConfig::faults`]); no route, spec or flag of the
+//! command line reaches them, so no client can crash a job on purpose.
+
+/// `WHAT@N`: at iteration `N` (at least), do `WHAT`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fault {
+    what: What,
+    at: usize,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum What {
+    /// `panic!`.
+    Panic,
+    /// `std::process::abort()`.
+    Abort,
+    /// SIGKILL to itself (as the kernel's OOM killer or an operator would).
+    Kill,
+    /// Allocate and touch memory without end (until the budget stops it).
+    Grow,
+    /// Stop making progress (sleep forever, deaf to cancellation).
+    Hang,
+}
+
+impl Fault {
+    /// `panic@N`, `abort@N`, `kill@N`, `grow@N` or `hang@N`.
+    pub fn parse(text: &str) -> Option<Fault> {
+        let (what, at) = text.split_once('@')?;
+        let what = match what {
+            "panic" => What::Panic,
+            "abort" => What::Abort,
+            "kill" => What::Kill,
+            "grow" => What::Grow,
+            "hang" => What::Hang,
+            _ => return None,
+        };
+        Some(Fault { what, at: at.parse().ok()? })
+    }
+
+    /// Commit the fault if the run is at its iteration.
+    pub fn strike(&self, iteration: usize) {
+        if iteration < self.at {
+            return;
+        }
+        match self.what {
+            What::Panic => panic!("an injected fault at iteration {iteration}"),
+            What::Abort => std::process::abort(),
+            What::Kill => {
+                #[cfg(unix)]
+                // SAFETY: kill(2) of this process with SIGKILL.
+                unsafe {
+                    libc::kill(libc::getpid(), libc::SIGKILL);
+                }
+                std::process::abort();
+            }
+            What::Grow => {
+                let mut held: Vec<Vec<u8>> = Vec::new();
+                loop {
+                    held.push(vec![1u8; 16 << 20]);
+                    std::hint::black_box(&held);
+                }
+            }
+            What::Hang => loop {
+                std::thread::sleep(std::time::Duration::from_secs(3600));
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn faults_parse_or_are_refused() {
+        assert_eq!(Fault::parse("panic@3"), Some(Fault { what: What::Panic, at: 3 }));
+        assert_eq!(Fault::parse("grow@0"), Some(Fault { what: What::Grow, at: 0 }));
+        assert_eq!(Fault::parse("explode@3"), None);
+        assert_eq!(Fault::parse("panic"), None);
+    }
+}

@@ -1,0 +1,266 @@
+//! A worker's side of a job's process: start it (`shapeflow job-runner`), send
+//! it the job, read its reports, watch its budgets and cancellation, and say how
+//! it ended. The worker keeps the database, the blob store and the lease; the
+//! process only computes.
+
+use super::protocol::{read_message, write_message, Control, Report, Request, RunEnd};
+use super::Budgets;
+use crate::flow::Progress;
+use std::collections::VecDeque;
+use std::io::{BufRead, BufReader, BufWriter};
+use std::path::Path;
+use std::process::{ChildStdin, ChildStdout, Command, ExitStatus, Stdio};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// How long a cancelled process has to write its last checkpoint and result
+/// files before it is killed.
+const CANCEL_GRACE: Duration = Duration::from_secs(5);
+
+/// The lines of the process's standard error kept to tell why it ended.
+const STDERR_LINES: usize = 20;
+
+/// Bytes a history row takes in the database, about (disk budget).
+const ROW_BYTES: u64 = 64;
+
+/// Why the worker killed a job's process.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kill {
+    Cancelled,
+    Time,
+    Disk,
+}
+
+/// A job's running process.
+pub struct JobProcess {
+    child: std::process::Child,
+    stdout: BufReader<ChildStdout>,
+    shared: Arc<Shared>,
+    watchdog: Option<std::thread::JoinHandle<()>>,
+    stderr: Option<std::thread::JoinHandle<VecDeque<String>>>,
+    budgets: Budgets,
+    last_iteration: usize,
+}
+
+/// What the watchdog and the reader share.
+struct Shared {
+    stdin: Mutex<Option<BufWriter<ChildStdin>>>,
+    cancel: Arc<AtomicBool>,
+    done: AtomicBool,
+    disk: AtomicU64,
+    killed: Mutex<Option<Kill>>,
+}
+
+/// How a job's process ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ProcessEnd {
+    /// It reported how its run ended.
+    Reported(RunEnd),
+    /// It was stopped by a cancellation before it reported.
+    Cancelled,
+    /// It went past a budget: the job fails with this message.
+    OverBudget(String),
+    /// It died without reporting (a signal, an abort): this attempt ends.
+    Died(String),
+}
+
+impl JobProcess {
+    /// Start `exe job-runner` under `budgets`, its log lines forwarded to this
+    /// process's log under `job`; `cancel` (the job's flag) stops it.
+    pub fn start(exe: &Path, budgets: Budgets, job: &str, cancel: Arc<AtomicBool>) -> std::io::Result<JobProcess> {
+        let mut cmd = Command::new(exe);
+        cmd.arg("job-runner");
+        if let Some(m) = budgets.memory {
+            cmd.arg("--memory").arg(m.to_string());
+        }
+        let mut child = cmd.stdin(Stdio::piped()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn()?;
+        let stdin = BufWriter::with_capacity(1 << 16, child.stdin.take().expect("piped"));
+        let stdout = BufReader::with_capacity(1 << 16, child.stdout.take().expect("piped"));
+        let stderr = child.stderr.take().expect("piped");
+        let id = job.to_string();
+        let stderr = std::thread::Builder::new().name("job-stderr".into()).spawn(move || {
+            let mut tail = VecDeque::new();
+            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+                tracing::info!(job = %id, "{line}");
+                if tail.len() == STDERR_LINES {
+                    tail.pop_front();
+                }
+                tail.push_back(line);
+            }
+            tail
+        })?;
+        let shared = Arc::new(Shared {
+            stdin: Mutex::new(Some(stdin)),
+            cancel,
+            done: AtomicBool::new(false),
+            disk: AtomicU64::new(0),
+            killed: Mutex::new(None),
+        });
+        let watchdog = {
+            let (shared, pid) = (shared.clone(), child.id());
+            std::thread::Builder::new().name("job-watchdog".into()).spawn(move || watch(&shared, pid, budgets))?
+        };
+        Ok(JobProcess {
+            child,
+            stdout,
+            shared,
+            watchdog: Some(watchdog),
+            stderr: Some(stderr),
+            budgets,
+            last_iteration: 0,
+        })
+    }
+
+    /// Send the request and its payloads (each from `payloads`, in order). An
+    /// error means the process is gone; [`JobProcess::finish`] says why.
+    pub fn send(&self, request: &Request, payloads: &mut dyn FnMut() -> Option<Vec<u8>>) -> std::io::Result<()> {
+        let mut stdin = self.shared.stdin.lock().unwrap();
+        let w = stdin.as_mut().expect("open until the end");
+        write_message(w, request, &[])?;
+        while let Some(p) = payloads() {
+            write_message(w, &(), &p)?;
+        }
+        Ok(())
+    }
+
+    /// The next report, `None` once the process has stopped reporting.
+    pub fn next(&mut self) -> Option<(Report, Vec<u8>)> {
+        let (report, payload) = match read_message::<Report>(&mut self.stdout) {
+            Ok(Some(m)) => m,
+            Ok(None) => return None,
+            Err(e) => {
+                tracing::debug!("a job's reports ended: {e}");
+                return None;
+            }
+        };
+        let bytes = match &report {
+            Report::Progress(Progress { iteration, .. }) => {
+                self.last_iteration = *iteration;
+                ROW_BYTES
+            }
+            _ => payload.len() as u64,
+        };
+        self.shared.disk.fetch_add(bytes, Ordering::Relaxed);
+        Some((report, payload))
+    }
+
+    /// Wait for the process to end and say how it did; `reported`: its outcome,
+    /// if it sent one.
+    pub fn finish(mut self, reported: Option<RunEnd>) -> ProcessEnd {
+        // the end of its input: a process still running sees a cancellation
+        self.shared.stdin.lock().unwrap().take();
+        let status = self.child.wait();
+        self.shared.done.store(true, Ordering::Relaxed);
+        if let Some(w) = self.watchdog.take() {
+            let _ = w.join();
+        }
+        let tail = self.stderr.take().and_then(|t| t.join().ok()).unwrap_or_default();
+        let killed = *self.shared.killed.lock().unwrap();
+        let at = self.last_iteration;
+        let b = self.budgets;
+        match (killed, reported) {
+            (Some(Kill::Time), _) => ProcessEnd::OverBudget(format!(
+                "exceeded its time budget of {} s at iteration {at}",
+                b.seconds.map_or(0.0, |s| s.as_secs_f64())
+            )),
+            (Some(Kill::Disk), _) => ProcessEnd::OverBudget(format!(
+                "exceeded its disk budget of {} at iteration {at}",
+                super::format_size(b.disk.unwrap_or(0))
+            )),
+            (_, Some(end)) => ProcessEnd::Reported(end),
+            (Some(Kill::Cancelled), None) => ProcessEnd::Cancelled,
+            (None, None) => {
+                if tail.iter().any(|l| l.contains("memory allocation of")) {
+                    let budget = b.memory.map_or("its memory budget".into(), |m| {
+                        format!("its memory budget of {}", super::format_size(m))
+                    });
+                    return ProcessEnd::OverBudget(format!("exceeded {budget} at iteration {at}"));
+                }
+                ProcessEnd::Died(died(status, at))
+            }
+        }
+    }
+}
+
+/// Why a process that did not report ended.
+fn died(status: std::io::Result<ExitStatus>, at: usize) -> String {
+    let status = match status {
+        Ok(s) => s,
+        Err(e) => return format!("the job's process could not be waited for ({e}) at iteration {at}"),
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::ExitStatusExt;
+        if let Some(sig) = status.signal() {
+            let name = match sig {
+                libc::SIGKILL => " (SIGKILL)",
+                libc::SIGABRT => " (SIGABRT, an abort)",
+                libc::SIGSEGV => " (SIGSEGV)",
+                libc::SIGTERM => " (SIGTERM)",
+                libc::SIGBUS => " (SIGBUS)",
+                _ => "",
+            };
+            return format!("the job's process was killed by signal {sig}{name} at iteration {at}");
+        }
+    }
+    match status.code() {
+        Some(0) | None => format!("the job's process ended without reporting an outcome at iteration {at}"),
+        Some(c) => format!("the job's process exited with status {c} at iteration {at}"),
+    }
+}
+
+/// Every 50 ms until the process ends: pass on a cancellation (and kill the
+/// process if it is still there [`CANCEL_GRACE`] later), and kill it past its
+/// time or disk budget.
+fn watch(shared: &Shared, pid: u32, budgets: Budgets) {
+    let started = Instant::now();
+    let mut cancelled_at: Option<Instant> = None;
+    let kill = |why: Kill| {
+        let mut killed = shared.killed.lock().unwrap();
+        if killed.is_none() {
+            *killed = Some(why);
+            #[cfg(unix)]
+            // SAFETY: kill(2) of our own child, which is not yet waited for (its
+            // pid cannot have been reused: the reader waits only after this loop).
+            unsafe {
+                libc::kill(pid as libc::pid_t, libc::SIGKILL);
+            }
+        }
+    };
+    while !shared.done.load(Ordering::Relaxed) {
+        std::thread::sleep(Duration::from_millis(50));
+        if shared.done.load(Ordering::Relaxed) {
+            return;
+        }
+        if budgets.seconds.is_some_and(|s| started.elapsed() > s) {
+            kill(Kill::Time);
+        }
+        if budgets.disk.is_some_and(|d| shared.disk.load(Ordering::Relaxed) > d) {
+            kill(Kill::Disk);
+        }
+        if shared.cancel.load(Ordering::Relaxed) {
+            match cancelled_at {
+                None => {
+                    cancelled_at = Some(Instant::now());
+                    if let Some(w) = shared.stdin.lock().unwrap().as_mut() {
+                        let _ = write_message(w, &Control::Cancel, &[]);
+                    }
+                }
+                Some(t) if t.elapsed() > CANCEL_GRACE => kill(Kill::Cancelled),
+                Some(_) => {}
+            }
+        }
+    }
+}
+
+impl Drop for JobProcess {
+    fn drop(&mut self) {
+        // not finished (a panic of the worker): no process is left behind
+        if self.watchdog.is_some() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+            self.shared.done.store(true, Ordering::Relaxed);
+        }
+    }
+}
