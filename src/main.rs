@@ -118,6 +118,20 @@ enum IsolationArg {
     Thread,
 }
 
+/// Faults to inject by submission number, `SEQ=FAULT,...` from
+/// `SHAPEFLOW_TEST_FAULTS`: debug builds only (the tests of isolation), never a
+/// release.
+fn test_faults() -> Vec<(i64, String)> {
+    if !cfg!(debug_assertions) {
+        return Vec::new();
+    }
+    let text = std::env::var("SHAPEFLOW_TEST_FAULTS").unwrap_or_default();
+    text.split(',')
+        .filter_map(|item| item.split_once('='))
+        .filter_map(|(seq, fault)| Some((seq.trim().parse().ok()?, fault.trim().to_string())))
+        .collect()
+}
+
 fn size_arg(text: &str) -> Result<u64, String> {
     shapeflow::service::isolation::parse_size(text)
 }
@@ -174,7 +188,7 @@ impl NodeArgs {
             policy,
             isolation,
             budgets,
-            faults: Vec::new(),
+            faults: test_faults(),
         })
     }
 }

@@ -5,13 +5,14 @@
 //! [`super::worker`].
 
 use super::isolation::child::panic_text;
+use super::isolation::fault::Fault;
 use super::isolation::parent::{JobProcess, ProcessEnd};
 use super::isolation::protocol::{Report, Request, RunEnd};
 use super::recorder::{retrying, Recorder, WriteState};
 use super::store::{JobRow, Lease, MadeFrame, StoreError, Which};
 use super::worker::Worker;
-use crate::flow::StopReason;
-use crate::jobs::{parse_spec, prepare, run_prepared, Frame, KeptFrames, PreparedJob, ResultFile};
+use crate::flow::{Checkpoint, Progress, StopReason};
+use crate::jobs::{parse_spec, prepare, run_prepared, Frame, KeptFrames, PreparedJob, ResultFile, RunEvents};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -58,6 +59,7 @@ impl Worker {
         job: &JobRow,
         lease: &Lease,
         cancel: &Arc<AtomicBool>,
+        fault: Option<String>,
     ) -> Result<Attempt, StoreError> {
         let inputs = self.rt.block_on(self.store.inputs(&job.id))?;
         let prepared = match parse_spec(&job.spec).and_then(|s| prepare(s, &inputs)) {
@@ -82,8 +84,10 @@ impl Worker {
             cancel.clone(),
             self.events.clone(),
         );
-        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            run_prepared(&prepared, resume.as_ref(), cancel, &mut rec)
+        let fault = fault.as_deref().and_then(Fault::parse).filter(|f| !(f.once && resume.is_some()));
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match fault {
+            Some(fault) => run_prepared(&prepared, resume.as_ref(), cancel, &mut Faulty { events: &mut rec, fault }),
+            None => run_prepared(&prepared, resume.as_ref(), cancel, &mut rec),
         }));
         let mut written = rec.close();
         let end = match result {
@@ -154,7 +158,6 @@ impl Worker {
         let mut rec =
             Recorder::start(&self.rt, None, store.clone(), &job.id, lease, cancel.clone(), self.events.clone());
         let (mut files, mut reported, mut context_error) = (Vec::new(), None, None);
-        use crate::jobs::RunEvents;
         while let Some((report, payload)) = process.next() {
             match report {
                 Report::Context => {
@@ -186,5 +189,21 @@ impl Worker {
             ProcessEnd::Died(why) => AttemptEnd::Crashed(why),
         };
         Ok(Attempt { end, written, results: Results::Files(files) })
+    }
+}
+
+/// Events passed on, with a fault committed on the way (tests of isolation).
+struct Faulty<'a> {
+    events: &'a mut dyn RunEvents,
+    fault: Fault,
+}
+
+impl RunEvents for Faulty<'_> {
+    fn progress(&mut self, p: &Progress) {
+        self.events.progress(p);
+        self.fault.strike(p.iteration);
+    }
+    fn checkpoint(&mut self, c: &Checkpoint) {
+        self.events.checkpoint(c);
     }
 }

@@ -67,7 +67,7 @@ pub struct ServiceConfig {
     /// What each job may use.
     pub budgets: Budgets,
     /// Faults injected into jobs by submission number (`panic@N`, `abort@N`,
-    /// `kill@N`, `grow@N`, `hang@N`): for the tests of isolation only; process
+    /// `kill@N`, `grow@N`, `hang@N`, optionally `:once`): for the tests of
     /// isolation only.
     #[doc(hidden)]
     pub faults: Vec<(i64, String)>,

@@ -159,12 +159,10 @@ impl Worker {
         let done = Arc::new(Notify::new());
         self.heartbeat(&job.id, lease, done.clone(), lost.clone(), cancel.clone());
         self.registry.lock().unwrap().insert(job.id.clone(), cancel.clone());
+        let fault = self.faults.iter().find(|(seq, _)| *seq == job.seq).map(|(_, f)| f.clone());
         let attempt = match &self.isolation {
-            Isolation::Thread => self.in_thread(job, lease, &cancel),
-            Isolation::Process { exe } => {
-                let fault = self.faults.iter().find(|(seq, _)| *seq == job.seq).map(|(_, f)| f.clone());
-                self.in_process(exe, job, lease, &cancel, fault)
-            }
+            Isolation::Thread => self.in_thread(job, lease, &cancel, fault),
+            Isolation::Process { exe } => self.in_process(exe, job, lease, &cancel, fault),
         };
         done.notify_one();
         self.registry.lock().unwrap().remove(&job.id);

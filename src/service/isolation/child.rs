@@ -46,7 +46,7 @@ pub fn job_runner(memory: Option<u64>) -> ExitCode {
         flag.store(true, Ordering::Relaxed);
     });
     let out = Reports { out: Mutex::new(BufWriter::new(std::io::stdout())), cancel: cancel.clone() };
-    let fault = request.fault.as_deref().and_then(Fault::parse);
+    let fault = request.fault.as_deref().and_then(Fault::parse).filter(|f| !(f.once && resume.is_some()));
     let end = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         run(&request, &inputs, resume, prior, &cancel, &out, fault)
     }))
@@ -81,13 +81,10 @@ fn read_request(r: &mut impl Read) -> std::io::Result<(Request, Inputs, Option<C
     for name in &request.inputs {
         inputs.insert(name.clone(), next()?);
     }
-    let resume = match request.resume {
-        true => Some(serde_json::from_slice(&next()?).map_err(|e| bad(&format!("the checkpoint: {e}")))?),
-        false => None,
-    };
-    let prior = (0..request.prior_frames)
+    let prior: Vec<Frame> = (0..request.prior_frames)
         .map(|_| serde_json::from_slice(&next()?).map_err(|e| bad(&format!("a stored frame: {e}"))))
         .collect::<std::io::Result<_>>()?;
+    let resume = prior.last().filter(|_| request.resume).map(|f| f.state.clone());
     Ok((request, inputs, resume, prior))
 }
 

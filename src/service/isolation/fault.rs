@@ -1,13 +1,16 @@
-//! Faults a job's process can be told to commit, for the tests of isolation
-//! only: a service's configuration names them by the job's submission number
-//! ([`crate::service::ServiceConfig::faults`]); no route, spec or flag of the
-//! command line reaches them, so no client can crash a job on purpose.
+//! Faults a job's run can be told to commit, for the tests of isolation only: a
+//! service's configuration names them by the job's submission number
+//! ([`crate::service::ServiceConfig::faults`]; `shapeflow serve` reads them from
+//! `SHAPEFLOW_TEST_FAULTS` in debug builds only); no route, spec or flag reaches
+//! them, so no client can crash a job on purpose.
 
-/// `WHAT@N`: at iteration `N` (at least), do `WHAT`.
+/// `WHAT@N`: at iteration `N` (at least), do `WHAT`; `WHAT@N:once`: only in a
+/// run from the start (not in one resumed from a checkpoint).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Fault {
     what: What,
     at: usize,
+    pub once: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -25,8 +28,13 @@ enum What {
 }
 
 impl Fault {
-    /// `panic@N`, `abort@N`, `kill@N`, `grow@N` or `hang@N`.
+    /// `panic@N`, `abort@N`, `kill@N`, `grow@N` or `hang@N`, each optionally
+    /// followed by `:once`.
     pub fn parse(text: &str) -> Option<Fault> {
+        let (text, once) = match text.strip_suffix(":once") {
+            Some(t) => (t, true),
+            None => (text, false),
+        };
         let (what, at) = text.split_once('@')?;
         let what = match what {
             "panic" => What::Panic,
@@ -36,7 +44,7 @@ impl Fault {
             "hang" => What::Hang,
             _ => return None,
         };
-        Some(Fault { what, at: at.parse().ok()? })
+        Some(Fault { what, at: at.parse().ok()?, once })
     }
 
     /// Commit the fault if the run is at its iteration.
@@ -75,8 +83,8 @@ mod tests {
 
     #[test]
     fn faults_parse_or_are_refused() {
-        assert_eq!(Fault::parse("panic@3"), Some(Fault { what: What::Panic, at: 3 }));
-        assert_eq!(Fault::parse("grow@0"), Some(Fault { what: What::Grow, at: 0 }));
+        assert_eq!(Fault::parse("panic@3"), Some(Fault { what: What::Panic, at: 3, once: false }));
+        assert_eq!(Fault::parse("kill@20:once"), Some(Fault { what: What::Kill, at: 20, once: true }));
         assert_eq!(Fault::parse("explode@3"), None);
         assert_eq!(Fault::parse("panic"), None);
     }

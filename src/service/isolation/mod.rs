@@ -8,7 +8,7 @@
 //! checkpoint on the next one, up to the claim policy's limit.
 
 pub mod child;
-mod fault;
+pub mod fault;
 pub mod parent;
 pub mod protocol;
 

@@ -233,10 +233,11 @@ fn watch(shared: &Shared, pid: u32, budgets: Budgets) {
         if shared.done.load(Ordering::Relaxed) {
             return;
         }
-        if budgets.seconds.is_some_and(|s| started.elapsed() > s) {
+        // a cancelled process is not killed for its budgets: it ends as cancelled
+        if cancelled_at.is_none() && budgets.seconds.is_some_and(|s| started.elapsed() > s) {
             kill(Kill::Time);
         }
-        if budgets.disk.is_some_and(|d| shared.disk.load(Ordering::Relaxed) > d) {
+        if cancelled_at.is_none() && budgets.disk.is_some_and(|d| shared.disk.load(Ordering::Relaxed) > d) {
             kill(Kill::Disk);
         }
         if shared.cancel.load(Ordering::Relaxed) {

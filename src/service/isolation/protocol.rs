@@ -16,9 +16,9 @@ use std::io::{self, Read, Write};
 const MAX_HEADER: usize = 8 * 1024 * 1024;
 
 /// What a job's process is asked to run. Its payloads follow it, in order: each
-/// input's bytes (as named in `inputs`), the checkpoint to resume from (its JSON)
-/// if `resume`, and the JSON of each of the `prior_frames` frames stored by
-/// earlier attempts (for evolution.glb).
+/// input's bytes (as named in `inputs`) and the JSON of each of the
+/// `prior_frames` frames stored by earlier attempts (for evolution.glb), the run
+/// resuming from the last of them if `resume`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Request {
     pub spec: String,

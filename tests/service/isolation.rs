@@ -1,0 +1,254 @@
+//! Jobs that cannot take the service down (docs/isolation.md): real `shapeflow
+//! serve` processes on SQLite whose jobs run each in a process of their own and
+//! are told to panic, abort, be killed, grow without end, hang or write without
+//! end (faults injected by submission number through `SHAPEFLOW_TEST_FAULTS`,
+//! which only debug builds read). Each test asserts the jobs' final status and
+//! message, that `/healthz` answered within a second throughout, the server's
+//! peak memory, that the other jobs' histories and checkpoints are complete and
+//! that no job process is left.
+
+use super::*;
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Arc;
+
+/// 500 iterations, a checkpoint every 50.
+const STEADY: &str = r#"{"problem": {"type": "curvature_flow"},
+    "initial": {"shape": "circle", "radius": 1.0, "resolution": 128},
+    "flow": {"tau": 1e-4, "end_time": 0.05, "max_iterations": 100000, "tolerance": 0},
+    "output": {"checkpoint_every": 50}}"#;
+
+/// A `shapeflow serve` process on a SQLite file in `dir`.
+struct Node {
+    child: Child,
+    addr: SocketAddr,
+}
+
+impl Node {
+    fn start(dir: &std::path::Path, args: &[&str], faults: &str) -> Node {
+        let addr: SocketAddr = format!("127.0.0.1:{}", free_port()).parse().unwrap();
+        let child = Command::new(env!("CARGO_BIN_EXE_shapeflow"))
+            .args(["serve", "--bind", &addr.to_string(), "--data-dir"])
+            .arg(dir)
+            .args(args)
+            .env("SHAPEFLOW_TEST_FAULTS", faults)
+            .env("RUST_BACKTRACE", "0")
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let mut node = Node { child, addr };
+        let start = Instant::now();
+        // up, or already ended (a job that aborts its server at once)
+        while TcpStream::connect(addr).is_err() && node.child.try_wait().unwrap().is_none() {
+            assert!(start.elapsed() < Duration::from_secs(20), "the server did not come up");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        node
+    }
+
+    /// `VmRSS` or `VmHWM` (peak) of the server process, in bytes.
+    fn memory(&self, field: &str) -> u64 {
+        let status = std::fs::read_to_string(format!("/proc/{}/status", self.child.id())).unwrap();
+        let line = status.lines().find(|l| l.starts_with(field)).unwrap();
+        line.split_whitespace().nth(1).unwrap().parse::<u64>().unwrap() * 1024
+    }
+
+    /// The job processes the server has now.
+    fn job_processes(&self) -> usize {
+        let me = self.child.id().to_string();
+        std::fs::read_dir("/proc")
+            .unwrap()
+            .filter_map(|e| std::fs::read_to_string(e.ok()?.path().join("stat")).ok())
+            .filter(|stat| stat.rsplit(')').next().and_then(|r| r.split_whitespace().nth(1)) == Some(me.as_str()))
+            .count()
+    }
+
+    fn submit(&self, spec: &str) -> String {
+        let (status, job) = http_json(self.addr, "POST", "/v1/jobs", Some(spec));
+        assert_eq!(status, 201, "{job}");
+        job["id"].as_str().unwrap().to_string()
+    }
+
+    fn wait_final(&self, id: &str) -> Value {
+        wait_for(self.addr, id, |j| j["status"] != "accepted" && j["status"] != "running")
+    }
+
+    /// A successful job's every iteration once, and its checkpoints.
+    fn assert_complete(&self, id: &str, iterations: u64, checkpoints: usize) -> f64 {
+        let done = self.wait_final(id);
+        assert_eq!(done["status"], "successful", "{done}");
+        let (_, hist) = http_json(self.addr, "GET", &format!("/v1/jobs/{id}/energy"), None);
+        let rows = hist["history"].as_array().unwrap();
+        let its: Vec<u64> = rows.iter().map(|r| r["iteration"].as_u64().unwrap()).collect();
+        assert_eq!(its, (0..=iterations).collect::<Vec<_>>(), "job {id}: every iteration once");
+        let (_, cps) = http_json(self.addr, "GET", &format!("/v1/jobs/{id}/checkpoints"), None);
+        assert_eq!(cps["checkpoints"].as_array().unwrap().len(), checkpoints, "job {id}: {cps}");
+        rows.last().unwrap()["energy"].as_f64().unwrap()
+    }
+}
+
+impl Drop for Node {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+/// Polls `/healthz` every 50 ms until dropped; the slowest answer in ms.
+struct Liveness {
+    stop: Arc<AtomicBool>,
+    slowest: Arc<AtomicU64>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Liveness {
+    fn watch(addr: SocketAddr) -> Liveness {
+        let (stop, slowest) = (Arc::new(AtomicBool::new(false)), Arc::new(AtomicU64::new(0)));
+        let (s, w) = (stop.clone(), slowest.clone());
+        let thread = std::thread::spawn(move || {
+            while !s.load(Ordering::Relaxed) {
+                let t = Instant::now();
+                let ok = http(addr, "GET", "/healthz", None, "").0 == 200;
+                let ms = if ok { t.elapsed().as_millis() as u64 } else { u64::MAX };
+                w.fetch_max(ms, Ordering::Relaxed);
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        });
+        Liveness { stop, slowest, thread: Some(thread) }
+    }
+
+    /// The slowest answer so far, in ms.
+    fn slowest(&self) -> u64 {
+        self.slowest.load(Ordering::Relaxed)
+    }
+}
+
+impl Drop for Liveness {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+#[test]
+fn jobs_that_panic_abort_die_or_outgrow_their_memory_end_only_their_own_attempts() {
+    let dir = tempfile::tempdir().unwrap();
+    let faults = "2=panic@30,3=kill@150:once,4=abort@20,5=grow@3";
+    let node = Node::start(dir.path(), &["--workers", "2", "--job-memory", "256MiB"], faults);
+    let idle = node.memory("VmRSS");
+    let live = Liveness::watch(node.addr);
+    let ids: Vec<String> = (0..6).map(|_| node.submit(STEADY)).collect();
+    let healthy = node.assert_complete(&ids[0], 500, 11);
+    assert_eq!(node.assert_complete(&ids[5], 500, 11), healthy);
+
+    let panicked = node.wait_final(&ids[1]);
+    assert_eq!(panicked["status"], "failed", "{panicked}");
+    let msg = panicked["message"].as_str().unwrap();
+    assert!(msg.contains("on each of its 4 attempts") && msg.contains("panicked: an injected fault at iteration 30"), "{msg}");
+    assert!(!msg.contains(".rs") && !msg.contains("::"), "no internal path or Rust name: {msg}");
+
+    // killed once: resumed from its checkpoint at 150, to the same end as a run without a kill
+    let resumed = node.assert_complete(&ids[2], 500, 11);
+    assert!((resumed - healthy).abs() <= 1e-12 * healthy.abs(), "{resumed} against {healthy}");
+
+    let aborted = node.wait_final(&ids[3]);
+    let msg = aborted["message"].as_str().unwrap();
+    assert_eq!(aborted["status"], "failed", "{aborted}");
+    assert!(msg.contains("on each of its 4 attempts") && msg.contains("signal 6 (SIGABRT"), "{msg}");
+
+    let grown = node.wait_final(&ids[4]);
+    assert_eq!(grown["status"], "failed", "{grown}");
+    assert_eq!(grown["message"], "the job exceeded its memory budget of 256 MiB at iteration 3", "{grown}");
+
+    assert!(live.slowest() < 1000, "/healthz took {} ms", live.slowest());
+    let peak = node.memory("VmHWM");
+    assert!(peak < idle + (512 << 20), "the server grew from {idle} to {peak} bytes");
+    assert_eq!(node.job_processes(), 0, "no job process is left");
+}
+
+#[test]
+fn cancel_and_the_time_budget_end_a_jobs_process() {
+    let dir = tempfile::tempdir().unwrap();
+    let node = Node::start(dir.path(), &["--workers", "2", "--job-seconds", "6"], "1=hang@5,2=hang@5");
+    let live = Liveness::watch(node.addr);
+    let (cancelled, timed) = (node.submit(STEADY), node.submit(STEADY));
+    wait_for(node.addr, &cancelled, |j| j["progress"]["iteration"].as_u64().unwrap_or(0) >= 5);
+    let asked = Instant::now();
+    assert_eq!(http(node.addr, "POST", &format!("/v1/jobs/{cancelled}/cancel"), None, "").0, 202);
+    let done = node.wait_final(&cancelled);
+    // a process deaf to the cancellation is killed after its grace of 5 s
+    assert!(asked.elapsed() < Duration::from_secs(8), "{:?}", asked.elapsed());
+    assert_eq!(done["status"], "dismissed", "{done}");
+    let done = node.wait_final(&timed);
+    assert_eq!(done["status"], "failed", "{done}");
+    assert_eq!(done["message"], "the job exceeded its time budget of 6 s at iteration 5", "{done}");
+    assert!(live.slowest() < 1000, "/healthz took {} ms", live.slowest());
+    assert_eq!(node.job_processes(), 0, "no job process is left");
+}
+
+/// The runaway spec of the issue: 20,000 vertices, a checkpoint at every step.
+/// Its frames go to the blob store as they come (the server holds none of
+/// them) and its disk budget ends it.
+#[test]
+fn a_job_that_writes_without_end_is_stopped_by_its_disk_budget() {
+    let runaway = r#"{"problem": {"type": "curvature_flow"},
+        "initial": {"shape": "circle", "radius": 1.0, "resolution": 20000},
+        "flow": {"tau": 1e-9, "end_time": 1.0, "max_iterations": 10000000, "tolerance": 0},
+        "mesh": {"adapt": false},
+        "output": {"checkpoint_every": 1}}"#;
+    let dir = tempfile::tempdir().unwrap();
+    let node = Node::start(dir.path(), &["--workers", "2", "--job-disk", "64MiB"], "");
+    let idle = node.memory("VmRSS");
+    let live = Liveness::watch(node.addr);
+    let (runaway, other) = (node.submit(runaway), node.submit(STEADY));
+    let done = node.wait_final(&runaway);
+    assert_eq!(done["status"], "failed", "{done}");
+    let msg = done["message"].as_str().unwrap();
+    assert!(msg.starts_with("the job exceeded its disk budget of 64 MiB at iteration "), "{msg}");
+    node.assert_complete(&other, 500, 11);
+    assert!(live.slowest() < 1000, "/healthz took {} ms", live.slowest());
+    let peak = node.memory("VmHWM");
+    assert!(peak < idle + (512 << 20), "the server grew from {idle} to {peak} bytes");
+}
+
+/// Thread isolation: a job that aborts takes the server with it; each restart
+/// counts an attempt, and after the last the job is failed, not run again.
+#[test]
+fn a_job_that_kills_its_server_is_not_run_past_its_attempts() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut node = Node::start(dir.path(), &["--isolation", "thread", "--workers", "1"], "1=abort@20");
+    let id = node.submit(STEADY);
+    let mut starts = 1;
+    let start = Instant::now();
+    loop {
+        assert!(start.elapsed() < Duration::from_secs(120), "timed out");
+        if node.child.try_wait().unwrap().is_some() {
+            assert!(starts <= 4, "the job ran past its attempts");
+            node = Node::start(dir.path(), &["--isolation", "thread", "--workers", "1"], "1=abort@20");
+            starts += 1;
+        } else if status_if_up(node.addr, &id).is_some_and(|j| j["status"] == "failed") {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let done = node.wait_final(&id);
+    assert_eq!(starts, 5, "four attempts, then the job is failed at its fifth claim");
+    assert_eq!(done["status"], "failed", "{done}");
+    let msg = done["message"].as_str().unwrap();
+    assert!(msg.contains("on each of its 4 attempts") && msg.contains("the service stopped while the job ran"), "{msg}");
+    let other = node.submit(STEADY);
+    node.assert_complete(&other, 500, 11);
+}
+
+/// A job's status, or `None` if the server went away meanwhile.
+fn status_if_up(addr: SocketAddr, id: &str) -> Option<Value> {
+    let path = format!("/v1/jobs/{id}");
+    std::panic::catch_unwind(|| http_json(addr, "GET", &path, None).1).ok()
+}
