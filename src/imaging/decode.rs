@@ -39,6 +39,24 @@ pub(super) fn no_such_channel(channels: usize, c: usize) -> String {
     format!("has {channels} channel{s} (0 to {}); channel {c} was asked for", channels - 1)
 }
 
+/// The width and height of a 2D image (PNG, JPEG or TIFF) from its header,
+/// without decoding it.
+pub fn image_dimensions(input: &str, bytes: &[u8]) -> Result<(usize, usize), ImageError> {
+    if bytes.is_empty() {
+        return Err(ImageError::new(input, "is empty"));
+    }
+    let r = ImageReader::new(Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| ImageError::new(input, format!("cannot be read: {e}")))?;
+    match r.format() {
+        Some(image::ImageFormat::Png | image::ImageFormat::Jpeg | image::ImageFormat::Tiff) => {}
+        Some(f) => return Err(ImageError::new(input, format!("is a {f:?} image; supported are PNG, JPEG and TIFF"))),
+        None => return Err(ImageError::new(input, "is not a PNG, JPEG or TIFF image (unknown format)")),
+    }
+    let (w, h) = r.into_dimensions().map_err(|e| ImageError::new(input, format!("has a corrupt header: {e}")))?;
+    Ok((w as usize, h as usize))
+}
+
 /// As [`decode_image`], with the image's component `channel` (0-based, in the
 /// order gray, alpha or red, green, blue, alpha) instead of its luminance when
 /// given.
@@ -49,22 +67,11 @@ pub fn decode_image_channel(
     channel: Option<usize>,
 ) -> Result<Grid, ImageError> {
     let fail = |m: String| ImageError::new(input, m);
-    if bytes.is_empty() {
-        return Err(fail("is empty".into()));
-    }
-    let reader = |b: &[u8]| -> Result<ImageReader<Cursor<Vec<u8>>>, ImageError> {
-        let r = ImageReader::new(Cursor::new(b.to_vec()))
-            .with_guessed_format()
-            .map_err(|e| ImageError::new(input, format!("cannot be read: {e}")))?;
-        match r.format() {
-            Some(image::ImageFormat::Png | image::ImageFormat::Jpeg | image::ImageFormat::Tiff) => Ok(r),
-            Some(f) => Err(ImageError::new(input, format!("is a {f:?} image; supported are PNG, JPEG and TIFF"))),
-            None => Err(ImageError::new(input, "is not a PNG, JPEG or TIFF image (unknown format)")),
-        }
-    };
-    let (w, h) = reader(bytes)?.into_dimensions().map_err(|e| fail(format!("has a corrupt header: {e}")))?;
-    limits.check(input, &[w as usize, h as usize])?;
-    let img = reader(bytes)?.decode().map_err(|e| fail(format!("is corrupt: {e}")))?;
+    let (w, h) = image_dimensions(input, bytes)?;
+    limits.check(input, &[w, h])?;
+    let reader =
+        ImageReader::new(Cursor::new(bytes)).with_guessed_format().map_err(|e| fail(format!("cannot be read: {e}")))?;
+    let img = reader.decode().map_err(|e| fail(format!("is corrupt: {e}")))?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let components = img.color().channel_count() as usize;
     if let Some(c) = channel.filter(|&c| c >= components) {
@@ -115,8 +122,18 @@ pub fn decode_slices(
     let Some(((first, _), _)) = slices.split_first() else {
         return Err(ImageError::new("(slices)", "a slice stack needs at least one slice"));
     };
+    // the stack's size from the slices' headers, before any slice is decoded: a
+    // small file may decode to many samples, and the stack to as many times that
+    let (w, h) = image_dimensions(first, slices[0].1)?;
+    for (name, bytes) in &slices[1..] {
+        let (sw, sh) = image_dimensions(name, bytes)?;
+        if (sw, sh) != (w, h) {
+            return Err(ImageError::new(name, format!("is {sw}×{sh}, but slice `{first}` is {w}×{h}")));
+        }
+    }
+    limits.check(first, &[w, h, slices.len()])?;
     let relaxed = ImageLimits { max_pixels: limits.max_voxels, ..*limits };
-    let mut values = Vec::new();
+    let mut values = Vec::with_capacity(w * h * slices.len());
     let mut dims = [0, 0];
     let mut kind = SampleKind::U8;
     for (k, (name, bytes)) in slices.iter().enumerate() {
@@ -124,11 +141,6 @@ pub fn decode_slices(
         if k == 0 {
             dims = [g.dims[0], g.dims[1]];
             kind = g.kind;
-        } else if [g.dims[0], g.dims[1]] != dims {
-            return Err(ImageError::new(
-                name,
-                format!("is {}×{}, but slice `{first}` is {}×{}", g.dims[0], g.dims[1], dims[0], dims[1]),
-            ));
         }
         values.extend_from_slice(&g.values);
     }

@@ -124,6 +124,7 @@ impl Worker {
             inputs: inputs.iter().map(|r| r.name.clone()).collect(),
             resume: !checkpoints.is_empty(),
             prior_frames: checkpoints.len(),
+            validate_only: false,
             fault,
         };
         let mut process = match JobProcess::start(exe, self.budgets, &job.id, cancel.clone()) {
@@ -187,6 +188,9 @@ impl Worker {
             ProcessEnd::Reported(RunEnd::Panicked { message }) => AttemptEnd::Crashed(format!("panicked: {message}")),
             ProcessEnd::OverBudget(why) => AttemptEnd::Failed(format!("the job {why}")),
             ProcessEnd::Died(why) => AttemptEnd::Crashed(why),
+            ProcessEnd::Reported(other @ (RunEnd::Valid | RunEnd::Invalid { .. })) => {
+                AttemptEnd::Crashed(format!("the job's process answered as a validation: {other:?}"))
+            }
         };
         Ok(Attempt { end, written, results: Results::Files(files) })
     }

@@ -45,6 +45,13 @@ pub struct AppState {
     /// A job's id after each of its history batches and its outcome, from this
     /// node's workers and (PostgreSQL) other nodes' notifications; `"*"`: re-read.
     pub events: broadcast::Sender<Arc<str>>,
+    /// Submissions validated at once (decoding their inputs), at most one per
+    /// core: the others wait their turn.
+    pub validations: Arc<tokio::sync::Semaphore>,
+    /// Where submissions are validated and jobs run (validation in a process of
+    /// its own under the job's memory budget with process isolation).
+    pub isolation: Isolation,
+    pub budgets: Budgets,
 }
 
 /// How a node runs.
@@ -126,6 +133,11 @@ impl Service {
             token: config.token.map(Arc::from),
             closing: Arc::new(AtomicBool::new(false)),
             events,
+            validations: Arc::new(tokio::sync::Semaphore::new(
+                std::thread::available_parallelism().map_or(2, |n| n.get()),
+            )),
+            isolation: config.isolation.clone(),
+            budgets: config.budgets,
         };
         // a job queued by another node (PostgreSQL's "queue" notification) wakes the
         // idle workers at once rather than at their next look at the store

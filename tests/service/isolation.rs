@@ -151,7 +151,10 @@ fn jobs_that_panic_abort_die_or_outgrow_their_memory_end_only_their_own_attempts
     let panicked = node.wait_final(&ids[1]);
     assert_eq!(panicked["status"], "failed", "{panicked}");
     let msg = panicked["message"].as_str().unwrap();
-    assert!(msg.contains("on each of its 4 attempts") && msg.contains("panicked: an injected fault at iteration 30"), "{msg}");
+    assert!(
+        msg.contains("on each of its 4 attempts") && msg.contains("panicked: an injected fault at iteration 30"),
+        "{msg}"
+    );
     assert!(!msg.contains(".rs") && !msg.contains("::"), "no internal path or Rust name: {msg}");
 
     // killed once: resumed from its checkpoint at 150, to the same end as a run without a kill
@@ -242,7 +245,10 @@ fn a_job_that_kills_its_server_is_not_run_past_its_attempts() {
     assert_eq!(starts, 5, "four attempts, then the job is failed at its fifth claim");
     assert_eq!(done["status"], "failed", "{done}");
     let msg = done["message"].as_str().unwrap();
-    assert!(msg.contains("on each of its 4 attempts") && msg.contains("the service stopped while the job ran"), "{msg}");
+    assert!(
+        msg.contains("on each of its 4 attempts") && msg.contains("the service stopped while the job ran"),
+        "{msg}"
+    );
     let other = node.submit(STEADY);
     node.assert_complete(&other, 500, 11);
 }
@@ -251,4 +257,55 @@ fn a_job_that_kills_its_server_is_not_run_past_its_attempts() {
 fn status_if_up(addr: SocketAddr, id: &str) -> Option<Value> {
     let path = format!("/v1/jobs/{id}");
     std::panic::catch_unwind(|| http_json(addr, "GET", &path, None).1).ok()
+}
+
+/// A PNG of `side`² black pixels: a few kB that decode to `side`² samples.
+fn black_png(side: u32) -> Vec<u8> {
+    let img = image::GrayImage::new(side, side);
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png).unwrap();
+    out.into_inner()
+}
+
+/// The issue's stack: one small PNG named 64 times as the slices of a volume is
+/// refused from the slices' headers, before any is decoded; an image within the
+/// limits that needs more memory to prepare than the job's budget is refused by
+/// its validation's own process. The server's memory stays near its idle size.
+#[test]
+fn inputs_cost_what_they_say_before_they_are_decoded() {
+    let dir = tempfile::tempdir().unwrap();
+    let node = Node::start(dir.path(), &["--workers", "1", "--job-memory", "100MiB"], "");
+    let idle = node.memory("VmRSS");
+    let live = Liveness::watch(node.addr);
+    let png = black_png(4096);
+    assert!(png.len() < 128 * 1024, "{} bytes", png.len());
+    let names: Vec<String> = (0..64).map(|k| format!("s{k}")).collect();
+    let refs: Vec<String> = names.iter().map(|n| format!("\"input:{n}\"")).collect();
+    let spec = format!(r#"{{"problem": {{"type": "segmentation", "image": [{}]}}}}"#, refs.join(", "));
+    let mut parts: Vec<(&str, Option<&str>, &[u8])> = vec![("spec", None, spec.as_bytes())];
+    parts.extend(names.iter().map(|n| (n.as_str(), Some("s.png"), png.as_slice())));
+    let (ctype, body) = multipart(&parts);
+    let asked = Instant::now();
+    let (status, _, answer) = post_bytes(node.addr, "/v1/jobs", &ctype, &body);
+    assert_eq!(status, 422, "{answer}");
+    assert!(asked.elapsed() < Duration::from_secs(2), "{:?}", asked.elapsed());
+    let answer: Value = serde_json::from_str(&answer).unwrap();
+    assert_eq!(answer["errors"][0]["field"], "problem.image", "{answer}");
+    assert!(answer["detail"].as_str().unwrap().contains("4096×4096×64"), "{answer}");
+
+    let spec = r#"{"problem": {"type": "segmentation", "image": "input:image"}}"#;
+    let (ctype, body) = multipart(&[("spec", None, spec.as_bytes()), ("image", Some("i.png"), &png)]);
+    let (status, _, answer) = post_bytes(node.addr, "/v1/jobs", &ctype, &body);
+    assert_eq!(status, 422, "{answer}");
+    let answer: Value = serde_json::from_str(&answer).unwrap();
+    assert_eq!(answer["errors"][0]["field"], "problem.image", "{answer}");
+    let detail = "needs more memory to prepare than the job's memory budget of 100 MiB";
+    assert_eq!(answer["errors"][0]["detail"], detail, "{answer}");
+
+    // a job that fits its budget runs
+    let id = node.submit(STEADY);
+    node.assert_complete(&id, 500, 11);
+    assert!(live.slowest() < 1000, "/healthz took {} ms", live.slowest());
+    let peak = node.memory("VmHWM");
+    assert!(peak < idle + (100 << 20), "the server grew from {idle} to {peak} bytes");
 }

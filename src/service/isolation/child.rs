@@ -114,7 +114,9 @@ fn run(
     fault: Option<Fault>,
 ) -> RunEnd {
     let job = match parse_spec(&request.spec).and_then(|s| prepare(s, inputs)) {
+        Ok(_) if request.validate_only => return RunEnd::Valid,
         Ok(job) => job,
+        Err(e) if request.validate_only => return RunEnd::Invalid { field: e.field, message: e.message },
         Err(e) => return RunEnd::Failed { message: e.to_string() },
     };
     out.send(&Report::Context, &serde_json::to_vec(&GlbContext::of(&job)).expect("contexts serialize"));

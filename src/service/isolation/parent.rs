@@ -265,3 +265,53 @@ impl Drop for JobProcess {
         }
     }
 }
+
+/// Why a submission is refused by its validation in a process of its own.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refusal {
+    pub field: String,
+    pub message: String,
+}
+
+/// Validate a submission (`spec`, its `inputs`) in a process of its own under
+/// `budgets.memory`: `Ok` if the job prepares. An input that needs more memory
+/// to prepare than the budget is refused naming `problem.image` (or the first
+/// input) and the budget.
+pub fn validate(
+    exe: &Path,
+    budgets: Budgets,
+    spec: &str,
+    inputs: &std::collections::HashMap<String, Vec<u8>>,
+) -> std::io::Result<Result<(), Refusal>> {
+    let budgets = Budgets { disk: None, ..budgets };
+    let mut process = JobProcess::start(exe, budgets, "(validation)", Arc::new(AtomicBool::new(false)))?;
+    let names: Vec<&String> = inputs.keys().collect();
+    let request = Request {
+        spec: spec.to_string(),
+        inputs: names.iter().map(|n| n.to_string()).collect(),
+        resume: false,
+        prior_frames: 0,
+        validate_only: true,
+        fault: None,
+    };
+    let mut queue = names.iter();
+    let _ = process.send(&request, &mut || queue.next().map(|n| inputs[*n].clone()));
+    let mut reported = None;
+    while let Some((report, _)) = process.next() {
+        if let Report::Outcome(end) = report {
+            reported = Some(end);
+        }
+    }
+    match process.finish(reported) {
+        ProcessEnd::Reported(RunEnd::Valid) => Ok(Ok(())),
+        ProcessEnd::Reported(RunEnd::Invalid { field, message }) => Ok(Err(Refusal { field, message })),
+        ProcessEnd::OverBudget(_) => {
+            let field = if inputs.is_empty() { "initial" } else { "problem.image" };
+            let budget = budgets.memory.map_or("the memory budget".into(), |m| {
+                format!("the job's memory budget of {}", super::format_size(m))
+            });
+            Ok(Err(Refusal { field: field.into(), message: format!("needs more memory to prepare than {budget}") }))
+        }
+        other => Err(std::io::Error::other(format!("the validation ended unexpectedly: {other:?}"))),
+    }
+}

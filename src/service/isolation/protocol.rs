@@ -25,6 +25,11 @@ pub struct Request {
     pub inputs: Vec<String>,
     pub resume: bool,
     pub prior_frames: usize,
+    /// Only prepare the job (decode its inputs, build its initial shape) and say
+    /// whether that works ([`RunEnd::Valid`] or [`RunEnd::Invalid`]): a
+    /// submission's validation, away from the service's memory.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub validate_only: bool,
     /// A fault to inject (debug builds of a service started with fault injection
     /// on, for the tests of isolation only; see `Fault`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -64,6 +69,10 @@ pub enum RunEnd {
     Failed { message: String },
     /// A panic, caught: its message.
     Panicked { message: String },
+    /// Validation only: the job prepares.
+    Valid,
+    /// Validation only: the spec or an input is wrong (the field and why).
+    Invalid { field: String, message: String },
 }
 
 /// Write one message.

@@ -5,6 +5,8 @@
 //! transaction before 201 is answered.
 
 use crate::jobs::{parse_spec, prepare};
+use crate::service::isolation::parent::validate;
+use crate::service::isolation::Isolation;
 use crate::service::wire::JobView;
 use crate::service::{ApiError, AppState, MAX_BODY_BYTES, MAX_UPLOAD_BYTES};
 use axum::extract::{FromRequest, Multipart, Request, State};
@@ -107,16 +109,28 @@ pub(in crate::service::routes) async fn create(
         )));
     };
     // off the async threads: naming the field of a bad spec may deserialize it a few
-    // dozen times, and validation decodes images and reads meshes
+    // dozen times, and validation decodes images and reads meshes; one at a time
+    // per core, so that many submissions at once do not decode together
+    let _turn = state.validations.clone().acquire_owned().await.map_err(|e| ApiError::Internal(e.to_string()))?;
+    let (isolation, budgets) = (state.isolation.clone(), state.budgets);
     let (normalized, tree, inputs) = tokio::task::spawn_blocking(move || {
-        let spec = parse_spec(&text)?;
+        let invalid = |e: crate::jobs::SpecError| ApiError::Invalid { field: e.field, detail: e.message };
+        let spec = parse_spec(&text).map_err(invalid)?;
         let normalized = serde_json::to_string(&spec).expect("spec serializes");
         let tree = serde_json::to_value(&spec).expect("spec serializes");
-        prepare(spec, &inputs).map(|_| (normalized, tree, inputs))
+        match &isolation {
+            // the inputs decoded in a process of their own, under the job's memory budget
+            Isolation::Process { exe } => match validate(exe, budgets, &normalized, &inputs) {
+                Ok(Ok(())) => {}
+                Ok(Err(r)) => return Err(ApiError::Invalid { field: r.field, detail: r.message }),
+                Err(e) => return Err(ApiError::Internal(format!("validation: {e}"))),
+            },
+            Isolation::Thread => drop(prepare(spec, &inputs).map_err(invalid)?),
+        }
+        Ok((normalized, tree, inputs))
     })
     .await
-    .map_err(|e| ApiError::Internal(e.to_string()))?
-    .map_err(|e| ApiError::Invalid { field: e.field, detail: e.message })?;
+    .map_err(|e| ApiError::Internal(e.to_string()))??;
     unreferenced_input(&tree, &inputs)?;
     let id = uuid::Uuid::new_v4().to_string();
     let job = state.store.insert_job(&id, &normalized, &inputs).await?;
