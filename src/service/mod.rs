@@ -11,6 +11,7 @@
 mod attempt;
 pub mod blobs;
 mod error;
+pub mod history;
 pub mod isolation;
 mod recorder;
 mod routes;

@@ -1,4 +1,5 @@
-//! What a running job writes: its history rows (batched: 256 rows or 250 ms) and
+//! What a running job writes: its history rows (batched: 256 rows or 250 ms;
+//! thinned past [`super::history::HISTORY_ROWS`]) and
 //! checkpoints, in fenced transactions ([`super::store::JobStore::record`]) made
 //! by a writer task in submission order, so that the engine computes on while the
 //! database commits (at most [`QUEUE`] batches wait; beyond that the engine waits).
@@ -14,6 +15,7 @@
 //! A lost lease or a storage error stops the run (through its cancel flag) and is
 //! reported when the recorder is closed.
 
+use super::history::Thinning;
 use super::store::{Lease, MadeFrame, Store, StoreError};
 use crate::flow::{Checkpoint, Progress};
 use crate::jobs::{FrameMaker, GlbContext, KeptFrames, PreparedJob, RunEvents};
@@ -73,6 +75,7 @@ enum Pending {
 pub(super) struct Recorder {
     rt: Handle,
     rows: Vec<Progress>,
+    thinning: Thinning,
     last_flush: Instant,
     queue: Option<mpsc::Sender<Batch>>,
     writer: Option<tokio::task::JoinHandle<WriteState>>,
@@ -166,7 +169,14 @@ impl Recorder {
             }
             state
         });
-        Recorder { rt: rt.clone(), rows: Vec::new(), last_flush: Instant::now(), queue: Some(tx), writer: Some(writer) }
+        Recorder {
+            rt: rt.clone(),
+            rows: Vec::new(),
+            thinning: Thinning::default(),
+            last_flush: Instant::now(),
+            queue: Some(tx),
+            writer: Some(writer),
+        }
     }
 
     /// A checkpoint whose frame the job's process made.
@@ -185,6 +195,7 @@ impl Recorder {
 
     /// Write what is left, wait for the writer, and say how the writes went.
     pub(super) fn close(mut self) -> WriteState {
+        self.rows.extend(self.thinning.last_skipped());
         if !self.rows.is_empty() {
             self.flush(None);
         }
@@ -198,7 +209,9 @@ impl Recorder {
 
 impl RunEvents for Recorder {
     fn progress(&mut self, p: &Progress) {
-        self.rows.push(*p);
+        if self.thinning.keep(p) {
+            self.rows.push(*p);
+        }
         if self.rows.len() >= 256 || self.last_flush.elapsed() > Duration::from_millis(250) {
             self.flush(None);
         }

@@ -41,12 +41,6 @@ pub struct JobList<'a> {
     pub next_page_token: Option<String>,
 }
 
-/// `GET /v1/jobs/{id}/energy`: the energy history.
-#[derive(Debug, Serialize)]
-pub struct History {
-    pub history: Vec<Progress>,
-}
-
 /// One entry of a manifest.
 #[derive(Debug, Serialize)]
 pub struct ResultFile {

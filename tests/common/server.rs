@@ -134,7 +134,9 @@ pub fn download_with(addr: SocketAddr, path: &str, headers: &str) -> (u16, Strin
     let split = out.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
     let head = String::from_utf8_lossy(&out[..split]).to_string();
     let status = head.split_whitespace().nth(1).unwrap().parse().unwrap();
-    (status, head, out[split + 4..].to_vec())
+    let body = &out[split + 4..];
+    let chunked = head.to_ascii_lowercase().contains("transfer-encoding: chunked");
+    (status, head, if chunked { dechunk_bytes(body) } else { body.to_vec() })
 }
 
 pub fn http_json(addr: SocketAddr, method: &str, path: &str, body: Option<&str>) -> (u16, Value) {
@@ -156,14 +158,21 @@ pub fn wait_for(addr: SocketAddr, id: &str, pred: impl Fn(&Value) -> bool) -> Va
 }
 
 pub fn dechunk(body: &str) -> String {
-    let mut out = String::new();
+    String::from_utf8(dechunk_bytes(body.as_bytes())).unwrap()
+}
+
+/// The body of a chunked transfer.
+pub fn dechunk_bytes(body: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
     let mut rest = body;
-    while let Some((size, tail)) = rest.split_once("\r\n") {
+    while let Some(eol) = rest.windows(2).position(|w| w == b"\r\n") {
+        let size = std::str::from_utf8(&rest[..eol]).unwrap_or("0");
         let n = usize::from_str_radix(size.trim(), 16).unwrap_or(0);
         if n == 0 {
             break;
         }
-        out.push_str(&tail[..n]);
+        let tail = &rest[eol + 2..];
+        out.extend_from_slice(&tail[..n]);
         rest = &tail[n + 2..];
     }
     out

@@ -309,3 +309,52 @@ fn inputs_cost_what_they_say_before_they_are_decoded() {
     let peak = node.memory("VmHWM");
     assert!(peak < idle + (100 << 20), "the server grew from {idle} to {peak} bytes");
 }
+
+/// A job with a million history rows (written into its database directly, as
+/// an older server kept them): its energy as JSON, as CSV and as a plot, each
+/// streamed with memory that does not grow with the rows.
+#[test]
+fn a_million_history_rows_are_served_in_little_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let id = {
+        let node = Node::start(dir.path(), &["--workers", "1"], "");
+        let id = node.submit(STEADY);
+        node.assert_complete(&id, 500, 11);
+        id
+    };
+    const ROWS: i64 = 1_000_000;
+    let rt = tokio::runtime::Builder::new_current_thread().build().unwrap();
+    rt.block_on(async {
+        use sqlx::Connection;
+        let url = format!("sqlite:{}", dir.path().join("shapeflow.db").display());
+        let mut db = sqlx::SqliteConnection::connect(&url).await.unwrap();
+        sqlx::query("DELETE FROM history WHERE job_id = ?1").bind(&id).execute(&mut db).await.unwrap();
+        sqlx::query(
+            "WITH RECURSIVE n(x) AS (SELECT 0 UNION ALL SELECT x + 1 FROM n WHERE x < ?2 - 1) \
+             INSERT INTO history SELECT ?1, x, x * 1e-4, 1e-4, 6.0 / (1.0 + x * 1e-4), 128, 1 FROM n",
+        )
+        .bind(&id)
+        .bind(ROWS)
+        .execute(&mut db)
+        .await
+        .unwrap();
+        db.close().await.unwrap();
+    });
+    let node = Node::start(dir.path(), &["--workers", "1"], "");
+    let idle = node.memory("VmRSS");
+    let (status, _, json) = download(node.addr, &format!("/v1/jobs/{id}/energy"));
+    assert_eq!(status, 200);
+    let json: Value = serde_json::from_slice(&json).unwrap();
+    let rows = json["history"].as_array().unwrap();
+    assert_eq!(rows.len() as i64, ROWS);
+    assert_eq!(rows[999_999]["iteration"], 999_999);
+    drop(json);
+    let (status, _, csv) = download(node.addr, &format!("/v1/jobs/{id}/energy?format=csv"));
+    assert_eq!(status, 200);
+    assert_eq!(csv.iter().filter(|&&b| b == b'\n').count() as i64, ROWS + 1);
+    let (status, _, svg) = download(node.addr, &format!("/v1/jobs/{id}/energy.svg"));
+    assert_eq!(status, 200);
+    assert!(svg.starts_with(b"<svg") && svg.len() < 2 << 20, "{} bytes of plot", svg.len());
+    let grown = node.memory("VmHWM").saturating_sub(idle);
+    assert!(grown < 64 << 20, "the server grew by {grown} bytes serving a million rows");
+}
