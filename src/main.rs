@@ -110,6 +110,10 @@ struct NodeArgs {
     /// or with a suffix).
     #[arg(long, value_parser = size_arg, default_value = "16GiB")]
     job_disk: u64,
+    /// Below this much free space on the data directory's disk, /readyz answers
+    /// 503 (bytes, or with a suffix).
+    #[arg(long, value_parser = size_arg, default_value = "512MiB")]
+    min_free_disk: u64,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -188,6 +192,7 @@ impl NodeArgs {
             policy,
             isolation,
             budgets,
+            min_free_disk: self.min_free_disk,
             faults: test_faults(),
         })
     }

@@ -165,6 +165,12 @@ fn evolution_picks(sizes: &[usize]) -> Vec<usize> {
     (0..fit).map(|k| k * (n - 1) / (fit - 1)).collect()
 }
 
+/// How many frames the size of `frame` evolution.glb shows at most
+/// ([`MAX_FRAMES`], and as many as fit in [`MAX_EVOLUTION_BYTES`]; at least two).
+pub fn evolution_frames_of(frame: &MeshData) -> usize {
+    (MAX_EVOLUTION_BYTES / glb_bytes(frame)).clamp(2, MAX_FRAMES)
+}
+
 /// About the bytes a state takes in a glb file: per vertex, a curve's line
 /// attributes, filled region and ribbon (measured 186–188 bytes on segmentations
 /// of 6,400 and 104,000 vertices), a surface's attributes, normals and triangles

@@ -17,8 +17,8 @@ mod spec;
 pub use crate::formats::{read_mesh_file, MeshFileError};
 pub use crate::geometry::AnyMesh;
 pub use frames::{
-    job_extras, run_with_frames, state_glb, states_glb, Frame, FrameFields, FrameMaker, GlbContext, KeptFrames,
-    MAX_FRAMES,
+    evolution_frames_of, job_extras, run_with_frames, state_glb, states_glb, Frame, FrameFields, FrameMaker,
+    GlbContext, KeptFrames, MAX_FRAMES,
 };
 pub use necks::NeckSplit;
 pub use prepare::{default_min_size, default_mu, default_mu_in, prepare, PreparedJob, ProblemKind, SegmentationSetup};

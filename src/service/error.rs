@@ -26,6 +26,8 @@ pub enum ApiError {
     TooLarge(usize),
     /// 401: missing or wrong bearer token.
     Unauthorized,
+    /// 503: the node cannot take work now (why).
+    Unavailable(String),
     Internal(String),
 }
 
@@ -72,6 +74,7 @@ impl IntoResponse for ApiError {
                 "missing or wrong `Authorization: Bearer` token".into(),
                 None,
             ),
+            ApiError::Unavailable(d) => (StatusCode::SERVICE_UNAVAILABLE, "Not ready", d, None),
             ApiError::Internal(d) => {
                 tracing::error!("internal error: {d}");
                 (

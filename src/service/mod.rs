@@ -32,6 +32,9 @@ use worker::{Registry, Worker};
 
 pub use crate::limits::{MAX_BODY_BYTES, MAX_UPLOAD_BYTES};
 
+/// The default floor of free space on the data disk (`/readyz`).
+pub const MIN_FREE_DISK: u64 = 512 << 20;
+
 /// Shared state of the handlers.
 #[derive(Clone)]
 pub struct AppState {
@@ -53,6 +56,14 @@ pub struct AppState {
     /// its own under the job's memory budget with process isolation).
     pub isolation: Isolation,
     pub budgets: Budgets,
+    /// This node's name (its leases, its readiness probe).
+    pub node: String,
+    /// The data directory, whose disk `/readyz` watches.
+    pub data_dir: std::path::PathBuf,
+    /// Below this many free bytes on the data disk, `/readyz` answers 503.
+    pub min_free_disk: u64,
+    /// The evolution.glb of running jobs last built, by job and checkpoint.
+    pub evolutions: Arc<tokio::sync::Mutex<std::collections::VecDeque<((String, i64), bytes::Bytes)>>>,
 }
 
 /// How a node runs.
@@ -74,6 +85,9 @@ pub struct ServiceConfig {
     pub isolation: Isolation,
     /// What each job may use.
     pub budgets: Budgets,
+    /// Below this many free bytes on the data directory's disk the node is not
+    /// ready (`/readyz`).
+    pub min_free_disk: u64,
     /// Faults injected into jobs by submission number (`panic@N`, `abort@N`,
     /// `kill@N`, `grow@N`, `hang@N`, optionally `:once`): for the tests of
     /// isolation only.
@@ -109,6 +123,7 @@ impl Service {
             policy,
             isolation: Isolation::Thread,
             budgets: Budgets::default(),
+            min_free_disk: MIN_FREE_DISK,
             faults: Vec::new(),
         })
         .await
@@ -126,6 +141,7 @@ impl Service {
             tracing::info!(requeued, "jobs interrupted by a previous stop go back to the queue");
         }
         let (events, _) = broadcast::channel(1024);
+        let node = format!("{}-{}", std::process::id(), &uuid::Uuid::new_v4().simple().to_string()[..8]);
         store.watch(events.clone());
         let state = AppState {
             store,
@@ -139,6 +155,10 @@ impl Service {
             )),
             isolation: config.isolation.clone(),
             budgets: config.budgets,
+            evolutions: Arc::default(),
+            node: node.clone(),
+            data_dir: config.data_dir.clone(),
+            min_free_disk: config.min_free_disk,
         };
         // a job queued by another node (PostgreSQL's "queue" notification) wakes the
         // idle workers at once rather than at their next look at the store
@@ -155,7 +175,6 @@ impl Service {
         let shutdown = Arc::new(AtomicBool::new(false));
         let rt = tokio::runtime::Handle::current();
         let faults = Arc::new(config.faults);
-        let node = format!("{}-{}", std::process::id(), &uuid::Uuid::new_v4().simple().to_string()[..8]);
         let workers = (0..config.workers)
             .map(|k| {
                 let w = Worker {

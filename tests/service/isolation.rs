@@ -358,3 +358,52 @@ fn a_million_history_rows_are_served_in_little_memory() {
     let grown = node.memory("VmHWM").saturating_sub(idle);
     assert!(grown < 64 << 20, "the server grew by {grown} bytes serving a million rows");
 }
+
+/// Another process holds the SQLite write lock for longer than the lease: the
+/// node is not ready meanwhile (`/healthz` still answers), the running job is
+/// not taken over (one attempt, every iteration once) and the node is ready
+/// again once the lock is let go. A floor of free disk space above the disk's
+/// says so in `/readyz`.
+#[test]
+fn a_held_write_lock_is_a_wait_not_a_takeover_and_readyz_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let node = Node::start(dir.path(), &["--workers", "1", "--lease-seconds", "1"], "");
+    assert_eq!(http(node.addr, "GET", "/readyz", None, "").0, 200);
+    let id = node.submit(LONG);
+    wait_for(node.addr, &id, |j| j["progress"]["iteration"].as_u64().unwrap_or(0) > 100);
+    let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
+    rt.block_on(async {
+        use sqlx::Connection;
+        let url = format!("sqlite:{}", dir.path().join("shapeflow.db").display());
+        let mut db = sqlx::SqliteConnection::connect(&url).await.unwrap();
+        let lock = db.begin_with("BEGIN IMMEDIATE").await.unwrap();
+        let t = Instant::now();
+        let (status, _, body) = http(node.addr, "GET", "/readyz", None, "");
+        assert_eq!(status, 503, "{body}");
+        assert!(body.contains("the database"), "{body}");
+        assert!(t.elapsed() < Duration::from_secs(4), "{:?}", t.elapsed());
+        let t = Instant::now();
+        assert_eq!(http(node.addr, "GET", "/healthz", None, "").0, 200);
+        assert!(t.elapsed() < Duration::from_secs(1));
+        tokio::time::sleep(Duration::from_secs(4)).await; // four leases
+        lock.rollback().await.unwrap();
+    });
+    let t = Instant::now();
+    while http(node.addr, "GET", "/readyz", None, "").0 != 200 {
+        assert!(t.elapsed() < Duration::from_secs(10), "not ready again");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let done = node.wait_final(&id);
+    assert_eq!(done["status"], "successful", "{done}");
+    assert!(done["message"].is_null(), "no attempt was abandoned: {done}");
+    let (_, hist) = http_json(node.addr, "GET", &format!("/v1/jobs/{id}/energy"), None);
+    let its: Vec<u64> = hist["history"].as_array().unwrap().iter().map(|r| r["iteration"].as_u64().unwrap()).collect();
+    let last = done["progress"]["iteration"].as_u64().unwrap();
+    assert_eq!(its, (0..=last).collect::<Vec<_>>(), "every iteration once");
+    drop(node);
+
+    let node = Node::start(dir.path(), &["--workers", "1", "--min-free-disk", "1000TiB"], "");
+    let (status, _, body) = http(node.addr, "GET", "/readyz", None, "");
+    assert_eq!(status, 503, "{body}");
+    assert!(body.contains("less than the floor of 1000 TiB"), "{body}");
+}

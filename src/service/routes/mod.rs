@@ -7,6 +7,7 @@ mod energy;
 mod events;
 mod jobs;
 mod openapi;
+mod readyz;
 mod results;
 mod ui;
 
@@ -26,6 +27,7 @@ pub use openapi::{openapi_json, OPENAPI_YAML};
 /// `api/openapi.yaml` and against the router itself.
 pub const ROUTES: &[(&str, &str)] = &[
     ("GET", "/healthz"),
+    ("GET", "/readyz"),
     ("GET", "/"),
     ("GET", "/jobs/{id}"),
     ("GET", "/ui/{path}"),
@@ -58,6 +60,7 @@ pub const ROUTES: &[(&str, &str)] = &[
 pub fn router(state: AppState) -> Router {
     Router::new()
         .route("/healthz", get(|| async { "ok" }))
+        .route("/readyz", get(readyz::readyz))
         .route("/", get(ui::index))
         .route("/jobs/{id}", get(ui::job_page))
         .route("/ui/{*path}", get(ui::asset))
@@ -86,10 +89,10 @@ async fn no_route(req: Request) -> ApiError {
     ApiError::NotFound(format!("no route {} {}", req.method(), req.uri().path()))
 }
 
-/// With a token, every route but `/healthz` and the viewer page's needs it.
+/// With a token, every route but `/healthz`, `/readyz` and the viewer page's needs it.
 async fn authorize(State(state): State<AppState>, req: Request, next: Next) -> Result<Response, ApiError> {
     if let Some(token) = &state.token {
-        if req.uri().path() != "/healthz" && !ui::is_page(req.uri().path()) {
+        if !matches!(req.uri().path(), "/healthz" | "/readyz") && !ui::is_page(req.uri().path()) {
             let given = req.headers().get(header::AUTHORIZATION).and_then(|v| v.to_str().ok());
             if given.and_then(|g| g.strip_prefix("Bearer ")) != Some(token.as_ref()) {
                 return Err(ApiError::Unauthorized);

@@ -4,11 +4,15 @@
 //! evolution.glb are encoded from the stored frames (checkpoints with their
 //! fields: nothing is solved); its image results come when it ends. An ended job
 //! whose files were never stored (its nodes kept dying, or an older version ran
-//! it) has them computed on the first request, and stored.
+//! it) has them computed on the first request, and stored. A running job's
+//! evolution.glb is built from as many of its checkpoints as it shows (never all
+//! of them read), one build at a time, once per new checkpoint.
 
 use super::{blocking, find};
 use crate::export::shape_json;
-use crate::jobs::{image_result_names, parse_spec, prepare, result_files, Frame, GlbContext, PreparedJob, GLB};
+use crate::jobs::{
+    evolution_frames_of, image_result_names, parse_spec, prepare, result_files, Frame, GlbContext, PreparedJob, GLB,
+};
 use crate::service::store::{JobRow, ResultIndex, Which};
 use crate::service::wire::{Manifest, ResultFile};
 use crate::service::{ApiError, AppState};
@@ -41,6 +45,11 @@ pub(super) async fn frames_to_draw(
     which: Which,
 ) -> Result<Option<(GlbContext, Vec<Frame>)>, ApiError> {
     let frames = state.store.frames(id, which).await?;
+    draw(state, id, frames).await
+}
+
+/// `frames` of job `id` and what their glb files share, as [`frames_to_draw`].
+async fn draw(state: &AppState, id: &str, frames: Vec<Frame>) -> Result<Option<(GlbContext, Vec<Frame>)>, ApiError> {
     if frames.is_empty() {
         return Ok(None);
     }
@@ -74,13 +83,13 @@ async fn ended_results(state: &AppState, row: &JobRow) -> Result<Option<ResultIn
     Ok(state.store.job(&row.id).await?.and_then(|j| j.results))
 }
 
-pub(super) fn glb_response(bytes: Vec<u8>, name: &str) -> Response {
+pub(super) fn glb_response(bytes: impl Into<bytes::Bytes>, name: &str) -> Response {
     (
         [
             (header::CONTENT_TYPE, GLB.to_string()),
             (header::CONTENT_DISPOSITION, format!("inline; filename=\"{name}\"")),
         ],
-        bytes,
+        bytes.into(),
     )
         .into_response()
 }
@@ -182,7 +191,34 @@ pub(super) async fn evolution_glb(State(state): State<AppState>, Path(id): Path<
         return Ok(r);
     }
     let no_checkpoint = || ApiError::NotFound(format!("job {id} has no checkpoint yet"));
-    let (context, frames) = frames_to_draw(&state, &id, Which::All).await?.ok_or_else(no_checkpoint)?;
+    let index = state.store.checkpoint_index(&id).await?;
+    let last = index.last().ok_or_else(no_checkpoint)?.0;
+    // one build at a time, and once per new checkpoint of a job
+    let mut built = state.evolutions.lock().await;
+    if let Some((_, bytes)) = built.iter().find(|(key, _)| *key == (id.clone(), last)) {
+        return Ok(glb_response(bytes.clone(), "evolution.glb"));
+    }
+    // of the checkpoints, as many as evolution.glb shows at the latest one's size,
+    // evenly picked with the first and the last: the others are never read
+    let newest = state.store.frames(&id, Which::At(last)).await?.pop().ok_or_else(no_checkpoint)?;
+    let fit = evolution_frames_of(&newest.state.mesh).min(index.len());
+    let picks: Vec<i64> = match fit {
+        1 => vec![last],
+        _ => (0..fit).map(|k| index[k * (index.len() - 1) / (fit - 1)].0).collect(),
+    };
+    let mut frames = Vec::with_capacity(picks.len());
+    for &it in &picks[..picks.len() - 1] {
+        frames.extend(state.store.frames(&id, Which::At(it)).await?);
+    }
+    frames.push(newest);
+    let (context, frames) = draw(&state, &id, frames).await?.ok_or_else(no_checkpoint)?;
     let bytes = blocking(move || context.evolution_glb(&frames)).await?.ok_or_else(no_checkpoint)?;
+    let bytes = bytes::Bytes::from(bytes);
+    built.retain(|((job, _), _)| *job != id);
+    built.push_front(((id, last), bytes.clone()));
+    built.truncate(EVOLUTIONS_KEPT);
     Ok(glb_response(bytes, "evolution.glb"))
 }
+
+/// Running jobs' evolution.glb kept built, the newest first.
+pub(super) const EVOLUTIONS_KEPT: usize = 2;

@@ -53,6 +53,8 @@ pub trait JobStore: Send + Sync + 'static {
     fn announces(&self) -> bool {
         false
     }
+    /// Whether the database takes writes now (readiness): an error if not.
+    async fn writable(&self) -> StoreResult<()>;
     /// Insert a new accepted job and the rows of its inputs (already in the blob
     /// store; `heads`: name and first bytes of each), in one transaction.
     async fn insert_rows(&self, id: &str, spec: &str, heads: &[(String, Vec<u8>)]) -> StoreResult<JobRow>;

@@ -163,6 +163,15 @@ impl JobStore for PgStore {
 
     /// Nodes share the database: a running job belongs to its lease holder until
     /// the lease expires.
+    /// A primary (not a read-only standby) that answers.
+    async fn writable(&self) -> StoreResult<()> {
+        let standby: bool = sqlx::query_scalar("SELECT pg_is_in_recovery()").fetch_one(&self.pool).await?;
+        match standby {
+            false => Ok(()),
+            true => Err(StoreError::Db(sqlx::Error::Protocol("the database is a read-only standby".into()))),
+        }
+    }
+
     async fn requeue_running(&self) -> StoreResult<u64> {
         Ok(0)
     }

@@ -45,18 +45,20 @@ pub(super) async fn fenced_progress(
     held.map(|r| r.get::<i64, _>(0) != 0).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
 }
 
-/// Claim the oldest accepted job, or a running one whose lease expired (failing
-/// it instead once it has been taken over `policy.max_takeovers` times).
+/// Claim the oldest accepted job, or a running one given up (failing it instead
+/// once it has been taken over `policy.max_takeovers` times).
 pub(super) async fn claim_next(pool: &SqlitePool, owner: &str, policy: &ClaimPolicy) -> StoreResult<Option<Claimed>> {
     let lease_ms = policy.lease.as_millis() as i64;
     loop {
         let mut tx = pool.begin_with("BEGIN IMMEDIATE").await?;
-        let pick = sqlx::query(concat!(
+        // one node: a running job is taken over only once given up (its attempt
+        // abandoned, or left by a process that stopped: lease_expires = 0), never
+        // for a lease that ran out while this process lived (its renewals waited
+        // for a write lock another process held: the job is alive)
+        let pick = sqlx::query(
             "SELECT id, status, takeovers, message FROM jobs WHERE status IN ('accepted', 'running') \
-             AND (status = 'accepted' OR lease_expires < ",
-            clock_ms!(),
-            ") ORDER BY seq LIMIT 1"
-        ))
+             AND (status = 'accepted' OR lease_expires = 0) ORDER BY seq LIMIT 1",
+        )
         .fetch_optional(&mut *tx)
         .await?;
         let Some(pick) = pick else { return Ok(None) };

@@ -174,6 +174,12 @@ impl JobStore for SqliteStore {
         Ok(rows.iter().map(job_from_row).collect())
     }
 
+    /// The write lock taken and given back.
+    async fn writable(&self) -> StoreResult<()> {
+        let tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
+        Ok(tx.rollback().await?)
+    }
+
     async fn requeue_running(&self) -> StoreResult<u64> {
         // the epoch moves on: a worker of the previous process can no longer write
         leases::requeue_running(&self.pool).await
