@@ -69,7 +69,13 @@ fn quote(s: &str) -> String {
 fn test_tools() {
     println!("cargo:rustc-check-cfg=cfg(shapeflow_cluster)");
     println!("cargo:rustc-check-cfg=cfg(shapeflow_browser)");
-    for var in ["SHAPEFLOW_REQUIRE_POSTGRES", "SHAPEFLOW_REQUIRE_S3", "SHAPEFLOW_REQUIRE_BROWSER", "SHAPEFLOW_WEED", "CHROMIUM"] {
+    for var in [
+        "SHAPEFLOW_REQUIRE_POSTGRES",
+        "SHAPEFLOW_REQUIRE_S3",
+        "SHAPEFLOW_REQUIRE_BROWSER",
+        "SHAPEFLOW_WEED",
+        "CHROMIUM",
+    ] {
         println!("cargo:rerun-if-env-changed={var}");
     }
     let watch = |path: &Path| {

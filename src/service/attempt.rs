@@ -6,7 +6,7 @@
 
 use super::isolation::child::panic_text;
 use super::isolation::fault::Fault;
-use super::isolation::parent::{JobProcess, ProcessEnd};
+use super::isolation::parent::{JobProcess, Next, ProcessEnd};
 use super::isolation::protocol::{Report, Request, RunEnd};
 use super::recorder::{retrying, Recorder, WriteState};
 use super::store::{JobRow, Lease, MadeFrame, StoreError, Which};
@@ -16,6 +16,9 @@ use crate::jobs::{parse_spec, prepare, run_prepared, Frame, KeptFrames, Prepared
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
+
+/// How long a job's process may be quiet before the rows it reported are written.
+const QUIET: std::time::Duration = std::time::Duration::from_millis(250);
 
 /// How an attempt ended.
 #[derive(Debug, Clone, PartialEq)]
@@ -159,7 +162,16 @@ impl Worker {
         let mut rec =
             Recorder::start(&self.rt, None, store.clone(), &job.id, lease, cancel.clone(), self.events.clone());
         let (mut files, mut reported, mut context_error) = (Vec::new(), None, None);
-        while let Some((report, payload)) = process.next() {
+        loop {
+            let (report, payload) = match process.next(QUIET) {
+                Next::Report(r, p) => (r, p),
+                // a long step: the rows of the steps before it go now
+                Next::Quiet => {
+                    rec.flush_due();
+                    continue;
+                }
+                Next::End => break,
+            };
             match report {
                 Report::Context => {
                     if let Err(e) = self.rt.block_on(retrying(|| store.put_context(&job.id, payload.clone()))) {

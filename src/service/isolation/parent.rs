@@ -32,10 +32,19 @@ enum Kill {
     Disk,
 }
 
+/// What [`JobProcess::next`] found.
+pub enum Next {
+    Report(Report, Vec<u8>),
+    /// Nothing for a while: the process is in a long step.
+    Quiet,
+    /// The process has stopped reporting.
+    End,
+}
+
 /// A job's running process.
 pub struct JobProcess {
     child: std::process::Child,
-    stdout: BufReader<ChildStdout>,
+    reports: std::sync::mpsc::Receiver<(Report, Vec<u8>)>,
     shared: Arc<Shared>,
     watchdog: Option<std::thread::JoinHandle<()>>,
     stderr: Option<std::thread::JoinHandle<VecDeque<String>>>,
@@ -77,6 +86,7 @@ impl JobProcess {
         let mut child = cmd.stdin(Stdio::piped()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn()?;
         let stdin = BufWriter::with_capacity(1 << 16, child.stdin.take().expect("piped"));
         let stdout = BufReader::with_capacity(1 << 16, child.stdout.take().expect("piped"));
+        let reports = read_reports(stdout)?;
         let stderr = child.stderr.take().expect("piped");
         let id = job.to_string();
         let stderr = std::thread::Builder::new().name("job-stderr".into()).spawn(move || {
@@ -103,7 +113,7 @@ impl JobProcess {
         };
         Ok(JobProcess {
             child,
-            stdout,
+            reports,
             shared,
             watchdog: Some(watchdog),
             stderr: Some(stderr),
@@ -124,15 +134,12 @@ impl JobProcess {
         Ok(())
     }
 
-    /// The next report, `None` once the process has stopped reporting.
-    pub fn next(&mut self) -> Option<(Report, Vec<u8>)> {
-        let (report, payload) = match read_message::<Report>(&mut self.stdout) {
-            Ok(Some(m)) => m,
-            Ok(None) => return None,
-            Err(e) => {
-                tracing::debug!("a job's reports ended: {e}");
-                return None;
-            }
+    /// The next report, waiting at most `quiet` for it.
+    pub fn next(&mut self, quiet: Duration) -> Next {
+        let (report, payload) = match self.reports.recv_timeout(quiet) {
+            Ok(m) => m,
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => return Next::Quiet,
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => return Next::End,
         };
         let bytes = match &report {
             Report::Progress(Progress { iteration, .. }) => {
@@ -142,7 +149,7 @@ impl JobProcess {
             _ => payload.len() as u64,
         };
         self.shared.disk.fetch_add(bytes, Ordering::Relaxed);
-        Some((report, payload))
+        Next::Report(report, payload)
     }
 
     /// Wait for the process to end and say how it did; `reported`: its outcome,
@@ -181,6 +188,27 @@ impl JobProcess {
             }
         }
     }
+}
+
+/// A thread reading the process's reports as they come (a few wait, then the
+/// process waits for its worker).
+fn read_reports(mut stdout: BufReader<ChildStdout>) -> std::io::Result<std::sync::mpsc::Receiver<(Report, Vec<u8>)>> {
+    let (tx, rx) = std::sync::mpsc::sync_channel(16);
+    std::thread::Builder::new().name("job-reports".into()).spawn(move || loop {
+        match read_message::<Report>(&mut stdout) {
+            Ok(Some(m)) => {
+                if tx.send(m).is_err() {
+                    return;
+                }
+            }
+            Ok(None) => return,
+            Err(e) => {
+                tracing::debug!("a job's reports ended: {e}");
+                return;
+            }
+        }
+    })?;
+    Ok(rx)
 }
 
 /// Why a process that did not report ended.
@@ -297,9 +325,11 @@ pub fn validate(
     let mut queue = names.iter();
     let _ = process.send(&request, &mut || queue.next().map(|n| inputs[*n].clone()));
     let mut reported = None;
-    while let Some((report, _)) = process.next() {
-        if let Report::Outcome(end) = report {
-            reported = Some(end);
+    loop {
+        match process.next(Duration::from_secs(1)) {
+            Next::Report(Report::Outcome(end), _) => reported = Some(end),
+            Next::Report(..) | Next::Quiet => {}
+            Next::End => break,
         }
     }
     match process.finish(reported) {
