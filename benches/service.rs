@@ -141,6 +141,11 @@ fn main() {
         workers: 2,
         token: None,
         policy: ClaimPolicy::default(),
+        // the service's own costs, apart from the job process's (benches/isolation.rs)
+        isolation: shapeflow::service::isolation::Isolation::Thread,
+        budgets: Default::default(),
+        min_free_disk: shapeflow::service::MIN_FREE_DISK,
+        faults: Vec::new(),
     };
     let service = rt.block_on(Service::start_with(config)).unwrap();
     println!("backend: {}", service.state.store.backend());

@@ -8,52 +8,17 @@ use super::isolation::child::panic_text;
 use super::isolation::fault::Fault;
 use super::isolation::parent::{JobProcess, Next, ProcessEnd};
 use super::isolation::protocol::{Report, Request, RunEnd};
-use super::recorder::{retrying, Recorder, WriteState};
+use super::recorder::{retrying, Recorder};
 use super::store::{JobRow, Lease, MadeFrame, StoreError, Which};
-use super::worker::Worker;
+use super::worker::{Attempt, AttemptEnd, Results, Worker};
 use crate::flow::{Checkpoint, Progress, StopReason};
-use crate::jobs::{parse_spec, prepare, run_prepared, Frame, KeptFrames, PreparedJob, ResultFile, RunEvents};
+use crate::jobs::{parse_spec, prepare, run_prepared, Frame, KeptFrames, ResultFile, RunEvents};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 /// How long a job's process may be quiet before the rows it reported are written.
 const QUIET: std::time::Duration = std::time::Duration::from_millis(250);
-
-/// How an attempt ended.
-#[derive(Debug, Clone, PartialEq)]
-pub(super) enum AttemptEnd {
-    /// The run stopped by its rules.
-    Stopped { stop: String, note: Option<String> },
-    /// Cancelled (by request, or by the node stopping).
-    Cancelled,
-    /// The job fails: a numeric failure, a spec that no longer prepares, a budget.
-    Failed(String),
-    /// The attempt ended abnormally (a panic, its process killed): the job is
-    /// tried again from its last checkpoint.
-    Crashed(String),
-}
-
-/// What the result files are made of.
-pub(super) enum Results {
-    None,
-    /// Made by the job's process.
-    Files(Vec<ResultFile>),
-    /// To be made from the frames of the run (thread isolation).
-    Frames(Arc<PreparedJob>, Vec<Frame>),
-}
-
-pub(super) struct Attempt {
-    pub end: AttemptEnd,
-    pub written: WriteState,
-    pub results: Results,
-}
-
-impl Attempt {
-    fn ended(end: AttemptEnd) -> Attempt {
-        Attempt { end, written: WriteState::default(), results: Results::None }
-    }
-}
 
 impl Worker {
     /// The attempt on this thread.
@@ -70,9 +35,16 @@ impl Worker {
             Err(e) => return Ok(Attempt::ended(AttemptEnd::Failed(e.to_string()))),
         };
         drop(inputs);
-        // the frames stored so far (a takeover), for evolution.glb
+        // the frames stored so far (a takeover), for evolution.glb, read one at a time
         let mut kept = KeptFrames::default();
-        self.rt.block_on(self.store.frames(&job.id, Which::All))?.into_iter().for_each(|f| kept.push(f));
+        for row in self.rt.block_on(self.store.checkpoint_rows(&job.id, Which::All))? {
+            let iteration = row.iteration;
+            let json = self.rt.block_on(self.store.frame_json(&job.id, row))?;
+            match serde_json::from_slice::<Frame>(&json) {
+                Ok(frame) => kept.push(frame),
+                Err(e) => tracing::warn!(job = %job.id, iteration, "a stored checkpoint cannot be read: {e}"),
+            }
+        }
         let resume = kept.last().map(|f| f.state.clone());
         if let Some(cp) = &resume {
             self.rt.block_on(self.store.truncate_history(&job.id, lease, cp.iteration))?;

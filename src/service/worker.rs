@@ -7,15 +7,14 @@
 //! computed once, when the run ends ([`result_files`]), from the frames stored;
 //! their blobs are written first, and the row points to them in the transaction
 //! that records the outcome. The run itself happens on the worker's thread or in
-//! a process of its own ([`Isolation`]; [`attempt`](super::attempt)); an attempt
+//! a process of its own ([`Isolation`]; the attempts are in `attempt.rs`); an attempt
 //! that ends abnormally (a panic, its process killed) is abandoned: the job goes
 //! on from its last checkpoint at its next claim, up to the policy's limit.
 
-use super::attempt::{AttemptEnd, Results};
 use super::isolation::{Budgets, Isolation};
-use super::recorder::retrying;
+use super::recorder::{retrying, WriteState};
 use super::store::{ClaimPolicy, Claimed, JobStatus, Lease, Store, StoreError, StoredResults};
-use crate::jobs::result_files;
+use crate::jobs::{result_files, Frame, PreparedJob, ResultFile};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -68,7 +67,16 @@ impl Worker {
             return Ok(Outcome::Idle);
         };
         let id = claimed.job.id.clone();
-        match self.run(&claimed) {
+        // a panic in the worker's own work (the result files, say) ends the attempt,
+        // not the worker: the job goes on at its next claim
+        let ran =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.run(&claimed))).unwrap_or_else(|panic| {
+                let why = format!("panicked: {}", super::isolation::child::panic_text(panic.as_ref()));
+                tracing::error!(job = %id, "attempt ended: {why}");
+                self.rt.block_on(retrying(|| self.store.abandon(&id, &claimed.lease, &why)))?;
+                Ok(JobStatus::Running)
+            });
+        match ran {
             Ok(status) => Ok(Outcome::Ran { id, status }),
             Err(StoreError::LeaseLost(_)) => Ok(Outcome::Lost { id }),
             Err(e) => Err(e),
@@ -159,13 +167,14 @@ impl Worker {
         let done = Arc::new(Notify::new());
         self.heartbeat(&job.id, lease, done.clone(), lost.clone(), cancel.clone());
         self.registry.lock().unwrap().insert(job.id.clone(), cancel.clone());
+        // the heartbeat stops and the job leaves the registry however this ends
+        let _running = Running { registry: &self.registry, id: &job.id, done: &done };
         let fault = self.faults.iter().find(|(seq, _)| *seq == job.seq).map(|(_, f)| f.clone());
         let attempt = match &self.isolation {
             Isolation::Thread => self.in_thread(job, lease, &cancel, fault),
             Isolation::Process { exe } => self.in_process(exe, job, lease, &cancel, fault),
         };
-        done.notify_one();
-        self.registry.lock().unwrap().remove(&job.id);
+        drop(_running);
         let attempt = attempt?;
         if attempt.written.lost || lost.load(Ordering::Relaxed) {
             tracing::warn!(job = %job.id, "the job was taken over by another worker; this run's results are dropped");
@@ -217,5 +226,55 @@ impl Worker {
             AttemptEnd::Failed(msg) => finish_with(JobStatus::Failed, None, Some(&msg), stored),
             AttemptEnd::Crashed(_) => unreachable!("abandoned above"),
         }
+    }
+}
+
+/// A job running on a worker: when dropped (the attempt over, or a panic), its
+/// heartbeat stops and it leaves the registry.
+struct Running<'a> {
+    registry: &'a Registry,
+    id: &'a str,
+    done: &'a Notify,
+}
+
+impl Drop for Running<'_> {
+    fn drop(&mut self) {
+        self.done.notify_one();
+        self.registry.lock().unwrap_or_else(|e| e.into_inner()).remove(self.id);
+    }
+}
+
+/// How an attempt ended.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) enum AttemptEnd {
+    /// The run stopped by its rules.
+    Stopped { stop: String, note: Option<String> },
+    /// Cancelled (by request, or by the node stopping).
+    Cancelled,
+    /// The job fails: a numeric failure, a spec that no longer prepares, a budget.
+    Failed(String),
+    /// The attempt ended abnormally (a panic, its process killed): the job is
+    /// tried again from its last checkpoint.
+    Crashed(String),
+}
+
+/// What the result files are made of.
+pub(super) enum Results {
+    None,
+    /// Made by the job's process.
+    Files(Vec<ResultFile>),
+    /// To be made from the frames of the run (thread isolation).
+    Frames(Arc<PreparedJob>, Vec<Frame>),
+}
+
+pub(super) struct Attempt {
+    pub end: AttemptEnd,
+    pub written: WriteState,
+    pub results: Results,
+}
+
+impl Attempt {
+    pub(super) fn ended(end: AttemptEnd) -> Attempt {
+        Attempt { end, written: WriteState::default(), results: Results::None }
     }
 }
