@@ -69,6 +69,11 @@ fn quote(s: &str) -> String {
 fn test_tools() {
     println!("cargo:rustc-check-cfg=cfg(shapeflow_cluster)");
     println!("cargo:rustc-check-cfg=cfg(shapeflow_browser)");
+    println!("cargo:rustc-check-cfg=cfg(shapeflow_mount)");
+    // root with CAP_SYS_ADMIN: the tests may mount a small tmpfs (a disk that fills up)
+    if can_mount() {
+        println!("cargo:rustc-cfg=shapeflow_mount");
+    }
     for var in [
         "SHAPEFLOW_REQUIRE_POSTGRES",
         "SHAPEFLOW_REQUIRE_S3",
@@ -115,4 +120,11 @@ fn test_tools() {
 
 fn on_path(program: &str) -> bool {
     std::env::var_os("PATH").is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join(program).is_file()))
+}
+
+/// Whether this process may mount filesystems (effective CAP_SYS_ADMIN, bit 21).
+fn can_mount() -> bool {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let cap = status.lines().find_map(|l| l.strip_prefix("CapEff:")).map(str::trim);
+    cap.and_then(|c| u64::from_str_radix(c, 16).ok()).is_some_and(|c| c & (1 << 21) != 0)
 }

@@ -407,3 +407,61 @@ fn a_held_write_lock_is_a_wait_not_a_takeover_and_readyz_says_so() {
     assert_eq!(status, 503, "{body}");
     assert!(body.contains("less than the floor of 1000 TiB"), "{body}");
 }
+
+/// A tmpfs of `mib` MiB mounted on a temporary directory, unmounted when dropped.
+struct Tmpfs {
+    dir: tempfile::TempDir,
+}
+
+impl Tmpfs {
+    fn mount(mib: u32) -> Tmpfs {
+        let dir = tempfile::tempdir().unwrap();
+        let done = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={mib}m"), "tmpfs"])
+            .arg(dir.path())
+            .status()
+            .unwrap();
+        assert!(done.success(), "cannot mount a tmpfs");
+        Tmpfs { dir }
+    }
+}
+
+impl Drop for Tmpfs {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg("-l").arg(self.dir.path()).status();
+    }
+}
+
+/// The data disk fills up while a job writes: that job fails with a message
+/// that names no path, `/readyz` says so, the jobs stored before are intact,
+/// and once the failed job is deleted the writer is not wedged: `/readyz` is 200
+/// again and a new job runs to its end.
+#[test]
+#[cfg_attr(not(shapeflow_mount), ignore = "needs root with CAP_SYS_ADMIN to mount a small tmpfs as the data disk")]
+fn a_full_disk_fails_the_job_that_fills_it_and_the_service_heals() {
+    let disk = Tmpfs::mount(24);
+    let node = Node::start(disk.dir.path(), &["--workers", "1", "--min-free-disk", "4MiB"], "");
+    let before = node.submit(STEADY);
+    node.assert_complete(&before, 500, 11);
+    let runaway = r#"{"problem": {"type": "curvature_flow"},
+        "initial": {"shape": "circle", "radius": 1.0, "resolution": 20000},
+        "flow": {"tau": 1e-9, "end_time": 1.0, "max_iterations": 10000000, "tolerance": 0},
+        "mesh": {"adapt": false}, "output": {"checkpoint_every": 1}}"#;
+    let filler = node.submit(runaway);
+    let done = node.wait_final(&filler);
+    assert_eq!(done["status"], "failed", "{done}");
+    let msg = done["message"].as_str().unwrap();
+    assert!(msg.contains("could not be stored") && !msg.contains('/') && !msg.contains("::"), "{msg}");
+    let (status, _, body) = http(node.addr, "GET", "/readyz", None, "");
+    assert_eq!(status, 503, "{body}");
+    assert!(body.contains("the data disk has"), "{body}");
+    assert_eq!(http(node.addr, "DELETE", &format!("/v1/jobs/{filler}"), None, "").0, 204);
+    let t = Instant::now();
+    while http(node.addr, "GET", "/readyz", None, "").0 != 200 {
+        assert!(t.elapsed() < Duration::from_secs(10), "{}", http(node.addr, "GET", "/readyz", None, "").2);
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let after = node.submit(STEADY);
+    node.assert_complete(&after, 500, 11);
+    node.assert_complete(&before, 500, 11);
+}

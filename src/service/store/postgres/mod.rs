@@ -72,6 +72,8 @@ impl PgStore {
             .max_connections(8)
             .acquire_timeout(Duration::from_secs(10))
             .test_before_acquire(true)
+            // a connection left in a transaction (a failed COMMIT) is closed
+            .after_release(|conn, _| Box::pin(async move { Ok(!sqlx::Connection::is_in_transaction(conn)) }))
             .connect_with(options)
             .await?;
         migrations::migrator(migrations::POSTGRES).run(&pool).await?;

@@ -91,6 +91,9 @@ impl SqliteStore {
         let pool = SqlitePoolOptions::new()
             .max_connections(1)
             .test_before_acquire(false)
+            // a connection whose COMMIT failed (a full disk) is still in its
+            // transaction for sqlx: closed, and the next write opens a new one
+            .after_release(|conn, _| Box::pin(async move { Ok(!sqlx::Connection::is_in_transaction(conn)) }))
             .connect_with(options.clone())
             .await?;
         migrations::migrator(migrations::SQLITE).run(&pool).await?;
