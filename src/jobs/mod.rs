@@ -27,7 +27,7 @@ pub use run::{run_prepared, run_vertex_fields, vertex_fields, JobFailure, JobOut
 pub use schema::{job_spec_schema, openapi_schemas};
 pub use schema_doc::job_spec_reference;
 pub use spec::{
-    parse_spec, BoundarySpec, ColorBy, ControlSpec, FlowSpec, InitialSpec, JobSpec, MeansKind, MeshSpec, OutputSpec,
-    Polarity, ProblemSpec, SegmentationModel, SegmentationSpec, ShapeDesignSpec, SpecError, StressedFilmSpec,
-    TargetSpec,
+    format_size, parse_size, parse_spec, BoundarySpec, ColorBy, ControlSpec, FlowSpec, InitialSpec, JobSpec, Limits,
+    LimitsSpec, MeansKind, MeshSpec, OutputSpec, Polarity, ProblemSpec, SegmentationModel, SegmentationSpec,
+    ShapeDesignSpec, Size, SpecError, StressedFilmSpec, TargetSpec,
 };

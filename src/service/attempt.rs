@@ -102,7 +102,9 @@ impl Worker {
             validate_only: false,
             fault,
         };
-        let mut process = match JobProcess::start(exe, self.budgets, &job.id, cancel.clone()) {
+        // the server's budgets, lowered to what the spec's `limits` ask for
+        let asked = parse_spec(&job.spec).ok().and_then(|s| s.limits.resolve().ok()).unwrap_or_default();
+        let mut process = match JobProcess::start(exe, self.budgets.within(asked), &job.id, cancel.clone()) {
             Ok(p) => p,
             Err(e) => return Ok(Attempt::ended(AttemptEnd::Crashed(format!("the job's process cannot start: {e}")))),
         };

@@ -140,11 +140,14 @@ impl Drop for Liveness {
 #[test]
 fn jobs_that_panic_abort_die_or_outgrow_their_memory_end_only_their_own_attempts() {
     let dir = tempfile::tempdir().unwrap();
-    let faults = "2=panic@30,3=kill@150:once,4=abort@20,5=grow@3";
+    let faults = "2=panic@30,3=kill@150:once,4=abort@20,5=grow@3,7=grow@3";
     let node = Node::start(dir.path(), &["--workers", "2", "--job-memory", "256MiB"], faults);
     let idle = node.memory("VmRSS");
     let live = Liveness::watch(node.addr);
-    let ids: Vec<String> = (0..6).map(|_| node.submit(STEADY)).collect();
+    let mut ids: Vec<String> = (0..6).map(|_| node.submit(STEADY)).collect();
+    // a spec that asks for less memory than the server's budget gets less
+    let asking = STEADY.replacen('{', r#"{"limits": {"memory": "128MiB"}, "#, 1);
+    ids.push(node.submit(&asking));
     let healthy = node.assert_complete(&ids[0], 500, 11);
     assert_eq!(node.assert_complete(&ids[5], 500, 11), healthy);
 
@@ -169,6 +172,14 @@ fn jobs_that_panic_abort_die_or_outgrow_their_memory_end_only_their_own_attempts
     let grown = node.wait_final(&ids[4]);
     assert_eq!(grown["status"], "failed", "{grown}");
     assert_eq!(grown["message"], "the job exceeded its memory budget of 256 MiB at iteration 3", "{grown}");
+    let grown = node.wait_final(&ids[6]);
+    assert_eq!(grown["message"], "the job exceeded its memory budget of 128 MiB at iteration 3", "{grown}");
+    // more than the server allows: refused, naming the field
+    let greedy = STEADY.replacen('{', r#"{"limits": {"memory": "4GiB"}, "#, 1);
+    let (status, refused) = http_json(node.addr, "POST", "/v1/jobs", Some(&greedy));
+    assert_eq!(status, 422, "{refused}");
+    assert_eq!(refused["errors"][0]["field"], "limits.memory", "{refused}");
+    assert_eq!(refused["errors"][0]["detail"], "asks for 4 GiB, more than this server's budget of 256 MiB per job");
 
     assert!(live.slowest() < 1000, "/healthz took {} ms", live.slowest());
     let peak = node.memory("VmHWM");

@@ -37,6 +37,7 @@ use std::sync::Arc;
 /// Validate `spec` and build the job. `inputs` maps `NAME` of `"input:NAME"` to the
 /// file's bytes.
 pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<PreparedJob, SpecError> {
+    spec.limits.resolve()?;
     let mut image = None;
     let mut second_stage = None;
     let mut edges = None;

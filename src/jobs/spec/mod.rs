@@ -9,6 +9,7 @@ pub mod bounds;
 mod defaults;
 mod error;
 mod initial;
+mod limits;
 mod parse;
 mod path;
 mod problem;
@@ -20,6 +21,7 @@ pub use initial::{
     BoxShape, CircleShape, EllipseShape, EllipsoidShape, FilmPolylineShape, FilmShape, InitialSpec, InscribedShape,
     MeshShape, PolygonShape, RectangleShape, SeedsShape, SphereShape, ThresholdShape, TorusShape, UnionShape,
 };
+pub use limits::{format_size, parse_size, Limits, LimitsSpec, Size};
 pub use parse::parse_spec;
 pub use problem::{
     BoundarySpec, CircleBoundary, ConstantBoundary, ConstantTarget, ControlSpec, CurvatureFlowSpec, FilmBoundarySpec,
@@ -69,6 +71,9 @@ pub struct JobSpec {
     pub mesh: MeshSpec,
     #[serde(default)]
     pub output: OutputSpec,
+    /// (Addition) what the job may use in the service (docs/isolation.md).
+    #[serde(default, skip_serializing_if = "LimitsSpec::is_empty")]
+    pub limits: LimitsSpec,
 }
 
 /// `flow`: time stepping and the descent direction. Every field is optional.

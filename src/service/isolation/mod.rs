@@ -12,6 +12,8 @@ pub mod fault;
 pub mod parent;
 pub mod protocol;
 
+use crate::jobs::Limits;
+pub use crate::jobs::{format_size, parse_size};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -48,6 +50,45 @@ impl Budgets {
     }
 }
 
+impl Budgets {
+    /// These budgets, lowered to what a job's `limits` ask for.
+    pub fn within(self, asked: Limits) -> Budgets {
+        let min = |a: Option<u64>, b: Option<u64>| match (a, b) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        let seconds = asked.seconds.map(Duration::from_secs_f64);
+        Budgets {
+            memory: min(self.memory, asked.memory),
+            seconds: match (self.seconds, seconds) {
+                (Some(a), Some(b)) => Some(a.min(b)),
+                (a, b) => a.or(b),
+            },
+            disk: min(self.disk, asked.disk),
+        }
+    }
+
+    /// The first of `asked` above these budgets: its field and why.
+    pub fn refuse(self, asked: Limits) -> Option<(&'static str, String)> {
+        let over = |field: &'static str, a: Option<u64>, b: Option<u64>| match (a, b) {
+            (Some(a), Some(b)) if a > b => Some((
+                field,
+                format!("asks for {}, more than this server's budget of {} per job", format_size(a), format_size(b)),
+            )),
+            _ => None,
+        };
+        let secs = |d: Option<Duration>| d.map(|d| d.as_secs_f64());
+        over("limits.memory", asked.memory, self.memory)
+            .or_else(|| match (asked.seconds, secs(self.seconds)) {
+                (Some(a), Some(b)) if a > b => {
+                    Some(("limits.seconds", format!("asks for {a} s, more than this server's budget of {b} s per job")))
+                }
+                _ => None,
+            })
+            .or_else(|| over("limits.disk", asked.disk, self.disk))
+    }
+}
+
 /// The machine's memory in bytes (Linux: `/proc/meminfo`).
 fn machine_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
@@ -56,67 +97,9 @@ fn machine_memory() -> Option<u64> {
     Some(kib * 1024)
 }
 
-/// A size in bytes, with an optional binary (`KiB`, `MiB`, `GiB`, `TiB`) or
-/// decimal (`kB`, `MB`, `GB`, `TB`) suffix: `512MiB`, `2GiB`, `1000000`.
-pub fn parse_size(text: &str) -> Result<u64, String> {
-    let t = text.trim();
-    let split = t.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(t.len());
-    let (number, unit) = (&t[..split], t[split..].trim());
-    let n: f64 = number.parse().map_err(|_| format!("expected a size such as 512MiB or 2GiB, got {text:?}"))?;
-    let scale: u64 = match unit {
-        "" | "B" => 1,
-        "KiB" | "K" => 1 << 10,
-        "MiB" | "M" => 1 << 20,
-        "GiB" | "G" => 1 << 30,
-        "TiB" | "T" => 1 << 40,
-        "kB" | "KB" => 1_000,
-        "MB" => 1_000_000,
-        "GB" => 1_000_000_000,
-        "TB" => 1_000_000_000_000,
-        _ => return Err(format!("unknown unit {unit:?} in {text:?} (use B, KiB, MiB, GiB, TiB, kB, MB, GB or TB)")),
-    };
-    let bytes = n * scale as f64;
-    if !bytes.is_finite() || bytes < 1.0 || bytes > u64::MAX as f64 {
-        return Err(format!("expected a positive size, got {text:?}"));
-    }
-    Ok(bytes as u64)
-}
-
-/// A size for messages: `2 GiB`, `512 MiB`, `1.5 GiB`, `1000 B`.
-pub fn format_size(bytes: u64) -> String {
-    const UNITS: [(&str, u64); 4] = [("TiB", 1 << 40), ("GiB", 1 << 30), ("MiB", 1 << 20), ("KiB", 1 << 10)];
-    for (name, scale) in UNITS {
-        if bytes >= scale {
-            let v = bytes as f64 / scale as f64;
-            return if (v - v.round()).abs() < 0.005 {
-                format!("{} {name}", v.round())
-            } else {
-                format!("{v:.2} {name}")
-            };
-        }
-    }
-    format!("{bytes} B")
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn sizes_parse_and_print() {
-        assert_eq!(parse_size("512MiB"), Ok(512 << 20));
-        assert_eq!(parse_size("2GiB"), Ok(2 << 30));
-        assert_eq!(parse_size("1.5 GiB"), Ok(3 << 29));
-        assert_eq!(parse_size("1000000"), Ok(1_000_000));
-        assert_eq!(parse_size("3MB"), Ok(3_000_000));
-        assert!(parse_size("12 parsecs").unwrap_err().contains("unknown unit"));
-        assert!(parse_size("-3MiB").is_err());
-        assert!(parse_size("0").is_err());
-        assert_eq!(format_size(2 << 30), "2 GiB");
-        assert_eq!(format_size(3 << 29), "1.50 GiB");
-        assert_eq!(format_size(512 << 20), "512 MiB");
-        assert_eq!(format_size(1000), "1000 B");
-    }
 
     #[test]
     fn default_budgets_share_the_machine() {

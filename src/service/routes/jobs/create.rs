@@ -118,9 +118,13 @@ pub(in crate::service::routes) async fn create(
         let spec = parse_spec(&text).map_err(invalid)?;
         let normalized = serde_json::to_string(&spec).expect("spec serializes");
         let tree = serde_json::to_value(&spec).expect("spec serializes");
+        let asked = spec.limits.resolve().map_err(invalid)?;
+        if let Some((field, detail)) = budgets.refuse(asked) {
+            return Err(ApiError::Invalid { field: field.into(), detail });
+        }
         match &isolation {
             // the inputs decoded in a process of their own, under the job's memory budget
-            Isolation::Process { exe } => match validate(exe, budgets, &normalized, &inputs) {
+            Isolation::Process { exe } => match validate(exe, budgets.within(asked), &normalized, &inputs) {
                 Ok(Ok(())) => {}
                 Ok(Err(r)) => return Err(ApiError::Invalid { field: r.field, detail: r.message }),
                 Err(e) => return Err(ApiError::Internal(format!("validation: {e}"))),
