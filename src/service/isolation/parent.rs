@@ -46,6 +46,8 @@ pub struct JobProcess {
     child: std::process::Child,
     reports: std::sync::mpsc::Receiver<(Report, Vec<u8>)>,
     shared: Arc<Shared>,
+    /// Dropped when the process has ended: the watchdog stops at once.
+    ended: Option<std::sync::mpsc::Sender<()>>,
     watchdog: Option<std::thread::JoinHandle<()>>,
     stderr: Option<std::thread::JoinHandle<VecDeque<String>>>,
     budgets: Budgets,
@@ -56,7 +58,6 @@ pub struct JobProcess {
 struct Shared {
     stdin: Mutex<Option<BufWriter<ChildStdin>>>,
     cancel: Arc<AtomicBool>,
-    done: AtomicBool,
     disk: AtomicU64,
     killed: Mutex<Option<Kill>>,
 }
@@ -103,18 +104,19 @@ impl JobProcess {
         let shared = Arc::new(Shared {
             stdin: Mutex::new(Some(stdin)),
             cancel,
-            done: AtomicBool::new(false),
             disk: AtomicU64::new(0),
             killed: Mutex::new(None),
         });
+        let (ended, wait) = std::sync::mpsc::channel();
         let watchdog = {
             let (shared, pid) = (shared.clone(), child.id());
-            std::thread::Builder::new().name("job-watchdog".into()).spawn(move || watch(&shared, pid, budgets))?
+            std::thread::Builder::new().name("job-watchdog".into()).spawn(move || watch(&shared, pid, budgets, wait))?
         };
         Ok(JobProcess {
             child,
             reports,
             shared,
+            ended: Some(ended),
             watchdog: Some(watchdog),
             stderr: Some(stderr),
             budgets,
@@ -158,7 +160,7 @@ impl JobProcess {
         // the end of its input: a process still running sees a cancellation
         self.shared.stdin.lock().unwrap().take();
         let status = self.child.wait();
-        self.shared.done.store(true, Ordering::Relaxed);
+        self.ended.take();
         if let Some(w) = self.watchdog.take() {
             let _ = w.join();
         }
@@ -238,10 +240,10 @@ fn died(status: std::io::Result<ExitStatus>, at: usize) -> String {
     }
 }
 
-/// Every 50 ms until the process ends: pass on a cancellation (and kill the
-/// process if it is still there [`CANCEL_GRACE`] later), and kill it past its
-/// time or disk budget.
-fn watch(shared: &Shared, pid: u32, budgets: Budgets) {
+/// Every 50 ms until the process ends (`ended` closes): pass on a cancellation
+/// (and kill the process if it is still there [`CANCEL_GRACE`] later), and kill
+/// it past its time or disk budget.
+fn watch(shared: &Shared, pid: u32, budgets: Budgets, ended: std::sync::mpsc::Receiver<()>) {
     let started = Instant::now();
     let mut cancelled_at: Option<Instant> = None;
     let kill = |why: Kill| {
@@ -256,11 +258,7 @@ fn watch(shared: &Shared, pid: u32, budgets: Budgets) {
             }
         }
     };
-    while !shared.done.load(Ordering::Relaxed) {
-        std::thread::sleep(Duration::from_millis(50));
-        if shared.done.load(Ordering::Relaxed) {
-            return;
-        }
+    while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) = ended.recv_timeout(Duration::from_millis(50)) {
         // a cancelled process is not killed for its budgets: it ends as cancelled
         if cancelled_at.is_none() && budgets.seconds.is_some_and(|s| started.elapsed() > s) {
             kill(Kill::Time);
@@ -289,7 +287,7 @@ impl Drop for JobProcess {
         if self.watchdog.is_some() {
             let _ = self.child.kill();
             let _ = self.child.wait();
-            self.shared.done.store(true, Ordering::Relaxed);
+            self.ended.take();
         }
     }
 }
