@@ -6,6 +6,7 @@
 //! No I/O: input files arrive as bytes.
 
 mod frames;
+mod kept;
 mod necks;
 mod prepare;
 mod results;
@@ -17,9 +18,9 @@ mod spec;
 pub use crate::formats::{read_mesh_file, MeshFileError};
 pub use crate::geometry::AnyMesh;
 pub use frames::{
-    evolution_frames_of, job_extras, run_with_frames, state_glb, states_glb, Frame, FrameFields, FrameMaker,
-    GlbContext, KeptFrames, MAX_FRAMES,
+    evolution_frames_of, job_extras, state_glb, states_glb, Frame, FrameFields, FrameMaker, GlbContext, MAX_FRAMES,
 };
+pub use kept::{run_with_frames, KeptFrames};
 pub use necks::NeckSplit;
 pub use prepare::{default_min_size, default_mu, default_mu_in, prepare, PreparedJob, ProblemKind, SegmentationSetup};
 pub use results::{image_result_names, result_files, result_state, ResultFile, StateResults, GLB};

@@ -8,8 +8,10 @@
 mod common;
 mod isolation;
 mod lifecycle;
+mod nodes;
 mod requests;
 mod results;
+mod storage;
 mod streams;
 mod viewer;
 
