@@ -5,6 +5,7 @@
 //! - the server's peak memory (VmHWM above its idle size) and the data written
 //!   while the runaway spec (20,000 vertices, a checkpoint per step) runs against
 //!   a 1 GiB disk budget, and for the GETs of a job with a million history rows.
+//!
 //! `cargo bench --bench isolation`.
 
 use std::io::{Read, Write};

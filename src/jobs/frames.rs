@@ -238,8 +238,7 @@ pub fn states_glb(job: &PreparedJob, states: &[Checkpoint]) -> Option<Vec<u8>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::flow::Progress;
-    use crate::jobs::{parse_spec, prepare, run_prepared, run_with_frames, RunEvents};
+    use crate::jobs::{parse_spec, prepare, run_prepared, run_with_frames};
     use std::sync::atomic::AtomicBool;
 
     /// A curvature flow of a 48-gon with a checkpoint every 5 of its 20 steps, and

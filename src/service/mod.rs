@@ -32,6 +32,9 @@ use worker::{Registry, Worker};
 
 pub use crate::limits::{MAX_BODY_BYTES, MAX_UPLOAD_BYTES};
 
+/// The evolution.glb of running jobs built last: (job, its newest checkpoint) and the bytes.
+pub type BuiltEvolutions = std::collections::VecDeque<((String, i64), bytes::Bytes)>;
+
 /// The default floor of free space on the data disk (`/readyz`).
 pub const MIN_FREE_DISK: u64 = 512 << 20;
 
@@ -63,7 +66,7 @@ pub struct AppState {
     /// Below this many free bytes on the data disk, `/readyz` answers 503.
     pub min_free_disk: u64,
     /// The evolution.glb of running jobs last built, by job and checkpoint.
-    pub evolutions: Arc<tokio::sync::Mutex<std::collections::VecDeque<((String, i64), bytes::Bytes)>>>,
+    pub evolutions: Arc<tokio::sync::Mutex<BuiltEvolutions>>,
 }
 
 /// How a node runs.

@@ -56,6 +56,8 @@ fn free_bytes(dir: &std::path::Path) -> Option<u64> {
         }
         // SAFETY: statvfs returned 0: `s` is initialized.
         let s = unsafe { s.assume_init() };
+        // (fsblkcnt_t and c_ulong are narrower than u64 on some targets)
+        #[allow(clippy::unnecessary_cast)]
         Some(s.f_bavail as u64 * s.f_frsize as u64)
     }
     #[cfg(not(unix))]
