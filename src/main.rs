@@ -101,18 +101,18 @@ struct NodeArgs {
     isolation: IsolationArg,
     /// Each job's memory budget (bytes, or with a suffix: 512MiB, 2GiB); default:
     /// three quarters of the machine's memory shared by the workers, at least 1 GiB.
-    #[arg(long, value_parser = size_arg)]
+    #[arg(long, value_parser = shapeflow::jobs::parse_size)]
     job_memory: Option<u64>,
     /// Each attempt's wall-clock budget in seconds (0: none).
     #[arg(long, default_value_t = 86_400.0)]
     job_seconds: f64,
     /// What each job may store: checkpoints, result files and history (bytes,
     /// or with a suffix).
-    #[arg(long, value_parser = size_arg, default_value = "16GiB")]
+    #[arg(long, value_parser = shapeflow::jobs::parse_size, default_value = "16GiB")]
     job_disk: u64,
     /// Below this much free space on the data directory's disk, /readyz answers
     /// 503 (bytes, or with a suffix).
-    #[arg(long, value_parser = size_arg, default_value = "512MiB")]
+    #[arg(long, value_parser = shapeflow::jobs::parse_size, default_value = "512MiB")]
     min_free_disk: u64,
 }
 
@@ -122,22 +122,11 @@ enum IsolationArg {
     Thread,
 }
 
-/// Faults to inject by submission number, `SEQ=FAULT,...` from
-/// `SHAPEFLOW_TEST_FAULTS`: debug builds only (the tests of isolation), never a
-/// release.
+/// Faults to inject from `SHAPEFLOW_TEST_FAULTS`: debug builds only (the tests
+/// of isolation), never a release.
 fn test_faults() -> Vec<(i64, String)> {
-    if !cfg!(debug_assertions) {
-        return Vec::new();
-    }
-    let text = std::env::var("SHAPEFLOW_TEST_FAULTS").unwrap_or_default();
-    text.split(',')
-        .filter_map(|item| item.split_once('='))
-        .filter_map(|(seq, fault)| Some((seq.trim().parse().ok()?, fault.trim().to_string())))
-        .collect()
-}
-
-fn size_arg(text: &str) -> Result<u64, String> {
-    shapeflow::service::isolation::parse_size(text)
+    let text = std::env::var("SHAPEFLOW_TEST_FAULTS").ok().filter(|_| cfg!(debug_assertions));
+    shapeflow::service::isolation::fault::by_submission(&text.unwrap_or_default())
 }
 
 impl NodeArgs {
@@ -166,23 +155,14 @@ impl NodeArgs {
         anyhow::ensure!(api || workers > 0, "a worker node needs --workers of at least 1");
         let policy =
             ClaimPolicy { lease: std::time::Duration::from_secs_f64(self.lease_seconds), ..ClaimPolicy::default() };
-        anyhow::ensure!(
-            self.job_seconds.is_finite() && self.job_seconds >= 0.0,
-            "--job-seconds must be a number of seconds (0: none), got {}",
-            self.job_seconds
-        );
         let isolation = match self.isolation {
             IsolationArg::Thread => Isolation::Thread,
             IsolationArg::Process => Isolation::Process {
                 exe: std::env::current_exe().context("cannot find this program's file to run jobs with")?,
             },
         };
-        let defaults = Budgets::defaults(workers.max(1));
-        let budgets = Budgets {
-            memory: self.job_memory.or(defaults.memory),
-            seconds: (self.job_seconds > 0.0).then(|| std::time::Duration::from_secs_f64(self.job_seconds)),
-            disk: Some(self.job_disk),
-        };
+        let budgets =
+            Budgets::of_node(self.job_memory, self.job_seconds, self.job_disk, workers).map_err(anyhow::Error::msg)?;
         Ok(shapeflow::service::ServiceConfig {
             database,
             object_store: self.object_store,

@@ -27,6 +27,15 @@ enum What {
     Hang,
 }
 
+/// `SEQ=FAULT,...`: the faults to inject, by submission number (unreadable items
+/// are left out).
+pub fn by_submission(text: &str) -> Vec<(i64, String)> {
+    text.split(',')
+        .filter_map(|item| item.split_once('='))
+        .filter_map(|(seq, fault)| Some((seq.trim().parse().ok()?, fault.trim().to_string())))
+        .collect()
+}
+
 impl Fault {
     /// `panic@N`, `abort@N`, `kill@N`, `grow@N` or `hang@N`, each optionally
     /// followed by `:once`.
@@ -87,5 +96,6 @@ mod tests {
         assert_eq!(Fault::parse("kill@20:once"), Some(Fault { what: What::Kill, at: 20, once: true }));
         assert_eq!(Fault::parse("explode@3"), None);
         assert_eq!(Fault::parse("panic"), None);
+        assert_eq!(by_submission("2=panic@3, 5=grow@0,x=kill@1"), vec![(2, "panic@3".into()), (5, "grow@0".into())]);
     }
 }

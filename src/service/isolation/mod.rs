@@ -51,6 +51,19 @@ impl Budgets {
 }
 
 impl Budgets {
+    /// A node's budgets from its flags: `memory` (default [`Budgets::defaults`]),
+    /// `seconds` (0: none) and `disk`, for `workers` workers; or why not.
+    pub fn of_node(memory: Option<u64>, seconds: f64, disk: u64, workers: usize) -> Result<Budgets, String> {
+        if !(seconds.is_finite() && seconds >= 0.0) {
+            return Err(format!("--job-seconds must be a number of seconds (0: none), got {seconds}"));
+        }
+        Ok(Budgets {
+            memory: memory.or(Budgets::defaults(workers).memory),
+            seconds: (seconds > 0.0).then(|| Duration::from_secs_f64(seconds)),
+            disk: Some(disk),
+        })
+    }
+
     /// These budgets, lowered to what a job's `limits` ask for.
     pub fn within(self, asked: Limits) -> Budgets {
         let min = |a: Option<u64>, b: Option<u64>| match (a, b) {
