@@ -6,7 +6,7 @@
 //!   while the runaway spec (20,000 vertices, a checkpoint per step) runs against
 //!   a 1 GiB disk budget, and for the GETs of a job with a million history rows.
 //!
-//! `cargo bench --bench isolation`.
+//! `cargo bench --bench isolation` (`-- fixed`: the fixed cost only).
 
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream};
@@ -194,6 +194,9 @@ fn million_rows() {
 
 fn main() {
     fixed_cost();
+    if std::env::args().any(|a| a == "fixed") {
+        return;
+    }
     println!();
     println!("| what | server's peak memory above idle | |");
     println!("|---|---|---|");

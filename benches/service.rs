@@ -146,6 +146,7 @@ fn main() {
         budgets: Default::default(),
         min_free_disk: shapeflow::service::MIN_FREE_DISK,
         faults: Vec::new(),
+        cors_origins: Vec::new(),
     };
     let service = rt.block_on(Service::start_with(config)).unwrap();
     println!("backend: {}", service.state.store.backend());

@@ -37,14 +37,23 @@ enum Command {
     /// Start the HTTP job service (API and workers).
     Serve {
         /// Address to listen on.
-        #[arg(long, default_value = "127.0.0.1:8080")]
+        #[arg(long, env = "SHAPEFLOW_BIND", default_value = "127.0.0.1:8080")]
         bind: String,
         #[command(flatten)]
         node: NodeArgs,
         /// Require `Authorization: Bearer TOKEN` on every route but /healthz and
-        /// the viewer page.
-        #[arg(long)]
+        /// the viewer page (an admin key: see `shapeflow keys`). Prefer
+        /// SHAPEFLOW_TOKEN or --token-file: a flag shows in `ps`.
+        #[arg(long, env = "SHAPEFLOW_TOKEN", hide_env_values = true)]
         token: Option<String>,
+        /// An origin (`https://app.example`) whose pages may call this service
+        /// from a browser: CORS headers for it, and its POSTs and DELETEs
+        /// allowed (repeatable; the service's own pages always are).
+        #[arg(long = "cors-origin", env = "SHAPEFLOW_CORS_ORIGINS", value_delimiter = ',', value_name = "ORIGIN")]
+        cors_origins: Vec<String>,
+        /// Read the token from this file (its first line).
+        #[arg(long, env = "SHAPEFLOW_TOKEN_FILE", conflicts_with = "token")]
+        token_file: Option<PathBuf>,
     },
     /// Run workers only (no HTTP), against the shared database of a cluster.
     Worker {
@@ -74,46 +83,55 @@ struct NodeArgs {
     /// The job store: a SQLite file (created if missing; a relative path is taken
     /// inside --data-dir), a `sqlite:` URL, or a `postgres://user@host/db` URL
     /// shared by the nodes of a cluster.
-    #[arg(long, default_value = "shapeflow.db")]
+    #[arg(long, env = "SHAPEFLOW_DATABASE", default_value = "shapeflow.db")]
     database: String,
     /// Directory for the service's data (a SQLite database, with its WAL files,
     /// and the folder `blobs` of inputs, checkpoints and results unless
     /// --object-store is given); created if missing.
-    #[arg(long, default_value = ".")]
+    #[arg(long, env = "SHAPEFLOW_DATA_DIR", default_value = ".")]
     data_dir: PathBuf,
     /// Keep inputs, checkpoints and result files in an S3-compatible bucket,
     /// `s3://bucket` or `s3://bucket/prefix`, shared by the nodes of a cluster
     /// (credentials and endpoint from AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY,
     /// AWS_REGION, AWS_ENDPOINT, AWS_ALLOW_HTTP).
-    #[arg(long)]
+    #[arg(long, env = "SHAPEFLOW_OBJECT_STORE")]
     object_store: Option<String>,
     /// Worker threads running jobs (default: number of cores).
-    #[arg(long)]
+    #[arg(long, env = "SHAPEFLOW_WORKERS")]
     workers: Option<usize>,
     /// Length of a running job's lease in seconds (renewed every third of it); a
     /// job whose node stops renewing is taken over after it.
-    #[arg(long, default_value_t = 15.0)]
+    #[arg(long, env = "SHAPEFLOW_LEASE_SECONDS", default_value_t = 15.0)]
     lease_seconds: f64,
     /// Where each job runs: `process` (a process of its own, with its budgets
     /// enforced by the kernel; a job that crashes ends only its own attempt) or
     /// `thread` (on its worker's thread in this process: no memory budget).
-    #[arg(long, value_enum, default_value_t = IsolationArg::Process)]
+    #[arg(long, env = "SHAPEFLOW_ISOLATION", value_enum, default_value_t = IsolationArg::Process)]
     isolation: IsolationArg,
     /// Each job's memory budget (bytes, or with a suffix: 512MiB, 2GiB); default:
     /// three quarters of the machine's memory shared by the workers, at least 1 GiB.
-    #[arg(long, value_parser = shapeflow::jobs::parse_size)]
+    #[arg(long, env = "SHAPEFLOW_JOB_MEMORY", value_parser = shapeflow::jobs::parse_size)]
     job_memory: Option<u64>,
     /// Each attempt's wall-clock budget in seconds (0: none).
-    #[arg(long, default_value_t = 86_400.0)]
+    #[arg(long, env = "SHAPEFLOW_JOB_SECONDS", default_value_t = 86_400.0)]
     job_seconds: f64,
     /// What each job may store: checkpoints, result files and history (bytes,
     /// or with a suffix).
-    #[arg(long, value_parser = shapeflow::jobs::parse_size, default_value = "16GiB")]
+    #[arg(long, env = "SHAPEFLOW_JOB_DISK", value_parser = shapeflow::jobs::parse_size, default_value = "16GiB")]
     job_disk: u64,
     /// Below this much free space on the data directory's disk, /readyz answers
     /// 503 (bytes, or with a suffix).
-    #[arg(long, value_parser = shapeflow::jobs::parse_size, default_value = "512MiB")]
+    #[arg(long, env = "SHAPEFLOW_MIN_FREE_DISK", value_parser = shapeflow::jobs::parse_size, default_value = "512MiB")]
     min_free_disk: u64,
+    /// Log lines as `text` or `json` (one object a line, with each request's id).
+    #[arg(long, env = "SHAPEFLOW_LOG_FORMAT", value_enum, default_value_t = LogFormat::Text)]
+    log_format: LogFormat,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum LogFormat {
+    Text,
+    Json,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -132,7 +150,7 @@ fn test_faults() -> Vec<(i64, String)> {
 impl NodeArgs {
     /// The configuration of a node, or why not.
     fn config(self, token: Option<String>, api: bool) -> Result<shapeflow::service::ServiceConfig> {
-        use shapeflow::service::isolation::{Budgets, Isolation};
+        use shapeflow::service::isolation::{Budgets, Isolation, Runner};
         use shapeflow::service::store::ClaimPolicy;
         anyhow::ensure!(
             self.lease_seconds.is_finite() && (1.0..=30.0).contains(&self.lease_seconds),
@@ -157,9 +175,13 @@ impl NodeArgs {
             ClaimPolicy { lease: std::time::Duration::from_secs_f64(self.lease_seconds), ..ClaimPolicy::default() };
         let isolation = match self.isolation {
             IsolationArg::Thread => Isolation::Thread,
-            IsolationArg::Process => Isolation::Process {
-                exe: std::env::current_exe().context("cannot find this program's file to run jobs with")?,
-            },
+            IsolationArg::Process => {
+                let runner = Runner::new(
+                    std::env::current_exe().context("cannot find this program's file to run jobs with")?,
+                );
+                runner.ahead().context("cannot start the thread that starts job processes")?;
+                Isolation::Process { runner }
+            }
         };
         let budgets =
             Budgets::of_node(self.job_memory, self.job_seconds, self.job_disk, workers).map_err(anyhow::Error::msg)?;
@@ -174,17 +196,29 @@ impl NodeArgs {
             budgets,
             min_free_disk: self.min_free_disk,
             faults: test_faults(),
+            cors_origins: Vec::new(),
         })
+    }
+}
+
+/// Log lines on standard error: text (colored on a terminal) or one JSON object a line.
+fn init_logs(format: LogFormat) {
+    use std::io::IsTerminal;
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into());
+    let logs = tracing_subscriber::fmt().with_writer(std::io::stderr).with_env_filter(filter);
+    match format {
+        LogFormat::Text => logs.with_ansi(std::io::stderr().is_terminal()).init(),
+        LogFormat::Json => logs.json().flatten_event(true).with_current_span(true).init(),
     }
 }
 
 fn main() -> ExitCode {
     shapeflow::tune_allocator();
-    tracing_subscriber::fmt()
-        .with_writer(std::io::stderr)
-        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()))
-        .init();
     let cli = Cli::parse();
+    init_logs(match &cli.command {
+        Command::Serve { node, .. } | Command::Worker { node } => node.log_format,
+        _ => LogFormat::Text,
+    });
     match cli.command {
         Command::JobRunner { memory } => shapeflow::service::isolation::child::job_runner(memory),
         Command::Run { spec, out, inputs, resume } => match run(&spec, &out, &inputs, resume.as_deref()) {
@@ -204,8 +238,10 @@ fn main() -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        Command::Serve { bind, node, token } => {
-            let result = node.config(token, true).and_then(|config| {
+        Command::Serve { bind, node, token, token_file, cors_origins } => {
+            let config = token_from(token, token_file.as_deref()).and_then(|t| node.config(t, true));
+            let result = config.and_then(|config| {
+                let config = shapeflow::service::ServiceConfig { cors_origins, ..config };
                 let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
                 rt.block_on(serve(Some(&bind), config))
             });
@@ -231,6 +267,15 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// The admin token: given, or the first line of `file`.
+fn token_from(token: Option<String>, file: Option<&Path>) -> Result<Option<String>> {
+    let Some(file) = file else { return Ok(token) };
+    let text = std::fs::read_to_string(file).with_context(|| format!("--token-file {}", file.display()))?;
+    let line = text.lines().next().unwrap_or("").trim().to_string();
+    anyhow::ensure!(!line.is_empty(), "--token-file {}: the file has no token on its first line", file.display());
+    Ok(Some(line))
 }
 
 /// Run a node: the HTTP API on `bind` (none: workers only) and the workers, until

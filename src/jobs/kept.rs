@@ -7,7 +7,12 @@ use super::PreparedJob;
 use crate::flow::{Checkpoint, Progress};
 use crate::limits::{MAX_EVOLUTION_BYTES, MAX_FRAMES};
 use std::sync::atomic::AtomicBool;
-use std::sync::mpsc::Sender;
+use std::sync::mpsc::SyncSender;
+
+/// Checkpoints a run may be ahead of the thread that makes their frames: beyond,
+/// the run waits, so that checkpoints made faster than their frames do not pile
+/// up in memory.
+pub const FRAMES_AHEAD: usize = 4;
 
 /// [`run_prepared`] with each checkpoint made into its frame ([`FrameMaker`]), on a
 /// second thread while the run goes on,
@@ -21,7 +26,7 @@ pub fn run_with_frames(
     events: &mut dyn RunEvents,
 ) -> (Result<JobOutcome, Box<JobFailure>>, Vec<Frame>) {
     let (result, mut frames) = std::thread::scope(|scope| {
-        let (send, receive) = std::sync::mpsc::channel::<Checkpoint>();
+        let (send, receive) = std::sync::mpsc::sync_channel::<Checkpoint>(FRAMES_AHEAD);
         let maker = scope.spawn(move || {
             let (mut maker, mut kept) = (FrameMaker::default(), KeptFrames::default());
             receive.into_iter().for_each(|c| kept.push(maker.make(job, &c)));
@@ -45,7 +50,7 @@ pub fn run_with_frames(
 /// The events of a run passed on, and its checkpoints also sent to be made into frames.
 struct Tee<'a> {
     events: &'a mut dyn RunEvents,
-    frames: Sender<Checkpoint>,
+    frames: SyncSender<Checkpoint>,
 }
 
 impl RunEvents for Tee<'_> {

@@ -5,6 +5,7 @@
 //! (`frames`) and the result files of a run (`results`).
 //! No I/O: input files arrive as bytes.
 
+mod estimate;
 mod frames;
 mod kept;
 mod necks;
@@ -20,7 +21,8 @@ pub use crate::geometry::AnyMesh;
 pub use frames::{
     evolution_frames_of, job_extras, state_glb, states_glb, Frame, FrameFields, FrameMaker, GlbContext, MAX_FRAMES,
 };
-pub use kept::{run_with_frames, KeptFrames};
+pub use estimate::MemoryEstimate;
+pub use kept::{run_with_frames, KeptFrames, FRAMES_AHEAD};
 pub use necks::NeckSplit;
 pub use prepare::{default_min_size, default_mu, default_mu_in, prepare, PreparedJob, ProblemKind, SegmentationSetup};
 pub use results::{image_result_names, result_files, result_state, ResultFile, StateResults, GLB};

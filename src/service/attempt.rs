@@ -12,8 +12,8 @@ use super::recorder::{retrying, Recorder};
 use super::store::{JobRow, Lease, MadeFrame, StoreError, Which};
 use super::worker::{Attempt, AttemptEnd, Results, Worker};
 use crate::flow::{Checkpoint, Progress, StopReason};
-use crate::jobs::{parse_spec, prepare, run_prepared, Frame, KeptFrames, ResultFile, RunEvents};
-use std::path::Path;
+use crate::jobs::{parse_spec, prepare, run_prepared, ResultFile, RunEvents};
+use super::isolation::Runner;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
@@ -36,15 +36,7 @@ impl Worker {
         };
         drop(inputs);
         // the frames stored so far (a takeover), for evolution.glb, read one at a time
-        let mut kept = KeptFrames::default();
-        for row in self.rt.block_on(self.store.checkpoint_rows(&job.id, Which::All))? {
-            let iteration = row.iteration;
-            let json = self.rt.block_on(self.store.frame_json(&job.id, row))?;
-            match serde_json::from_slice::<Frame>(&json) {
-                Ok(frame) => kept.push(frame),
-                Err(e) => tracing::warn!(job = %job.id, iteration, "a stored checkpoint cannot be read: {e}"),
-            }
-        }
+        let mut kept = self.rt.block_on(self.store.kept_frames(&job.id))?;
         let resume = kept.last().map(|f| f.state.clone());
         if let Some(cp) = &resume {
             self.rt.block_on(self.store.truncate_history(&job.id, lease, cp.iteration))?;
@@ -81,7 +73,7 @@ impl Worker {
     /// The attempt in a process of its own (`exe job-runner`).
     pub(super) fn in_process(
         &self,
-        exe: &Path,
+        runner: &Runner,
         job: &JobRow,
         lease: &Lease,
         cancel: &Arc<AtomicBool>,
@@ -89,27 +81,32 @@ impl Worker {
     ) -> Result<Attempt, StoreError> {
         let store = &self.store;
         let inputs = self.rt.block_on(store.input_rows(&job.id))?;
-        let checkpoints = self.rt.block_on(store.checkpoint_rows(&job.id, Which::All))?;
-        if let Some(last) = checkpoints.last() {
+        let stored = self.rt.block_on(store.checkpoint_count(&job.id))?;
+        if let Some(last) = self.rt.block_on(store.checkpoint_rows(&job.id, Which::Last))?.pop() {
             self.rt.block_on(store.truncate_history(&job.id, lease, last.iteration as usize))?;
             tracing::info!(job = %job.id, iteration = last.iteration, "resuming from checkpoint");
         }
         let request = Request {
             spec: job.spec.clone(),
             inputs: inputs.iter().map(|r| r.name.clone()).collect(),
-            resume: !checkpoints.is_empty(),
-            prior_frames: checkpoints.len(),
+            resume: stored > 0,
+            prior_frames: stored,
             validate_only: false,
+            memory: None,
             fault,
         };
         // the server's budgets, lowered to what the spec's `limits` ask for
         let asked = parse_spec(&job.spec).ok().and_then(|s| s.limits.resolve().ok()).unwrap_or_default();
-        let mut process = match JobProcess::start(exe, self.budgets.within(asked), &job.id, cancel.clone()) {
+        // what the earlier attempts stored counts against the disk budget too
+        let stored = self.rt.block_on(store.stored_bytes(&job.id))?;
+        let mut process = match JobProcess::start(runner, self.budgets.within(asked), &job.id, stored, cancel.clone()) {
             Ok(p) => p,
             Err(e) => return Ok(Attempt::ended(AttemptEnd::Crashed(format!("the job's process cannot start: {e}")))),
         };
-        // the payloads one at a time, read from the store as they are sent
-        let (mut inputs, mut checkpoints) = (inputs.into_iter(), checkpoints.into_iter());
+        // the payloads one at a time, read from the store as they are sent (the
+        // checkpoints a page of rows at a time)
+        let mut inputs = inputs.into_iter();
+        let (mut page, mut after) = (Vec::new().into_iter(), -1);
         let mut failed_read = None;
         let mut payloads = || -> Option<Vec<u8>> {
             let got = if let Some(row) = inputs.next() {
@@ -121,7 +118,18 @@ impl Worker {
                     false => Ok(row.data),
                 }
             } else {
-                self.rt.block_on(store.frame_json(&job.id, checkpoints.next()?))
+                if page.len() == 0 {
+                    match self.rt.block_on(store.checkpoint_rows(&job.id, Which::After(after))) {
+                        Ok(rows) => page = rows.into_iter(),
+                        Err(e) => {
+                            failed_read = Some(e);
+                            return None;
+                        }
+                    }
+                }
+                let row = page.next()?;
+                after = row.iteration;
+                self.rt.block_on(store.frame_json(&job.id, row))
             };
             got.map_err(|e| failed_read = Some(e)).ok()
         };

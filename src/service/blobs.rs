@@ -112,6 +112,17 @@ impl Blobs {
         self.get(parts).await?.ok_or_else(|| BlobError(format!("the blob {} is missing", self.key(parts))))
     }
 
+    /// The bytes of every blob under `parts` together.
+    pub async fn size_all(&self, parts: &[&str]) -> BlobResult<u64> {
+        let key = self.key(parts);
+        let mut listed = self.store.list(Some(&key));
+        let mut total = 0;
+        while let Some(meta) = listed.next().await {
+            total += meta.map_err(|e| blob_error("cannot list", &key, e))?.size;
+        }
+        Ok(total)
+    }
+
     /// Remove every blob under `parts` (a job's folder, an old result set).
     pub async fn delete_all(&self, parts: &[&str]) -> BlobResult<()> {
         let key = self.key(parts);

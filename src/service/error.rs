@@ -26,8 +26,16 @@ pub enum ApiError {
     TooLarge(usize),
     /// 401: missing or wrong bearer token.
     Unauthorized,
+    /// 403: the request is not allowed (a foreign `Origin`).
+    Forbidden(String),
+    /// 408: the request did not arrive in time (a body below the minimum rate).
+    Timeout(String),
+    /// 429 with `Retry-After` (seconds): a key's quota is used up.
+    TooMany { detail: String, retry_after: u64 },
     /// 503: the node cannot take work now (why).
     Unavailable(String),
+    /// 503 with `Retry-After` (seconds): the queue is full.
+    Busy { detail: String, retry_after: u64 },
     Internal(String),
 }
 
@@ -45,6 +53,7 @@ impl From<super::store::StoreError> for ApiError {
 
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
+        let mut retry = None;
         let (status, title, detail, errors) = match self {
             ApiError::Invalid { field, detail } => (
                 StatusCode::UNPROCESSABLE_ENTITY,
@@ -71,10 +80,20 @@ impl IntoResponse for ApiError {
             ApiError::Unauthorized => (
                 StatusCode::UNAUTHORIZED,
                 "Unauthorized",
-                "missing or wrong `Authorization: Bearer` token".into(),
+                "missing or wrong `Authorization: Bearer` key".into(),
                 None,
             ),
+            ApiError::Forbidden(d) => (StatusCode::FORBIDDEN, "Forbidden", d, None),
+            ApiError::Timeout(d) => (StatusCode::REQUEST_TIMEOUT, "Request timeout", d, None),
+            ApiError::TooMany { detail, retry_after } => {
+                retry = Some(retry_after);
+                (StatusCode::TOO_MANY_REQUESTS, "Too many requests", detail, None)
+            }
             ApiError::Unavailable(d) => (StatusCode::SERVICE_UNAVAILABLE, "Not ready", d, None),
+            ApiError::Busy { detail, retry_after } => {
+                retry = Some(retry_after);
+                (StatusCode::SERVICE_UNAVAILABLE, "Busy", detail, None)
+            }
             ApiError::Internal(d) => {
                 tracing::error!("internal error: {d}");
                 (
@@ -91,6 +110,9 @@ impl IntoResponse for ApiError {
         }
         let mut response =
             (status, [(header::CONTENT_TYPE, "application/problem+json")], body.to_string()).into_response();
+        if let Some(seconds) = retry {
+            response.headers_mut().insert(header::RETRY_AFTER, header::HeaderValue::from(seconds));
+        }
         if status == StatusCode::UNAUTHORIZED {
             response.headers_mut().insert(header::WWW_AUTHENTICATE, header::HeaderValue::from_static("Bearer"));
         }

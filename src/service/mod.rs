@@ -67,6 +67,9 @@ pub struct AppState {
     pub min_free_disk: u64,
     /// The evolution.glb of running jobs last built, by job and checkpoint.
     pub evolutions: Arc<tokio::sync::Mutex<BuiltEvolutions>>,
+    /// Origins other than the service's own that may call it from a browser
+    /// (`serve --cors-origin`).
+    pub cors_origins: Arc<[String]>,
 }
 
 /// How a node runs.
@@ -96,6 +99,8 @@ pub struct ServiceConfig {
     /// isolation only.
     #[doc(hidden)]
     pub faults: Vec<(i64, String)>,
+    /// Origins other than the service's own that may call it from a browser.
+    pub cors_origins: Vec<String>,
 }
 
 /// A running service: the HTTP state and the worker threads.
@@ -128,6 +133,7 @@ impl Service {
             budgets: Budgets::default(),
             min_free_disk: MIN_FREE_DISK,
             faults: Vec::new(),
+            cors_origins: Vec::new(),
         })
         .await
     }
@@ -162,6 +168,7 @@ impl Service {
             node: node.clone(),
             data_dir: config.data_dir.clone(),
             min_free_disk: config.min_free_disk,
+            cors_origins: config.cors_origins.clone().into(),
         };
         // a job queued by another node (PostgreSQL's "queue" notification) wakes the
         // idle workers at once rather than at their next look at the store

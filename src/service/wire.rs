@@ -68,8 +68,3 @@ pub struct CheckpointEntry {
     pub time: f64,
     pub href: String,
 }
-
-#[derive(Debug, Serialize)]
-pub struct CheckpointList {
-    pub checkpoints: Vec<CheckpointEntry>,
-}

@@ -172,7 +172,7 @@ impl Worker {
         let fault = self.faults.iter().find(|(seq, _)| *seq == job.seq).map(|(_, f)| f.clone());
         let attempt = match &self.isolation {
             Isolation::Thread => self.in_thread(job, lease, &cancel, fault),
-            Isolation::Process { exe } => self.in_process(exe, job, lease, &cancel, fault),
+            Isolation::Process { runner } => self.in_process(runner, job, lease, &cancel, fault),
         };
         drop(_running);
         let attempt = attempt?;

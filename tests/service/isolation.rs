@@ -53,11 +53,33 @@ fn jobs_that_panic_abort_die_or_outgrow_their_memory_end_only_their_own_attempts
     assert_eq!(status, 422, "{refused}");
     assert_eq!(refused["errors"][0]["field"], "limits.memory", "{refused}");
     assert_eq!(refused["errors"][0]["detail"], "asks for 4 GiB, more than this server's budget of 256 MiB per job");
+    // a mesh whose run cannot fit the budget (163,842 vertices: about 400 MiB) is
+    // refused before it is queued; the same mesh fits 1 GiB, a smaller one 128 MiB
+    let sphere = |resolution: u32, limits: &str| {
+        format!(
+            r#"{{{limits}"problem": {{"type": "curvature_flow"}},
+                "initial": {{"shape": "sphere", "radius": 1.0, "resolution": {resolution}}},
+                "flow": {{"tau": 1e-4, "max_iterations": 1}}}}"#
+        )
+    };
+    let (status, refused) = http_json(node.addr, "POST", "/v1/jobs", Some(&sphere(7, "")));
+    assert_eq!(status, 422, "{refused}");
+    assert_eq!(refused["errors"][0]["field"], "initial", "{refused}");
+    let detail = refused["errors"][0]["detail"].as_str().unwrap();
+    assert!(detail.contains("163842 vertices") && detail.ends_with("more than its memory budget of 256 MiB"), "{detail}");
+    let (status, refused) = http_json(node.addr, "POST", "/v1/jobs", Some(&sphere(6, r#""limits": {"memory": "64MiB"}, "#)));
+    assert_eq!(status, 422, "{refused}");
+    assert!(refused["errors"][0]["detail"].as_str().unwrap().ends_with("memory budget of 64 MiB"), "{refused}");
+    let (status, accepted) = http_json(node.addr, "POST", "/v1/jobs", Some(&sphere(5, "")));
+    assert_eq!(status, 201, "{accepted}");
+    let fits = node.wait_final(accepted["id"].as_str().unwrap());
+    assert_eq!(fits["status"], "successful", "{fits}");
 
     assert!(live.slowest() < 1000, "/healthz took {} ms", live.slowest());
     let peak = node.memory("VmHWM");
     assert!(peak < idle + (512 << 20), "the server grew from {idle} to {peak} bytes");
     assert_eq!(node.job_processes(), 0, "no job process is left");
+    assert!(node.children() <= 2, "at most two processes wait for a job: {}", node.children());
 }
 
 #[test]
@@ -85,21 +107,35 @@ fn cancel_and_the_time_budget_end_a_jobs_process() {
 /// them) and its disk budget ends it.
 #[test]
 fn a_job_that_writes_without_end_is_stopped_by_its_disk_budget() {
-    let runaway = r#"{"problem": {"type": "curvature_flow"},
+    let spec = r#"{"problem": {"type": "curvature_flow"},
         "initial": {"shape": "circle", "radius": 1.0, "resolution": 20000},
         "flow": {"tau": 1e-9, "end_time": 1.0, "max_iterations": 10000000, "tolerance": 0},
         "mesh": {"adapt": false},
         "output": {"checkpoint_every": 1}}"#;
     let dir = tempfile::tempdir().unwrap();
-    let node = Node::start(dir.path(), &["--workers", "2", "--job-disk", "64MiB"], "");
+    // the third is killed once at iteration 20: what its first attempt stored
+    // counts against the budget of the second, which ends where the first did
+    let node = Node::start(dir.path(), &["--workers", "2", "--job-disk", "64MiB"], "3=kill@20:once");
     let idle = node.memory("VmRSS");
     let live = Liveness::watch(node.addr);
-    let (runaway, other) = (node.submit(runaway), node.submit(STEADY));
+    let (runaway, other) = (node.submit(spec), node.submit(STEADY));
     let done = node.wait_final(&runaway);
     assert_eq!(done["status"], "failed", "{done}");
     let msg = done["message"].as_str().unwrap();
     assert!(msg.starts_with("the job exceeded its disk budget of 64 MiB at iteration "), "{msg}");
     node.assert_complete(&other, 500, 11);
+    let killed = node.submit(spec);
+    let done = node.wait_final(&killed);
+    assert_eq!(done["status"], "failed", "{done}");
+    let msg = done["message"].as_str().unwrap();
+    assert!(msg.starts_with("the job exceeded its disk budget of 64 MiB at iteration "), "{msg}");
+    // (the iteration of the message is the run's, ahead of its frames)
+    let stored = |id: &str| {
+        let (_, list) = http_json(node.addr, "GET", &format!("/v1/jobs/{id}/checkpoints"), None);
+        list["checkpoints"].as_array().unwrap().len() as i64
+    };
+    let (once, twice) = (stored(&runaway), stored(&killed));
+    assert!(once > 20 && (twice - once).abs() <= 1, "killed once, it stored {twice} checkpoints, unkilled {once}");
     assert!(live.slowest() < 1000, "/healthz took {} ms", live.slowest());
     let peak = node.memory("VmHWM");
     assert!(peak < idle + (512 << 20), "the server grew from {idle} to {peak} bytes");

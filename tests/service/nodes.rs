@@ -50,8 +50,20 @@ impl Node {
         line.split_whitespace().nth(1).unwrap().parse::<u64>().unwrap() * 1024
     }
 
-    /// The job processes the server has now.
+    /// The job processes the server has now (named `shapeflow-job` once they
+    /// have a job; those started ahead of their jobs are not counted).
     pub(super) fn job_processes(&self) -> usize {
+        let me = self.child.id().to_string();
+        std::fs::read_dir("/proc")
+            .unwrap()
+            .filter_map(|e| std::fs::read_to_string(e.ok()?.path().join("stat")).ok())
+            .filter(|stat| stat.contains("(shapeflow-job)"))
+            .filter(|stat| stat.rsplit(')').next().and_then(|r| r.split_whitespace().nth(1)) == Some(me.as_str()))
+            .count()
+    }
+
+    /// The server's child processes, job processes and those waiting for a job.
+    pub(super) fn children(&self) -> usize {
         let me = self.child.id().to_string();
         std::fs::read_dir("/proc")
             .unwrap()

@@ -59,9 +59,10 @@ fn inputs_cost_what_they_say_before_they_are_decoded() {
     assert!(peak < idle + (100 << 20), "the server grew from {idle} to {peak} bytes");
 }
 
-/// A job with a million history rows (written into its database directly, as
-/// an older server kept them): its energy as JSON, as CSV and as a plot, each
-/// streamed with memory that does not grow with the rows.
+/// A job with a million history rows and 200,000 checkpoints (written into its
+/// database directly, as an older server kept them): its energy as JSON, as CSV
+/// and as a plot, and its list of checkpoints, each streamed with memory that
+/// does not grow with the rows.
 #[test]
 fn a_million_history_rows_are_served_in_little_memory() {
     let dir = tempfile::tempdir().unwrap();
@@ -72,6 +73,7 @@ fn a_million_history_rows_are_served_in_little_memory() {
         id
     };
     const ROWS: i64 = 1_000_000;
+    const CHECKPOINTS: i64 = 200_000;
     let rt = tokio::runtime::Builder::new_current_thread().build().unwrap();
     rt.block_on(async {
         use sqlx::Connection;
@@ -84,6 +86,18 @@ fn a_million_history_rows_are_served_in_little_memory() {
         )
         .bind(&id)
         .bind(ROWS)
+        .execute(&mut db)
+        .await
+        .unwrap();
+        // every added checkpoint row shares the frame of the last one
+        sqlx::query(
+            "WITH RECURSIVE n(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM n WHERE x < ?2) \
+             INSERT INTO checkpoints (job_id, iteration, time, data, blob) \
+             SELECT ?1, 500 + x, 0.05 + x * 1e-4, data, blob FROM n, \
+             (SELECT data, blob FROM checkpoints WHERE job_id = ?1 AND iteration = 500)",
+        )
+        .bind(&id)
+        .bind(CHECKPOINTS)
         .execute(&mut db)
         .await
         .unwrap();
@@ -104,8 +118,18 @@ fn a_million_history_rows_are_served_in_little_memory() {
     let (status, _, svg) = download(node.addr, &format!("/v1/jobs/{id}/energy.svg"));
     assert_eq!(status, 200);
     assert!(svg.starts_with(b"<svg") && svg.len() < 2 << 20, "{} bytes of plot", svg.len());
+    let (status, _, list) = download(node.addr, &format!("/v1/jobs/{id}/checkpoints"));
+    assert_eq!(status, 200);
+    let list: Value = serde_json::from_slice(&list).unwrap();
+    let list = list["checkpoints"].as_array().unwrap();
+    assert_eq!(list.len() as i64, 11 + CHECKPOINTS);
+    let last = &list[list.len() - 1];
+    assert_eq!(last["iteration"], 500 + CHECKPOINTS);
+    assert_eq!(last["href"], format!("/v1/jobs/{id}/checkpoints/{}.glb", 500 + CHECKPOINTS));
+    let (status, _, glb) = download(node.addr, last["href"].as_str().unwrap());
+    assert_eq!((status, &glb[..4]), (200, &b"glTF"[..]));
     let grown = node.memory("VmHWM").saturating_sub(idle);
-    assert!(grown < 64 << 20, "the server grew by {grown} bytes serving a million rows");
+    assert!(grown < 64 << 20, "the server grew by {grown} bytes serving a million rows and 200,000 checkpoints");
 }
 
 /// Another process holds the SQLite write lock for longer than the lease: the

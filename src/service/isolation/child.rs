@@ -13,7 +13,8 @@ use super::fault::Fault;
 use super::protocol::{read_message, write_message, Control, Report, Request, RunEnd};
 use crate::flow::{Checkpoint, Progress};
 use crate::jobs::{
-    parse_spec, prepare, result_files, run_prepared, Frame, FrameMaker, GlbContext, KeptFrames, RunEvents,
+    parse_spec, prepare, result_files, run_prepared, Frame, FrameMaker, GlbContext, KeptFrames, MemoryEstimate,
+    RunEvents, FRAMES_AHEAD,
 };
 use std::collections::HashMap;
 use std::io::{BufWriter, Read, Stdout};
@@ -24,11 +25,9 @@ use std::sync::{Arc, Mutex};
 /// Run the job the worker sends on standard input; `memory`: its budget in bytes.
 pub fn job_runner(memory: Option<u64>) -> ExitCode {
     die_with_parent();
-    if let Some(bytes) = memory {
-        if let Err(e) = rlimit::setrlimit(rlimit::Resource::DATA, bytes, bytes) {
-            eprintln!("cannot set the memory budget: {e}");
-            return ExitCode::from(3);
-        }
+    if let Err(e) = limit_memory(memory) {
+        eprintln!("cannot set the memory budget: {e}");
+        return ExitCode::from(3);
     }
     let mut stdin = std::io::stdin();
     let (request, inputs, resume, prior) = match read_request(&mut stdin) {
@@ -38,6 +37,8 @@ pub fn job_runner(memory: Option<u64>) -> ExitCode {
             return ExitCode::from(3);
         }
     };
+    let memory = request.memory.or(memory);
+    name_process();
     let cancel = Arc::new(AtomicBool::new(false));
     let flag = cancel.clone();
     std::thread::spawn(move || {
@@ -48,11 +49,21 @@ pub fn job_runner(memory: Option<u64>) -> ExitCode {
     let out = Reports { out: Mutex::new(BufWriter::new(std::io::stdout())), cancel: cancel.clone() };
     let fault = request.fault.as_deref().and_then(Fault::parse).filter(|f| !(f.once && resume.is_some()));
     let end = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        run(&request, &inputs, resume, prior, &cancel, &out, fault)
+        run(&request, &inputs, resume, prior, &cancel, &out, fault, memory)
     }))
     .unwrap_or_else(|panic| RunEnd::Panicked { message: panic_text(panic.as_ref()) });
     out.send(&Report::Outcome(end), &[]);
     ExitCode::SUCCESS
+}
+
+/// Named `shapeflow-job` once it has its job (`ps`, `/proc/PID/comm`), apart
+/// from the processes started ahead that wait for theirs.
+fn name_process() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: prctl(PR_SET_NAME) copies at most 16 bytes of the NUL-ended name.
+    unsafe {
+        libc::prctl(libc::PR_SET_NAME, c"shapeflow-job".as_ptr());
+    }
 }
 
 /// The kernel ends this process with the worker's (Linux); if the worker is
@@ -71,9 +82,21 @@ fn die_with_parent() {
 
 type Inputs = HashMap<String, Vec<u8>>;
 
-fn read_request(r: &mut impl Read) -> std::io::Result<(Request, Inputs, Option<Checkpoint>, Vec<Frame>)> {
+/// This process's data segment limited to `bytes` (the kernel enforces it: an
+/// allocation past it fails and the process aborts).
+fn limit_memory(bytes: Option<u64>) -> std::io::Result<()> {
+    match bytes {
+        Some(b) => rlimit::setrlimit(rlimit::Resource::DATA, b, b),
+        None => Ok(()),
+    }
+}
+
+/// The request, under its memory budget from then on; its inputs; the stored
+/// frames, read into [`KeptFrames`] one at a time; the checkpoint to resume from.
+fn read_request(r: &mut impl Read) -> std::io::Result<(Request, Inputs, Option<Checkpoint>, KeptFrames)> {
     let bad = |what: &str| std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string());
     let (request, _): (Request, _) = read_message(r)?.ok_or_else(|| bad("no request"))?;
+    limit_memory(request.memory)?;
     let mut next = || -> std::io::Result<Vec<u8>> {
         read_message::<()>(r)?.map(|(_, payload)| payload).ok_or_else(|| bad("the request ended early"))
     };
@@ -81,9 +104,10 @@ fn read_request(r: &mut impl Read) -> std::io::Result<(Request, Inputs, Option<C
     for name in &request.inputs {
         inputs.insert(name.clone(), next()?);
     }
-    let prior: Vec<Frame> = (0..request.prior_frames)
-        .map(|_| serde_json::from_slice(&next()?).map_err(|e| bad(&format!("a stored frame: {e}"))))
-        .collect::<std::io::Result<_>>()?;
+    let mut prior = KeptFrames::default();
+    for _ in 0..request.prior_frames {
+        prior.push(serde_json::from_slice(&next()?).map_err(|e| bad(&format!("a stored frame: {e}")))?);
+    }
     let resume = prior.last().filter(|_| request.resume).map(|f| f.state.clone());
     Ok((request, inputs, resume, prior))
 }
@@ -108,24 +132,29 @@ fn run(
     request: &Request,
     inputs: &Inputs,
     resume: Option<Checkpoint>,
-    prior: Vec<Frame>,
+    prior: KeptFrames,
     cancel: &AtomicBool,
     out: &Reports,
     fault: Option<Fault>,
+    memory: Option<u64>,
 ) -> RunEnd {
     let job = match parse_spec(&request.spec).and_then(|s| prepare(s, inputs)) {
-        Ok(_) if request.validate_only => return RunEnd::Valid,
+        Ok(job) if request.validate_only => {
+            return match memory.map(|budget| MemoryEstimate::of(&job).check(budget)) {
+                Some(Err((field, message))) => RunEnd::Invalid { field: field.into(), message },
+                _ => RunEnd::Valid,
+            }
+        }
         Ok(job) => job,
         Err(e) if request.validate_only => return RunEnd::Invalid { field: e.field, message: e.message },
         Err(e) => return RunEnd::Failed { message: e.to_string() },
     };
     out.send(&Report::Context, &serde_json::to_vec(&GlbContext::of(&job)).expect("contexts serialize"));
-    let mut kept = KeptFrames::default();
-    prior.into_iter().for_each(|f| kept.push(f));
+    let mut kept = prior;
     // a resumed run's first checkpoint repeats the last one stored before
     let resumed_at = kept.last().map(|f| f.state.iteration);
     let (result, mut kept) = std::thread::scope(|scope| {
-        let (send, receive) = std::sync::mpsc::channel::<Checkpoint>();
+        let (send, receive) = std::sync::mpsc::sync_channel::<Checkpoint>(FRAMES_AHEAD);
         let job = &job;
         let maker = scope.spawn(move || {
             let mut maker = FrameMaker::default();
@@ -163,7 +192,7 @@ fn run(
 
 struct Events<'a> {
     out: &'a Reports,
-    frames: std::sync::mpsc::Sender<Checkpoint>,
+    frames: std::sync::mpsc::SyncSender<Checkpoint>,
     fault: Option<Fault>,
 }
 

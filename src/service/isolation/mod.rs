@@ -11,10 +11,11 @@ pub mod child;
 pub mod fault;
 pub mod parent;
 pub mod protocol;
+pub mod runner;
 
 use crate::jobs::Limits;
 pub use crate::jobs::{format_size, parse_size};
-use std::path::PathBuf;
+pub use runner::Runner;
 use std::time::Duration;
 
 /// Where a worker runs its jobs.
@@ -23,8 +24,9 @@ pub enum Isolation {
     /// On the worker's thread, in the service's process: a job that aborts the
     /// process (an allocation past the machine's memory) takes the service with it.
     Thread,
-    /// In a process of its own: `exe job-runner` (the service's own binary).
-    Process { exe: PathBuf },
+    /// In a process of its own: `exe job-runner` (the service's own binary),
+    /// started by `runner`, some ahead of their jobs.
+    Process { runner: Runner },
 }
 
 /// What one job may use; `None`: no limit.

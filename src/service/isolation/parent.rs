@@ -4,12 +4,13 @@
 //! process only computes.
 
 use super::protocol::{read_message, write_message, Control, Report, Request, RunEnd};
+use super::runner::Runner;
 use super::Budgets;
+use crate::service::store::HISTORY_ROW_BYTES;
 use crate::flow::Progress;
 use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, BufWriter};
-use std::path::Path;
-use std::process::{ChildStdin, ChildStdout, Command, ExitStatus, Stdio};
+use std::process::{ChildStdin, ChildStdout, ExitStatus};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -21,8 +22,6 @@ const CANCEL_GRACE: Duration = Duration::from_secs(5);
 /// The lines of the process's standard error kept to tell why it ended.
 const STDERR_LINES: usize = 20;
 
-/// Bytes a history row takes in the database, about (disk budget).
-const ROW_BYTES: u64 = 64;
 
 /// Why the worker killed a job's process.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,6 +61,23 @@ struct Shared {
     killed: Mutex<Option<Kill>>,
 }
 
+impl Shared {
+    /// Kill the process `pid` for `why`, unless it was killed already. Called
+    /// only before the process is waited for (by the watchdog, which runs until
+    /// then, and by [`JobProcess::next`]), so that its pid cannot be reused.
+    fn kill(&self, pid: u32, why: Kill) {
+        let mut killed = self.killed.lock().unwrap();
+        if killed.is_none() {
+            *killed = Some(why);
+            #[cfg(unix)]
+            // SAFETY: kill(2) of our own child, not yet waited for (see above).
+            unsafe {
+                libc::kill(pid as libc::pid_t, libc::SIGKILL);
+            }
+        }
+    }
+}
+
 /// How a job's process ended.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ProcessEnd {
@@ -77,14 +93,17 @@ pub enum ProcessEnd {
 
 impl JobProcess {
     /// Start `exe job-runner` under `budgets`, its log lines forwarded to this
-    /// process's log under `job`; `cancel` (the job's flag) stops it.
-    pub fn start(exe: &Path, budgets: Budgets, job: &str, cancel: Arc<AtomicBool>) -> std::io::Result<JobProcess> {
-        let mut cmd = Command::new(exe);
-        cmd.arg("job-runner");
-        if let Some(m) = budgets.memory {
-            cmd.arg("--memory").arg(m.to_string());
-        }
-        let mut child = cmd.stdin(Stdio::piped()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn()?;
+    /// process's log under `job`, `stored` bytes of the job already stored by its
+    /// earlier attempts (counted against its disk budget); `cancel` (the job's
+    /// flag) stops it.
+    pub fn start(
+        runner: &Runner,
+        budgets: Budgets,
+        job: &str,
+        stored: u64,
+        cancel: Arc<AtomicBool>,
+    ) -> std::io::Result<JobProcess> {
+        let mut child = runner.start()?;
         let stdin = BufWriter::with_capacity(1 << 16, child.stdin.take().expect("piped"));
         let stdout = BufReader::with_capacity(1 << 16, child.stdout.take().expect("piped"));
         let reports = read_reports(stdout)?;
@@ -104,7 +123,7 @@ impl JobProcess {
         let shared = Arc::new(Shared {
             stdin: Mutex::new(Some(stdin)),
             cancel,
-            disk: AtomicU64::new(0),
+            disk: AtomicU64::new(stored),
             killed: Mutex::new(None),
         });
         let (ended, wait) = std::sync::mpsc::channel();
@@ -129,7 +148,8 @@ impl JobProcess {
     pub fn send(&self, request: &Request, payloads: &mut dyn FnMut() -> Option<Vec<u8>>) -> std::io::Result<()> {
         let mut stdin = self.shared.stdin.lock().unwrap();
         let w = stdin.as_mut().expect("open until the end");
-        write_message(w, request, &[])?;
+        // the process limits its memory to the budget as it reads this
+        write_message(w, &Request { memory: self.budgets.memory, ..request.clone() }, &[])?;
         while let Some(p) = payloads() {
             write_message(w, &(), &p)?;
         }
@@ -146,11 +166,17 @@ impl JobProcess {
         let bytes = match &report {
             Report::Progress(Progress { iteration, .. }) => {
                 self.last_iteration = *iteration;
-                ROW_BYTES
+                HISTORY_ROW_BYTES
             }
             _ => payload.len() as u64,
         };
-        self.shared.disk.fetch_add(bytes, Ordering::Relaxed);
+        let stored = self.shared.disk.fetch_add(bytes, Ordering::Relaxed) + bytes;
+        // over the disk budget: killed now, this report not kept (a cancelled
+        // process ends as cancelled, with its last files)
+        if self.budgets.disk.is_some_and(|d| stored > d) && !self.shared.cancel.load(Ordering::Relaxed) {
+            self.shared.kill(self.child.id(), Kill::Disk);
+            return Next::End;
+        }
         Next::Report(report, payload)
     }
 
@@ -246,18 +272,7 @@ fn died(status: std::io::Result<ExitStatus>, at: usize) -> String {
 fn watch(shared: &Shared, pid: u32, budgets: Budgets, ended: std::sync::mpsc::Receiver<()>) {
     let started = Instant::now();
     let mut cancelled_at: Option<Instant> = None;
-    let kill = |why: Kill| {
-        let mut killed = shared.killed.lock().unwrap();
-        if killed.is_none() {
-            *killed = Some(why);
-            #[cfg(unix)]
-            // SAFETY: kill(2) of our own child, which is not yet waited for (its
-            // pid cannot have been reused: the reader waits only after this loop).
-            unsafe {
-                libc::kill(pid as libc::pid_t, libc::SIGKILL);
-            }
-        }
-    };
+    let kill = |why: Kill| shared.kill(pid, why);
     while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) = ended.recv_timeout(Duration::from_millis(50)) {
         // a cancelled process is not killed for its budgets: it ends as cancelled
         if cancelled_at.is_none() && budgets.seconds.is_some_and(|s| started.elapsed() > s) {
@@ -304,13 +319,13 @@ pub struct Refusal {
 /// to prepare than the budget is refused naming `problem.image` (or the first
 /// input) and the budget.
 pub fn validate(
-    exe: &Path,
+    runner: &Runner,
     budgets: Budgets,
     spec: &str,
     inputs: &std::collections::HashMap<String, Vec<u8>>,
 ) -> std::io::Result<Result<(), Refusal>> {
     let budgets = Budgets { disk: None, ..budgets };
-    let mut process = JobProcess::start(exe, budgets, "(validation)", Arc::new(AtomicBool::new(false)))?;
+    let mut process = JobProcess::start(runner, budgets, "(validation)", 0, Arc::new(AtomicBool::new(false)))?;
     let names: Vec<&String> = inputs.keys().collect();
     let request = Request {
         spec: spec.to_string(),
@@ -318,6 +333,7 @@ pub fn validate(
         resume: false,
         prior_frames: 0,
         validate_only: true,
+        memory: None,
         fault: None,
     };
     let mut queue = names.iter();

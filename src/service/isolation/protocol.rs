@@ -30,6 +30,11 @@ pub struct Request {
     /// submission's validation, away from the service's memory.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub validate_only: bool,
+    /// The job's memory budget in bytes, which the process sets as its own limit
+    /// (`RLIMIT_DATA`) before it reads the payloads (a process started ahead of
+    /// its job has none yet).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub memory: Option<u64>,
     /// A fault to inject (debug builds of a service started with fault injection
     /// on, for the tests of isolation only; see `Fault`).
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -4,6 +4,7 @@
 //! [`PLOT_POINTS`] rows, so that a request's memory does not grow with the job's
 //! history.
 
+use super::thinned::Thinned;
 use super::{find, query};
 use crate::export::energy_svg;
 use crate::flow::Progress;
@@ -121,48 +122,10 @@ pub(super) async fn plot(State(state): State<AppState>, Path(id): Path<String>) 
     find(&state, &id).await?;
     let first = state.store.history_from(&id, 0, PAGE).await?;
     let mut rows = std::pin::pin!(pages(state.store.clone(), id.clone(), first));
-    let mut plotted = Thinned::default();
+    let mut plotted = Thinned::new(PLOT_POINTS);
     while let Some(page) = rows.next().await {
         page?.into_iter().for_each(|p| plotted.push(p));
     }
-    Ok(([(header::CONTENT_TYPE, "image/svg+xml")], energy_svg(&plotted.into_rows(), &format!("job {id}")))
+    Ok(([(header::CONTENT_TYPE, "image/svg+xml")], energy_svg(&plotted.into_items(), &format!("job {id}")))
         .into_response())
-}
-
-/// At most [`PLOT_POINTS`] rows of many, evenly spaced in their order, the first
-/// and the last kept.
-#[derive(Default)]
-struct Thinned {
-    rows: Vec<Progress>,
-    last: Option<Progress>,
-    seen: usize,
-    stride: usize,
-}
-
-impl Thinned {
-    fn push(&mut self, p: Progress) {
-        self.stride = self.stride.max(1);
-        let k = self.seen;
-        self.seen += 1;
-        if k % self.stride != 0 {
-            self.last = Some(p);
-            return;
-        }
-        self.last = None;
-        self.rows.push(p);
-        if self.rows.len() > PLOT_POINTS {
-            // every other row kept (those at multiples of the doubled stride)
-            self.stride *= 2;
-            let mut i = 0;
-            self.rows.retain(|_| {
-                i += 1;
-                (i - 1) % 2 == 0
-            });
-        }
-    }
-
-    fn into_rows(mut self) -> Vec<Progress> {
-        self.rows.extend(self.last);
-        self.rows
-    }
 }

@@ -7,8 +7,10 @@ mod energy;
 mod events;
 mod jobs;
 mod openapi;
+mod origin;
 mod readyz;
 mod results;
+mod thinned;
 mod ui;
 
 use super::store::JobRow;
@@ -58,7 +60,7 @@ pub const ROUTES: &[(&str, &str)] = &[
 
 /// The HTTP application.
 pub fn router(state: AppState) -> Router {
-    Router::new()
+    let app = Router::new()
         .route("/healthz", get(|| async { "ok" }))
         .route("/readyz", get(readyz::readyz))
         .route("/", get(ui::index))
@@ -81,8 +83,13 @@ pub fn router(state: AppState) -> Router {
         .fallback(no_route)
         .layer(DefaultBodyLimit::disable())
         .layer(middleware::from_fn_with_state(state.clone(), authorize))
-        .layer(middleware::from_fn(super::error::method_not_allowed))
-        .with_state(state)
+        .layer(middleware::from_fn_with_state(state.clone(), origin::same_origin))
+        .layer(middleware::from_fn(super::error::method_not_allowed));
+    let app = match origin::cors(&state.cors_origins) {
+        Some(cors) => app.layer(cors),
+        None => app,
+    };
+    app.with_state(state)
 }
 
 async fn no_route(req: Request) -> ApiError {

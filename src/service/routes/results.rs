@@ -8,6 +8,7 @@
 //! evolution.glb is built from as many of its checkpoints as it shows (never all
 //! of them read), one build at a time, once per new checkpoint.
 
+use super::thinned::Thinned;
 use super::{blocking, find};
 use crate::export::shape_json;
 use crate::jobs::{
@@ -76,7 +77,8 @@ async fn ended_results(state: &AppState, row: &JobRow) -> Result<Option<ResultIn
     if let Some(index) = &row.results {
         return Ok(Some(index.clone()));
     }
-    let Some((_, frames)) = frames_to_draw(state, &row.id, Which::All).await? else { return Ok(None) };
+    let kept = state.store.kept_frames(&row.id).await?.into_frames();
+    let Some((_, frames)) = draw(state, &row.id, kept).await? else { return Ok(None) };
     let job = rebuild(state, &row.id).await?;
     let files = blocking(move || result_files(&job, &frames)).await?;
     state.store.put_results(&row.id, None, &files).await?;
@@ -110,7 +112,7 @@ pub(super) async fn manifest(State(state): State<AppState>, Path(id): Path<Strin
     ];
     if let Some(index) = ended_results(&state, &job).await? {
         files.extend(index.files.iter().map(|f| file(&f.name, format!("{base}/results/{}", f.name), &f.media_type)));
-    } else if !job.status.is_final() && !state.store.checkpoint_index(&id).await?.is_empty() {
+    } else if !job.status.is_final() && !state.store.checkpoint_rows(&id, Which::Last).await?.is_empty() {
         files.extend(RUNNING_FILES.iter().map(|(name, media)| file(name, format!("{base}/results/{name}"), media)));
     }
     let checkpoints = format!("{base}/checkpoints");
@@ -191,8 +193,7 @@ pub(super) async fn evolution_glb(State(state): State<AppState>, Path(id): Path<
         return Ok(r);
     }
     let no_checkpoint = || ApiError::NotFound(format!("job {id} has no checkpoint yet"));
-    let index = state.store.checkpoint_index(&id).await?;
-    let last = index.last().ok_or_else(no_checkpoint)?.0;
+    let last = state.store.checkpoint_rows(&id, Which::Last).await?.pop().ok_or_else(no_checkpoint)?.iteration;
     // one build at a time, and once per new checkpoint of a job
     let mut built = state.evolutions.lock().await;
     if let Some((_, bytes)) = built.iter().find(|(key, _)| *key == (id.clone(), last)) {
@@ -201,13 +202,9 @@ pub(super) async fn evolution_glb(State(state): State<AppState>, Path(id): Path<
     // of the checkpoints, as many as evolution.glb shows at the latest one's size,
     // evenly picked with the first and the last: the others are never read
     let newest = state.store.frames(&id, Which::At(last)).await?.pop().ok_or_else(no_checkpoint)?;
-    let fit = evolution_frames_of(&newest.state.mesh).min(index.len());
-    let picks: Vec<i64> = match fit {
-        1 => vec![last],
-        _ => (0..fit).map(|k| index[k * (index.len() - 1) / (fit - 1)].0).collect(),
-    };
-    let mut frames = Vec::with_capacity(picks.len());
-    for &it in &picks[..picks.len() - 1] {
+    let picks = shown(&state, &id, evolution_frames_of(&newest.state.mesh), last).await?;
+    let mut frames = Vec::with_capacity(picks.len() + 1);
+    for &it in picks.iter().filter(|&&it| it != last) {
         frames.extend(state.store.frames(&id, Which::At(it)).await?);
     }
     frames.push(newest);
@@ -218,6 +215,30 @@ pub(super) async fn evolution_glb(State(state): State<AppState>, Path(id): Path<
     built.push_front(((id, last), bytes.clone()));
     built.truncate(EVOLUTIONS_KEPT);
     Ok(glb_response(bytes, "evolution.glb"))
+}
+
+/// The iterations of the `fit` checkpoints (at least 2) up to `last` that
+/// evolution.glb shows, evenly picked with the first and the last; the index is
+/// read a page at a time and at most `2 fit` iterations are kept ([`Thinned`]),
+/// so that the memory does not grow with the number of checkpoints.
+async fn shown(state: &AppState, id: &str, fit: usize, last: i64) -> Result<Vec<i64>, ApiError> {
+    let fit = fit.max(2);
+    let (mut thinned, mut after) = (Thinned::new(2 * fit), -1);
+    while after < last {
+        let page = state.store.checkpoint_index(id, after).await?;
+        let Some(&(end, _)) = page.last() else { break };
+        page.iter().filter(|(it, _)| *it <= last).for_each(|&(it, _)| thinned.push(it));
+        after = end;
+    }
+    let mut kept = thinned.into_items();
+    if kept.last() != Some(&last) {
+        kept.push(last);
+    }
+    let n = kept.len();
+    Ok(match n.min(fit) {
+        0 | 1 => vec![last],
+        fit => (0..fit).map(|k| kept[k * (n - 1) / (fit - 1)]).collect(),
+    })
 }
 
 /// Running jobs' evolution.glb kept built, the newest first.

@@ -19,7 +19,7 @@ mod types;
 
 use super::blobs::{input_key, BlobError, Blobs};
 use crate::flow::{Checkpoint, Progress};
-use crate::jobs::{Frame, GlbContext, ResultFile};
+use crate::jobs::{Frame, GlbContext, KeptFrames, ResultFile};
 use futures_util::TryFutureExt;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -29,7 +29,8 @@ pub use sqlite::SqliteStore;
 pub(crate) use types::status_of;
 pub use types::{
     CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus, Lease, MadeFrame, ResultEntry,
-    ResultIndex, StoreError, StoreResult, StoredResults, Which,
+    ResultIndex, StoreError, StoreResult, StoredResults, Which, CHECKPOINT_PAGE,
+    HISTORY_ROW_BYTES,
 };
 
 /// What every backend stores and how (see the module documentation). The
@@ -81,8 +82,9 @@ pub trait JobStore: Send + Sync + 'static {
     /// checkpoint and counts the attempt ([`ClaimPolicy::max_takeovers`]); the
     /// job's message says why ([`ABANDONED`] and `why`); fenced.
     async fn abandon(&self, id: &str, lease: &Lease, why: &str) -> StoreResult<()>;
-    /// `(iteration, time)` of every checkpoint of a job, oldest first.
-    async fn checkpoint_index(&self, id: &str) -> StoreResult<Vec<(i64, f64)>>;
+    /// `(iteration, time)` of the checkpoints of a job after iteration `after`
+    /// (`-1`: from the first), oldest first, at most [`CHECKPOINT_PAGE`].
+    async fn checkpoint_index(&self, id: &str, after: i64) -> StoreResult<Vec<(i64, f64)>>;
     /// Checkpoint rows of a job, oldest first.
     async fn checkpoint_rows(&self, id: &str, which: Which) -> StoreResult<Vec<CheckpointRow>>;
     /// Append history rows (replacing rows already present after a resume), update
@@ -124,6 +126,8 @@ pub trait JobStore: Send + Sync + 'static {
     async fn request_cancel(&self, id: &str) -> StoreResult<Option<JobStatus>>;
     /// Delete the job's rows (history, checkpoints and inputs with them).
     async fn delete_rows(&self, id: &str) -> StoreResult<()>;
+    /// The number of a job's history rows.
+    async fn history_count(&self, id: &str) -> StoreResult<u64>;
     /// History rows from iteration `from` on, at most `limit`.
     async fn history_from(&self, id: &str, from: usize, limit: usize) -> StoreResult<Vec<Progress>>;
 
@@ -170,6 +174,45 @@ pub trait JobStore: Send + Sync + 'static {
             Some(key) => self.blobs().get_existing(&["jobs", id, "checkpoints", key]).await?,
             None => row.data.into_bytes(),
         })
+    }
+
+    /// The frames of a job's stored checkpoints that evolution.glb keeps
+    /// ([`KeptFrames`]), read a page of rows and one frame at a time; a frame that
+    /// cannot be read is left out with a warning.
+    async fn kept_frames(&self, id: &str) -> StoreResult<KeptFrames> {
+        let mut kept = KeptFrames::default();
+        let mut after = -1;
+        loop {
+            let rows = self.checkpoint_rows(id, Which::After(after)).await?;
+            let Some(last) = rows.last() else { return Ok(kept) };
+            after = last.iteration;
+            for row in rows {
+                let iteration = row.iteration;
+                let json = self.frame_json(id, row).await?;
+                match serde_json::from_slice::<Frame>(&json) {
+                    Ok(frame) => kept.push(frame),
+                    Err(e) => tracing::warn!(job = %id, iteration, "a stored checkpoint cannot be read: {e}"),
+                }
+            }
+        }
+    }
+
+    /// The number of a job's stored checkpoints (read a page of the index at a time).
+    async fn checkpoint_count(&self, id: &str) -> StoreResult<usize> {
+        let (mut count, mut after) = (0, -1);
+        loop {
+            let page = self.checkpoint_index(id, after).await?;
+            let Some(&(last, _)) = page.last() else { return Ok(count) };
+            (count, after) = (count + page.len(), last);
+        }
+    }
+
+    /// What a job stores now against its disk budget: its checkpoints' frames,
+    /// its result files and [`HISTORY_ROW_BYTES`] per history row.
+    async fn stored_bytes(&self, id: &str) -> StoreResult<u64> {
+        let frames = self.blobs().size_all(&["jobs", id, "checkpoints"]).await?;
+        let results = self.blobs().size_all(&["jobs", id, "results"]).await?;
+        Ok(frames + results + self.history_count(id).await? * HISTORY_ROW_BYTES)
     }
 
     /// The newest checkpoint of a job.

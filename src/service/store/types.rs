@@ -149,8 +149,16 @@ pub struct Claimed {
 pub enum Which {
     Last,
     At(i64),
-    All,
+    /// At most [`CHECKPOINT_PAGE`] rows after this iteration (`-1`: from the
+    /// first), oldest first: a page, so that no read grows with a job's length.
+    After(i64),
 }
+
+/// Bytes a history row takes in the database, about (the disk budget's count).
+pub const HISTORY_ROW_BYTES: u64 = 64;
+
+/// Checkpoint rows read at a time ([`Which::After`], `checkpoint_index`).
+pub const CHECKPOINT_PAGE: usize = 4096;
 
 /// A checkpoint row: the key of its frame in the blob store, or (rows stored
 /// before blobs) the checkpoint's JSON itself.

@@ -4,7 +4,7 @@
 //! meshes read) before anything is stored; job and inputs are stored in one
 //! transaction before 201 is answered.
 
-use crate::jobs::{parse_spec, prepare};
+use crate::jobs::{parse_spec, prepare, MemoryEstimate};
 use crate::service::isolation::parent::validate;
 use crate::service::isolation::Isolation;
 use crate::service::wire::JobView;
@@ -124,12 +124,19 @@ pub(in crate::service::routes) async fn create(
         }
         match &isolation {
             // the inputs decoded in a process of their own, under the job's memory budget
-            Isolation::Process { exe } => match validate(exe, budgets.within(asked), &normalized, &inputs) {
+            Isolation::Process { runner } => match validate(runner, budgets.within(asked), &normalized, &inputs) {
                 Ok(Ok(())) => {}
                 Ok(Err(r)) => return Err(ApiError::Invalid { field: r.field, detail: r.message }),
                 Err(e) => return Err(ApiError::Internal(format!("validation: {e}"))),
             },
-            Isolation::Thread => drop(prepare(spec, &inputs).map_err(invalid)?),
+            Isolation::Thread => {
+                let job = prepare(spec, &inputs).map_err(invalid)?;
+                if let Some(budget) = budgets.within(asked).memory {
+                    MemoryEstimate::of(&job)
+                        .check(budget)
+                        .map_err(|(field, detail)| ApiError::Invalid { field: field.into(), detail })?;
+                }
+            }
         }
         Ok((normalized, tree, inputs))
     })

@@ -194,9 +194,10 @@ impl JobStore for PgStore {
         leases::abandon(&self.pool, id, lease, why).await
     }
 
-    async fn checkpoint_index(&self, id: &str) -> StoreResult<Vec<(i64, f64)>> {
-        let rows = sqlx::query("SELECT iteration, time FROM checkpoints WHERE job_id = $1 ORDER BY iteration")
+    async fn checkpoint_index(&self, id: &str, after: i64) -> StoreResult<Vec<(i64, f64)>> {
+        let rows = sqlx::query("SELECT iteration, time FROM checkpoints WHERE job_id = $1 AND iteration > $2 ORDER BY iteration LIMIT 4096")
             .bind(id)
+            .bind(after)
             .fetch_all(&self.pool)
             .await?;
         Ok(rows.iter().map(|r| (r.get::<i64, _>("iteration"), r.get::<f64, _>("time"))).collect())
@@ -210,9 +211,10 @@ impl JobStore for PgStore {
                 0,
             ),
             Which::At(n) => ("SELECT iteration, blob, data FROM checkpoints WHERE job_id = $1 AND iteration = $2", n),
-            Which::All => (
-                "SELECT iteration, blob, data FROM checkpoints WHERE job_id = $1 AND $2::bigint = $2 ORDER BY iteration",
-                0,
+            Which::After(n) => (
+                "SELECT iteration, blob, data FROM checkpoints WHERE job_id = $1 AND iteration > $2 \
+                 ORDER BY iteration LIMIT 4096",
+                n,
             ),
         };
         let rows = sqlx::query(sql).bind(id).bind(iteration).fetch_all(&self.pool).await?;
@@ -363,6 +365,11 @@ impl JobStore for PgStore {
         sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind(id).execute(&mut *tx).await?;
         tx.commit().await?;
         Ok(Some(status))
+    }
+
+    async fn history_count(&self, id: &str) -> StoreResult<u64> {
+        let n: i64 = sqlx::query_scalar("SELECT COUNT(*) FROM history WHERE job_id = $1").bind(id).fetch_one(&self.pool).await?;
+        Ok(n as u64)
     }
 
     async fn delete_rows(&self, id: &str) -> StoreResult<()> {

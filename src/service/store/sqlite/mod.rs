@@ -204,9 +204,10 @@ impl JobStore for SqliteStore {
         leases::abandon(&self.pool, id, lease, why).await
     }
 
-    async fn checkpoint_index(&self, id: &str) -> StoreResult<Vec<(i64, f64)>> {
-        let rows = sqlx::query("SELECT iteration, time FROM checkpoints WHERE job_id = ?1 ORDER BY iteration")
+    async fn checkpoint_index(&self, id: &str, after: i64) -> StoreResult<Vec<(i64, f64)>> {
+        let rows = sqlx::query("SELECT iteration, time FROM checkpoints WHERE job_id = ?1 AND iteration > ?2 ORDER BY iteration LIMIT 4096")
             .bind(id)
+            .bind(after)
             .fetch_all(&self.reader)
             .await?;
         Ok(rows.iter().map(|r| (r.get::<i64, _>("iteration"), r.get::<f64, _>("time"))).collect())
@@ -220,9 +221,11 @@ impl JobStore for SqliteStore {
                 0,
             ),
             Which::At(n) => ("SELECT iteration, blob, data FROM checkpoints WHERE job_id = ?1 AND iteration = ?2", n),
-            Which::All => {
-                ("SELECT iteration, blob, data FROM checkpoints WHERE job_id = ?1 AND ?2 = ?2 ORDER BY iteration", 0)
-            }
+            Which::After(n) => (
+                "SELECT iteration, blob, data FROM checkpoints WHERE job_id = ?1 AND iteration > ?2 \
+                 ORDER BY iteration LIMIT 4096",
+                n,
+            ),
         };
         let rows = sqlx::query(sql).bind(id).bind(iteration).fetch_all(&self.reader).await?;
         Ok(rows
@@ -342,6 +345,11 @@ impl JobStore for SqliteStore {
         }
         sqlx::query("UPDATE jobs SET cancel_requested = 1 WHERE id = ?1").bind(id).execute(&self.pool).await?;
         Ok(Some(job.status))
+    }
+
+    async fn history_count(&self, id: &str) -> StoreResult<u64> {
+        let n: i64 = sqlx::query_scalar("SELECT COUNT(*) FROM history WHERE job_id = ?1").bind(id).fetch_one(&self.reader).await?;
+        Ok(n as u64)
     }
 
     async fn delete_rows(&self, id: &str) -> StoreResult<()> {
