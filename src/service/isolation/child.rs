@@ -29,6 +29,7 @@ pub fn job_runner(memory: Option<u64>) -> ExitCode {
         eprintln!("cannot set the memory budget: {e}");
         return ExitCode::from(3);
     }
+    warm_up();
     let mut stdin = std::io::stdin();
     let (request, inputs, resume, prior) = match read_request(&mut stdin) {
         Ok(r) => r,
@@ -81,6 +82,21 @@ fn die_with_parent() {
 }
 
 type Inputs = HashMap<String, Vec<u8>>;
+
+/// A small job prepared and run for one step while the process waits for its
+/// own (it is started ahead of its job: `super::runner`), so that the code and
+/// the allocator's first pages are in place when the job comes.
+fn warm_up() {
+    const SPEC: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0,
+        "resolution": 16}, "flow": {"tau": 1e-3, "max_iterations": 1}}"#;
+    if let Ok(job) = parse_spec(SPEC).and_then(|s| prepare(s, &HashMap::new())) {
+        if let Ok(outcome) = run_prepared(&job, None, &AtomicBool::new(false), &mut ()) {
+            let frame = FrameMaker::default().make(&job, &outcome.last);
+            let _ = serde_json::to_vec(&frame);
+            let _ = result_files(&job, &[frame]);
+        }
+    }
+}
 
 /// This process's data segment limited to `bytes` (the kernel enforces it: an
 /// allocation past it fails and the process aborts).

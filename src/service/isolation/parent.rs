@@ -339,14 +339,19 @@ pub fn validate(
     let mut queue = names.iter();
     let _ = process.send(&request, &mut || queue.next().map(|n| inputs[*n].clone()));
     let mut reported = None;
-    loop {
+    let end = loop {
         match process.next(Duration::from_secs(1)) {
+            // the answer: the process ends (and is waited for) on its own
+            Next::Report(Report::Outcome(end @ (RunEnd::Valid | RunEnd::Invalid { .. })), _) => {
+                std::thread::spawn(move || drop(process.finish(None)));
+                break ProcessEnd::Reported(end);
+            }
             Next::Report(Report::Outcome(end), _) => reported = Some(end),
             Next::Report(..) | Next::Quiet => {}
-            Next::End => break,
+            Next::End => break process.finish(reported),
         }
-    }
-    match process.finish(reported) {
+    };
+    match end {
         ProcessEnd::Reported(RunEnd::Valid) => Ok(Ok(())),
         ProcessEnd::Reported(RunEnd::Invalid { field, message }) => Ok(Err(Refusal { field, message })),
         ProcessEnd::OverBudget(_) => {
