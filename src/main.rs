@@ -51,6 +51,8 @@ enum Command {
         /// allowed (repeatable; the service's own pages always are).
         #[arg(long = "cors-origin", env = "SHAPEFLOW_CORS_ORIGINS", value_delimiter = ',', value_name = "ORIGIN")]
         cors_origins: Vec<String>,
+        #[command(flatten)]
+        http: HttpArgs,
         /// Read the token from this file (its first line).
         #[arg(long, env = "SHAPEFLOW_TOKEN_FILE", conflicts_with = "token")]
         token_file: Option<PathBuf>,
@@ -75,6 +77,46 @@ enum Command {
         #[arg(long)]
         markdown: bool,
     },
+}
+
+/// What HTTP clients may take of the service (docs/operations.md).
+#[derive(clap::Args)]
+struct HttpArgs {
+    /// Seconds a client has to send a request's headers, and to start its next
+    /// request on a kept-alive connection.
+    #[arg(long, env = "SHAPEFLOW_HEADER_TIMEOUT", default_value_t = 10.0)]
+    header_timeout: f64,
+    /// Bytes a second a request body must arrive at on average, once
+    /// --body-grace seconds have passed; slower, the request ends with 408.
+    #[arg(long, env = "SHAPEFLOW_BODY_MIN_RATE", value_parser = shapeflow::jobs::parse_size, default_value = "1KiB")]
+    body_min_rate: u64,
+    /// Seconds a body may take before the minimum rate applies.
+    #[arg(long, env = "SHAPEFLOW_BODY_GRACE", default_value_t = 10.0)]
+    body_grace: f64,
+    /// Open connections at most (the last 32 serve only /healthz and /readyz);
+    /// at most the open-file limit less 256.
+    #[arg(long, env = "SHAPEFLOW_MAX_CONNECTIONS", default_value_t = 1024)]
+    max_connections: usize,
+}
+
+impl HttpArgs {
+    fn limits(&self) -> Result<shapeflow::service::http::HttpLimits> {
+        let seconds = |flag: &str, s: f64| {
+            anyhow::ensure!(s.is_finite() && s > 0.0, "{flag} must be a positive number of seconds, got {s}");
+            Ok(std::time::Duration::from_secs_f64(s))
+        };
+        // as many files as the system lets this process open, less what the
+        // store, the blobs and the job processes' pipes need
+        let files = rlimit::increase_nofile_limit(u64::MAX).unwrap_or(1024) as usize;
+        let max_connections = self.max_connections.min(files.saturating_sub(256)).max(64);
+        Ok(shapeflow::service::http::HttpLimits {
+            header_timeout: seconds("--header-timeout", self.header_timeout)?,
+            body_min_rate: self.body_min_rate,
+            body_grace: seconds("--body-grace", self.body_grace)?,
+            max_connections,
+            reserve: 32,
+        })
+    }
 }
 
 /// What a node of the service needs: where the jobs are and how many it runs.
@@ -238,12 +280,13 @@ fn main() -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        Command::Serve { bind, node, token, token_file, cors_origins } => {
+        Command::Serve { bind, node, token, token_file, cors_origins, http } => {
             let config = token_from(token, token_file.as_deref()).and_then(|t| node.config(t, true));
             let result = config.and_then(|config| {
                 let config = shapeflow::service::ServiceConfig { cors_origins, ..config };
+                let limits = http.limits()?;
                 let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
-                rt.block_on(serve(Some(&bind), config))
+                rt.block_on(serve(Some((&bind, limits)), config))
             });
             match result {
                 Ok(()) => ExitCode::SUCCESS,
@@ -280,25 +323,28 @@ fn token_from(token: Option<String>, file: Option<&Path>) -> Result<Option<Strin
 
 /// Run a node: the HTTP API on `bind` (none: workers only) and the workers, until
 /// SIGINT/SIGTERM.
-async fn serve(bind: Option<&str>, config: shapeflow::service::ServiceConfig) -> Result<()> {
+async fn serve(
+    bind: Option<(&str, shapeflow::service::http::HttpLimits)>,
+    config: shapeflow::service::ServiceConfig,
+) -> Result<()> {
     let shown = redact(&config.database);
     let workers = config.workers;
     let service = shapeflow::service::Service::start_with(config)
         .await
         .with_context(|| format!("cannot open database {shown}"))?;
     match bind {
-        Some(bind) => {
+        Some((bind, limits)) => {
             let listener =
                 tokio::net::TcpListener::bind(bind).await.with_context(|| format!("cannot listen on {bind}"))?;
             tracing::info!(address = %listener.local_addr()?, database = %shown, workers, "shapeflow serving");
             let closing = service.state.closing.clone();
-            axum::serve(listener, service.router())
-                .with_graceful_shutdown(async move {
-                    shutdown_signal().await;
-                    // end open event streams, or graceful shutdown would wait for them
-                    closing.store(true, std::sync::atomic::Ordering::Relaxed);
-                })
-                .await?;
+            let shutdown = async move {
+                shutdown_signal().await;
+                // end open event streams, or graceful shutdown would wait for them
+                closing.store(true, std::sync::atomic::Ordering::Relaxed);
+            };
+            let drain = std::time::Duration::from_secs(10);
+            shapeflow::service::http::serve(listener, service.router(), limits, shutdown, drain).await?;
         }
         None => {
             tracing::info!(database = %shown, workers, "shapeflow worker running");

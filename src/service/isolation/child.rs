@@ -31,14 +31,14 @@ pub fn job_runner(memory: Option<u64>) -> ExitCode {
     }
     warm_up();
     let mut stdin = std::io::stdin();
-    let (request, inputs, resume, prior) = match read_request(&mut stdin) {
+    let (mut request, inputs, resume, prior) = match read_request(&mut stdin) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("cannot read the job's request: {e}");
             return ExitCode::from(3);
         }
     };
-    let memory = request.memory.or(memory);
+    request.memory = request.memory.or(memory);
     name_process();
     let cancel = Arc::new(AtomicBool::new(false));
     let flag = cancel.clone();
@@ -50,7 +50,7 @@ pub fn job_runner(memory: Option<u64>) -> ExitCode {
     let out = Reports { out: Mutex::new(BufWriter::new(std::io::stdout())), cancel: cancel.clone() };
     let fault = request.fault.as_deref().and_then(Fault::parse).filter(|f| !(f.once && resume.is_some()));
     let end = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        run(&request, &inputs, resume, prior, &cancel, &out, fault, memory)
+        run(&request, &inputs, resume, prior, &cancel, &out, fault)
     }))
     .unwrap_or_else(|panic| RunEnd::Panicked { message: panic_text(panic.as_ref()) });
     out.send(&Report::Outcome(end), &[]);
@@ -152,11 +152,10 @@ fn run(
     cancel: &AtomicBool,
     out: &Reports,
     fault: Option<Fault>,
-    memory: Option<u64>,
 ) -> RunEnd {
     let job = match parse_spec(&request.spec).and_then(|s| prepare(s, inputs)) {
         Ok(job) if request.validate_only => {
-            return match memory.map(|budget| MemoryEstimate::of(&job).check(budget)) {
+            return match request.memory.map(|budget| MemoryEstimate::of(&job).check(budget)) {
                 Some(Err((field, message))) => RunEnd::Invalid { field: field.into(), message },
                 _ => RunEnd::Valid,
             }

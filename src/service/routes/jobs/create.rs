@@ -7,6 +7,7 @@
 use crate::jobs::{parse_spec, prepare, MemoryEstimate};
 use crate::service::isolation::parent::validate;
 use crate::service::isolation::Isolation;
+use crate::service::min_rate::is_slow_body;
 use crate::service::wire::JobView;
 use crate::service::{ApiError, AppState, MAX_BODY_BYTES, MAX_UPLOAD_BYTES};
 use axum::extract::{FromRequest, Multipart, Request, State};
@@ -15,20 +16,46 @@ use axum::response::{IntoResponse, Response};
 use axum::Json;
 use std::collections::HashMap;
 
-/// The spec text and the input files of a multipart body.
+/// Most parts of a multipart body (a spec and its inputs).
+pub const MAX_PARTS: usize = 256;
+
+/// A body that could not be read: too slow (408), too large (413) or malformed (400).
+fn unreadable(e: &(dyn std::error::Error + 'static), limit: usize) -> ApiError {
+    let mut next = Some(e);
+    while let Some(e) = next {
+        if is_slow_body(e) {
+            return ApiError::Timeout(e.to_string());
+        }
+        if e.is::<http_body_util::LengthLimitError>() {
+            return ApiError::TooLarge(limit);
+        }
+        next = e.source();
+    }
+    ApiError::BadRequest(format!("malformed multipart body: {e}"))
+}
+
+/// The spec text and the input files of a multipart body. Everything the body
+/// holds (the preamble, the parts' headers, their number) counts against
+/// [`MAX_UPLOAD_BYTES`] and [`MAX_PARTS`].
 async fn read_multipart(req: Request, state: &AppState) -> Result<(String, HashMap<String, Vec<u8>>), ApiError> {
+    // the whole body, not only the parts' contents, is limited
+    let req = req.map(|b| axum::body::Body::new(http_body_util::Limited::new(b, MAX_UPLOAD_BYTES + (64 << 10))));
     let mut mp = Multipart::from_request(req, state)
         .await
         .map_err(|e| ApiError::BadRequest(format!("malformed multipart body: {}", e.body_text())))?;
     let mut spec = None;
     let mut inputs = HashMap::new();
-    let mut total = 0usize;
+    let (mut total, mut parts) = (0usize, 0usize);
     loop {
         let field = match mp.next_field().await {
             Ok(Some(f)) => f,
             Ok(None) => break,
-            Err(e) => return Err(ApiError::BadRequest(format!("malformed multipart body: {}", e.body_text()))),
+            Err(e) => return Err(unreadable(&e, MAX_UPLOAD_BYTES)),
         };
+        parts += 1;
+        if parts > MAX_PARTS {
+            return Err(ApiError::BadRequest(format!("the multipart body has more than {MAX_PARTS} parts")));
+        }
         let name = field
             .name()
             .map(str::to_string)
@@ -36,9 +63,10 @@ async fn read_multipart(req: Request, state: &AppState) -> Result<(String, HashM
             .ok_or_else(|| ApiError::BadRequest("a multipart part has no name".into()))?;
         let mut data = Vec::new();
         let mut field = field;
-        while let Some(chunk) =
-            field.chunk().await.map_err(|e| ApiError::BadRequest(format!("part `{name}`: {}", e.body_text())))?
-        {
+        while let Some(chunk) = field.chunk().await.map_err(|e| match unreadable(&e, MAX_UPLOAD_BYTES) {
+            ApiError::BadRequest(_) => ApiError::BadRequest(format!("part `{name}`: {}", e.body_text())),
+            other => other,
+        })? {
             total += chunk.len();
             if total > MAX_UPLOAD_BYTES {
                 return Err(ApiError::TooLarge(MAX_UPLOAD_BYTES));
@@ -96,9 +124,12 @@ pub(in crate::service::routes) async fn create(
 ) -> Result<Response, ApiError> {
     let ctype = req.headers().get(header::CONTENT_TYPE).and_then(|v| v.to_str().ok()).unwrap_or("").to_string();
     let (text, inputs) = if ctype.starts_with("application/json") {
-        let body = axum::body::to_bytes(req.into_body(), MAX_BODY_BYTES)
-            .await
-            .map_err(|_| ApiError::TooLarge(MAX_BODY_BYTES))?;
+        let body = axum::body::to_bytes(req.into_body(), MAX_BODY_BYTES).await.map_err(|e| {
+            match is_slow_body(&e) {
+                true => ApiError::Timeout(e.to_string()),
+                false => ApiError::TooLarge(MAX_BODY_BYTES),
+            }
+        })?;
         let text = String::from_utf8(body.to_vec()).map_err(|_| ApiError::BadRequest("body is not UTF-8".into()))?;
         (text, HashMap::new())
     } else if ctype.starts_with("multipart/form-data") {
