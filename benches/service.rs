@@ -147,6 +147,7 @@ fn main() {
         min_free_disk: shapeflow::service::MIN_FREE_DISK,
         faults: Vec::new(),
         cors_origins: Vec::new(),
+        max_queued: None,
     };
     let service = rt.block_on(Service::start_with(config)).unwrap();
     println!("backend: {}", service.state.store.backend());

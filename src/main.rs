@@ -62,6 +62,14 @@ enum Command {
         #[command(flatten)]
         node: NodeArgs,
     },
+    /// Create, list or revoke the API keys of a service (docs/keys.md), in the
+    /// store of its --database and --data-dir.
+    Keys {
+        #[command(subcommand)]
+        action: KeysAction,
+        #[command(flatten)]
+        store: StoreArgs,
+    },
     /// Run one job sent on standard input (the process a worker starts for each
     /// job under process isolation; not for use by hand).
     #[command(hide = true)]
@@ -119,25 +127,69 @@ impl HttpArgs {
     }
 }
 
-/// What a node of the service needs: where the jobs are and how many it runs.
+/// Where the jobs are.
 #[derive(clap::Args)]
-struct NodeArgs {
+struct StoreArgs {
     /// The job store: a SQLite file (created if missing; a relative path is taken
     /// inside --data-dir), a `sqlite:` URL, or a `postgres://user@host/db` URL
     /// shared by the nodes of a cluster.
-    #[arg(long, env = "SHAPEFLOW_DATABASE", default_value = "shapeflow.db")]
+    #[arg(long, global = true, env = "SHAPEFLOW_DATABASE", default_value = "shapeflow.db")]
     database: String,
     /// Directory for the service's data (a SQLite database, with its WAL files,
     /// and the folder `blobs` of inputs, checkpoints and results unless
     /// --object-store is given); created if missing.
-    #[arg(long, env = "SHAPEFLOW_DATA_DIR", default_value = ".")]
+    #[arg(long, global = true, env = "SHAPEFLOW_DATA_DIR", default_value = ".")]
     data_dir: PathBuf,
     /// Keep inputs, checkpoints and result files in an S3-compatible bucket,
     /// `s3://bucket` or `s3://bucket/prefix`, shared by the nodes of a cluster
     /// (credentials and endpoint from AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY,
     /// AWS_REGION, AWS_ENDPOINT, AWS_ALLOW_HTTP).
-    #[arg(long, env = "SHAPEFLOW_OBJECT_STORE")]
+    #[arg(long, global = true, env = "SHAPEFLOW_OBJECT_STORE")]
     object_store: Option<String>,
+}
+
+impl StoreArgs {
+    /// The database URL or file (a relative file inside the data directory,
+    /// which is created).
+    fn database(&self) -> Result<String> {
+        let shared = self.database.contains("://") && !self.database.starts_with("sqlite:");
+        if let Some(url) = &self.object_store {
+            anyhow::ensure!(url.starts_with("s3://"), "--object-store must be an s3://bucket/prefix URL, got {url:?}");
+        }
+        std::fs::create_dir_all(&self.data_dir)
+            .with_context(|| format!("cannot create data directory {}", self.data_dir.display()))?;
+        Ok(if shared || self.database.starts_with("sqlite:") {
+            self.database.clone()
+        } else {
+            self.data_dir.join(&self.database).to_string_lossy().into_owned()
+        })
+    }
+}
+
+#[derive(Subcommand)]
+enum KeysAction {
+    /// Make a new key and print it, once, on the last line.
+    Create {
+        /// The key's name (letters, digits, `-`, `_`, `.`).
+        name: String,
+        /// The key sees and manages every job.
+        #[arg(long)]
+        admin: bool,
+        /// Jobs accepted or running at most at a time; the next POST is 429.
+        #[arg(long)]
+        max_active: Option<u32>,
+    },
+    /// The keys, one a line: name, admin or not, quota, created, revoked.
+    List,
+    /// Revoke a key: requests with it are 401 (within a second on every node).
+    Revoke { name: String },
+}
+
+/// What a node of the service needs: where the jobs are and how many it runs.
+#[derive(clap::Args)]
+struct NodeArgs {
+    #[command(flatten)]
+    store: StoreArgs,
     /// Worker threads running jobs (default: number of cores).
     #[arg(long, env = "SHAPEFLOW_WORKERS")]
     workers: Option<usize>,
@@ -165,6 +217,10 @@ struct NodeArgs {
     /// 503 (bytes, or with a suffix).
     #[arg(long, env = "SHAPEFLOW_MIN_FREE_DISK", value_parser = shapeflow::jobs::parse_size, default_value = "512MiB")]
     min_free_disk: u64,
+    /// Jobs waiting at most on the whole service (0: no limit); beyond, a POST
+    /// is 503 with Retry-After.
+    #[arg(long, env = "SHAPEFLOW_MAX_QUEUED", default_value_t = 10_000)]
+    max_queued: u64,
     /// Log lines as `text` or `json` (one object a line, with each request's id).
     #[arg(long, env = "SHAPEFLOW_LOG_FORMAT", value_enum, default_value_t = LogFormat::Text)]
     log_format: LogFormat,
@@ -199,17 +255,7 @@ impl NodeArgs {
             "--lease-seconds must be between 1 and 30, got {}",
             self.lease_seconds
         );
-        let shared = self.database.contains("://") && !self.database.starts_with("sqlite:");
-        if let Some(url) = &self.object_store {
-            anyhow::ensure!(url.starts_with("s3://"), "--object-store must be an s3://bucket/prefix URL, got {url:?}");
-        }
-        std::fs::create_dir_all(&self.data_dir)
-            .with_context(|| format!("cannot create data directory {}", self.data_dir.display()))?;
-        let database = if shared || self.database.starts_with("sqlite:") {
-            self.database
-        } else {
-            self.data_dir.join(&self.database).to_string_lossy().into_owned()
-        };
+        let database = self.store.database()?;
         let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
         let workers = self.workers.unwrap_or(cores);
         anyhow::ensure!(api || workers > 0, "a worker node needs --workers of at least 1");
@@ -218,9 +264,8 @@ impl NodeArgs {
         let isolation = match self.isolation {
             IsolationArg::Thread => Isolation::Thread,
             IsolationArg::Process => {
-                let runner = Runner::new(
-                    std::env::current_exe().context("cannot find this program's file to run jobs with")?,
-                );
+                let runner =
+                    Runner::new(std::env::current_exe().context("cannot find this program's file to run jobs with")?);
                 runner.ahead().context("cannot start the thread that starts job processes")?;
                 Isolation::Process { runner }
             }
@@ -229,8 +274,8 @@ impl NodeArgs {
             Budgets::of_node(self.job_memory, self.job_seconds, self.job_disk, workers).map_err(anyhow::Error::msg)?;
         Ok(shapeflow::service::ServiceConfig {
             database,
-            object_store: self.object_store,
-            data_dir: self.data_dir,
+            object_store: self.store.object_store,
+            data_dir: self.store.data_dir,
             workers: workers.max(!api as usize),
             token,
             policy,
@@ -239,6 +284,7 @@ impl NodeArgs {
             min_free_disk: self.min_free_disk,
             faults: test_faults(),
             cors_origins: Vec::new(),
+            max_queued: (self.max_queued > 0).then_some(self.max_queued as i64),
         })
     }
 }
@@ -296,6 +342,13 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Command::Keys { action, store } => match keys(action, &store) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::from(1)
+            }
+        },
         Command::Worker { node } => {
             let result = node.config(None, false).and_then(|config| {
                 let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
@@ -310,6 +363,43 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// `shapeflow keys ...` on the store of `args`.
+fn keys(action: KeysAction, args: &StoreArgs) -> Result<()> {
+    use shapeflow::service::keys;
+    let database = args.database()?;
+    let rt = tokio::runtime::Builder::new_current_thread().enable_all().build()?;
+    rt.block_on(async {
+        let blobs = shapeflow::service::blobs::Blobs::open(args.object_store.as_deref(), &args.data_dir)?;
+        let store = shapeflow::service::store::open(&database, blobs)
+            .await
+            .with_context(|| format!("cannot open database {}", redact(&database)))?;
+        match action {
+            KeysAction::Create { name, admin, max_active } => {
+                let key = keys::create(&store, &name, admin, max_active.map(i64::from)).await?;
+                println!("created the key {name:?}; it is shown only now:");
+                println!("{key}");
+            }
+            KeysAction::List => {
+                for k in store.keys().await? {
+                    let quota = k.max_active.map_or("-".to_string(), |n| n.to_string());
+                    let state = if k.revoked { "revoked" } else { "active" };
+                    println!(
+                        "{}\t{}\tmax-active {quota}\t{}\t{state}",
+                        k.name,
+                        if k.admin { "admin" } else { "user" },
+                        k.created_at
+                    );
+                }
+            }
+            KeysAction::Revoke { name } => {
+                anyhow::ensure!(store.revoke_key(&name).await?, "no key {name:?} to revoke (or it is revoked already)");
+                println!("revoked the key {name:?}");
+            }
+        }
+        Ok(())
+    })
 }
 
 /// The admin token: given, or the first line of `file`.

@@ -31,7 +31,7 @@ pub(super) async fn claims(database: &str, dir: &std::path::Path) {
     let mut ids = Vec::new();
     for k in 0..50 {
         let id = format!("claim-{}-{k}", std::process::id());
-        st.insert_job(&id, SHORT, &Default::default()).await.unwrap();
+        st.insert_job(&id, SHORT, &Default::default(), &Default::default()).await.unwrap();
         ids.push(id);
     }
     let policy = ClaimPolicy::default();
@@ -64,9 +64,14 @@ async fn batch_rate(st: &store::Store, policy: &ClaimPolicy) {
     for writers in [1, 4, 16] {
         let mut tasks = Vec::new();
         for k in 0..writers {
-            st.insert_job(&format!("batch-{}-{writers}-{k}", std::process::id()), SHORT, &Default::default())
-                .await
-                .unwrap();
+            st.insert_job(
+                &format!("batch-{}-{writers}-{k}", std::process::id()),
+                SHORT,
+                &Default::default(),
+                &Default::default(),
+            )
+            .await
+            .unwrap();
             let c = st.claim_next("bench", policy).await.unwrap().expect("an accepted job");
             let st = st.clone();
             tasks.push(tokio::spawn(async move {

@@ -18,10 +18,10 @@ mod spec;
 
 pub use crate::formats::{read_mesh_file, MeshFileError};
 pub use crate::geometry::AnyMesh;
+pub use estimate::MemoryEstimate;
 pub use frames::{
     evolution_frames_of, job_extras, state_glb, states_glb, Frame, FrameFields, FrameMaker, GlbContext, MAX_FRAMES,
 };
-pub use estimate::MemoryEstimate;
 pub use kept::{run_with_frames, KeptFrames, FRAMES_AHEAD};
 pub use necks::NeckSplit;
 pub use prepare::{default_min_size, default_mu, default_mu_in, prepare, PreparedJob, ProblemKind, SegmentationSetup};

@@ -8,12 +8,12 @@ use super::isolation::child::panic_text;
 use super::isolation::fault::Fault;
 use super::isolation::parent::{JobProcess, Next, ProcessEnd};
 use super::isolation::protocol::{Report, Request, RunEnd};
+use super::isolation::Runner;
 use super::recorder::{retrying, Recorder};
 use super::store::{JobRow, Lease, MadeFrame, StoreError, Which};
 use super::worker::{Attempt, AttemptEnd, Results, Worker};
 use crate::flow::{Checkpoint, Progress, StopReason};
 use crate::jobs::{parse_spec, prepare, run_prepared, ResultFile, RunEvents};
-use super::isolation::Runner;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 

@@ -31,11 +31,17 @@ pub enum ApiError {
     /// 408: the request did not arrive in time (a body below the minimum rate).
     Timeout(String),
     /// 429 with `Retry-After` (seconds): a key's quota is used up.
-    TooMany { detail: String, retry_after: u64 },
+    TooMany {
+        detail: String,
+        retry_after: u64,
+    },
     /// 503: the node cannot take work now (why).
     Unavailable(String),
     /// 503 with `Retry-After` (seconds): the queue is full.
-    Busy { detail: String, retry_after: u64 },
+    Busy {
+        detail: String,
+        retry_after: u64,
+    },
     Internal(String),
 }
 
@@ -77,12 +83,9 @@ impl IntoResponse for ApiError {
                 format!("the request body exceeds the limit of {limit} bytes"),
                 None,
             ),
-            ApiError::Unauthorized => (
-                StatusCode::UNAUTHORIZED,
-                "Unauthorized",
-                "missing or wrong `Authorization: Bearer` key".into(),
-                None,
-            ),
+            ApiError::Unauthorized => {
+                (StatusCode::UNAUTHORIZED, "Unauthorized", "missing or wrong `Authorization: Bearer` key".into(), None)
+            }
             ApiError::Forbidden(d) => (StatusCode::FORBIDDEN, "Forbidden", d, None),
             ApiError::Timeout(d) => (StatusCode::REQUEST_TIMEOUT, "Request timeout", d, None),
             ApiError::TooMany { detail, retry_after } => {

@@ -106,7 +106,8 @@ pub async fn serve(
             req
         });
         let builder = if is_crowded { &reserved } else { &builder };
-        let conn = builder.serve_connection(TokioIo::new(stream), hyper_util::service::TowerToHyperService::new(service));
+        let conn =
+            builder.serve_connection(TokioIo::new(stream), hyper_util::service::TowerToHyperService::new(service));
         let conn = graceful.watch(conn);
         tokio::spawn(async move {
             let _guard = guard;

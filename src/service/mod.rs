@@ -14,6 +14,7 @@ mod error;
 pub mod history;
 pub mod http;
 pub mod isolation;
+pub mod keys;
 pub(crate) mod min_rate;
 mod recorder;
 mod routes;
@@ -46,9 +47,11 @@ pub struct AppState {
     pub store: Store,
     pub registry: Registry,
     pub wake: Arc<Notify>,
-    /// With a token, every route but `/healthz` and the viewer page's needs
-    /// `Authorization: Bearer <token>`.
-    pub token: Option<Arc<str>>,
+    /// Who a bearer key is (the token, stored keys): with either, every `/v1`
+    /// route needs `Authorization: Bearer KEY`.
+    pub keys: Arc<keys::Keys>,
+    /// Jobs waiting at most on the whole service (`serve --max-queued`).
+    pub max_queued: Option<i64>,
     /// Set when the server shuts down: open event streams end.
     pub closing: Arc<AtomicBool>,
     /// A job's id after each of its history batches and its outcome, from this
@@ -103,6 +106,8 @@ pub struct ServiceConfig {
     pub faults: Vec<(i64, String)>,
     /// Origins other than the service's own that may call it from a browser.
     pub cors_origins: Vec<String>,
+    /// Jobs waiting (accepted) at most on the whole service; beyond, 503.
+    pub max_queued: Option<i64>,
 }
 
 /// A running service: the HTTP state and the worker threads.
@@ -136,6 +141,7 @@ impl Service {
             min_free_disk: MIN_FREE_DISK,
             faults: Vec::new(),
             cors_origins: Vec::new(),
+            max_queued: None,
         })
         .await
     }
@@ -158,7 +164,8 @@ impl Service {
             store,
             registry: Arc::new(Mutex::new(HashMap::new())),
             wake: Arc::new(Notify::new()),
-            token: config.token.map(Arc::from),
+            keys: Arc::new(keys::Keys::new(config.token)),
+            max_queued: config.max_queued,
             closing: Arc::new(AtomicBool::new(false)),
             events,
             validations: Arc::new(tokio::sync::Semaphore::new(

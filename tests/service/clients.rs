@@ -59,14 +59,19 @@ fn a_stalled_body_is_408_and_an_endless_part_header_is_refused_early() {
     let node = Node::start(dir.path(), &["--workers", "1", "--body-grace", "2"], "");
     let idle = node.memory("VmRSS");
     let mut s = TcpStream::connect(node.addr).unwrap();
-    s.write_all(b"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nContent-Length: 1000\r\n\r\n{\"pro")
-        .unwrap();
+    s.write_all(
+        b"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nContent-Length: 1000\r\n\r\n{\"pro",
+    )
+    .unwrap();
     let t = Instant::now();
     let mut answer = String::new();
     s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
     let _ = s.read_to_string(&mut answer);
     assert!(answer.starts_with("HTTP/1.1 408"), "{answer}");
-    assert!(answer.contains("application/problem+json") && answer.contains("slower than 1024 bytes a second"), "{answer}");
+    assert!(
+        answer.contains("application/problem+json") && answer.contains("slower than 1024 bytes a second"),
+        "{answer}"
+    );
     assert!(t.elapsed() < Duration::from_secs(10), "{:?}", t.elapsed());
 
     let mut s = TcpStream::connect(node.addr).unwrap();

@@ -66,8 +66,12 @@ fn jobs_that_panic_abort_die_or_outgrow_their_memory_end_only_their_own_attempts
     assert_eq!(status, 422, "{refused}");
     assert_eq!(refused["errors"][0]["field"], "initial", "{refused}");
     let detail = refused["errors"][0]["detail"].as_str().unwrap();
-    assert!(detail.contains("163842 vertices") && detail.ends_with("more than its memory budget of 256 MiB"), "{detail}");
-    let (status, refused) = http_json(node.addr, "POST", "/v1/jobs", Some(&sphere(6, r#""limits": {"memory": "64MiB"}, "#)));
+    assert!(
+        detail.contains("163842 vertices") && detail.ends_with("more than its memory budget of 256 MiB"),
+        "{detail}"
+    );
+    let (status, refused) =
+        http_json(node.addr, "POST", "/v1/jobs", Some(&sphere(6, r#""limits": {"memory": "64MiB"}, "#)));
     assert_eq!(status, 422, "{refused}");
     assert!(refused["errors"][0]["detail"].as_str().unwrap().ends_with("memory budget of 64 MiB"), "{refused}");
     let (status, accepted) = http_json(node.addr, "POST", "/v1/jobs", Some(&sphere(5, "")));

@@ -4,10 +4,11 @@
 //! binary: each binary that starts the service compiles its HTTP stack again (about
 //! a minute of CI's build per binary).
 
+mod clients;
 #[path = "../common/mod.rs"]
 mod common;
-mod clients;
 mod isolation;
+mod keys;
 mod lifecycle;
 mod nodes;
 mod requests;

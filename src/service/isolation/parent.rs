@@ -6,8 +6,8 @@
 use super::protocol::{read_message, write_message, Control, Report, Request, RunEnd};
 use super::runner::Runner;
 use super::Budgets;
-use crate::service::store::HISTORY_ROW_BYTES;
 use crate::flow::Progress;
+use crate::service::store::HISTORY_ROW_BYTES;
 use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, BufWriter};
 use std::process::{ChildStdin, ChildStdout, ExitStatus};
@@ -21,7 +21,6 @@ const CANCEL_GRACE: Duration = Duration::from_secs(5);
 
 /// The lines of the process's standard error kept to tell why it ended.
 const STDERR_LINES: usize = 20;
-
 
 /// Why the worker killed a job's process.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

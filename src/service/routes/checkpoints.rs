@@ -40,7 +40,10 @@ pub(super) async fn list(State(state): State<AppState>, Path(id): Path<String>) 
                     Ok(p) => Some(p),
                     Err(e) => {
                         tracing::warn!("a checkpoint list stopped: {e}");
-                        return Some((Err(std::io::Error::other("the checkpoints could not be read to their end")), (None, false)));
+                        return Some((
+                            Err(std::io::Error::other("the checkpoints could not be read to their end")),
+                            (None, false),
+                        ));
                     }
                 },
                 false => None,

@@ -13,6 +13,7 @@ mod results;
 mod thinned;
 mod ui;
 
+use super::keys::Caller;
 use super::store::JobRow;
 use super::{ApiError, AppState};
 use axum::extract::rejection::QueryRejection;
@@ -96,16 +97,31 @@ async fn no_route(req: Request) -> ApiError {
     ApiError::NotFound(format!("no route {} {}", req.method(), req.uri().path()))
 }
 
-/// With a token, every route but `/healthz`, `/readyz` and the viewer page's needs it.
-async fn authorize(State(state): State<AppState>, req: Request, next: Next) -> Result<Response, ApiError> {
-    if let Some(token) = &state.token {
-        if !matches!(req.uri().path(), "/healthz" | "/readyz") && !ui::is_page(req.uri().path()) {
+/// Once a key or the token exists, every route but `/healthz`, `/readyz` and
+/// the viewer page's needs one ([`Keys`](crate::service::keys::Keys)); the caller
+/// goes on in the request's extensions, and a job another key owns is not found.
+async fn authorize(State(state): State<AppState>, mut req: Request, next: Next) -> Result<Response, ApiError> {
+    let path = req.uri().path();
+    let public = matches!(path, "/healthz" | "/readyz") || ui::is_page(path);
+    let caller = match public || !state.keys.required(&state.store).await? {
+        true => Caller::Open,
+        false => {
             let given = req.headers().get(header::AUTHORIZATION).and_then(|v| v.to_str().ok());
-            if given.and_then(|g| g.strip_prefix("Bearer ")) != Some(token.as_ref()) {
-                return Err(ApiError::Unauthorized);
+            let bearer = given.and_then(|g| g.strip_prefix("Bearer ")).ok_or(ApiError::Unauthorized)?;
+            state.keys.caller(&state.store, bearer).await?.ok_or(ApiError::Unauthorized)?
+        }
+    };
+    if !caller.sees_all() {
+        if let Some(id) = path.strip_prefix("/v1/jobs/").map(|rest| rest.split('/').next().unwrap_or("")) {
+            match state.store.job(id).await? {
+                Some(job) if !caller.may_see(job.owner.as_deref()) => {
+                    return Err(ApiError::NotFound(format!("no job {id}")));
+                }
+                _ => {}
             }
         }
     }
+    req.extensions_mut().insert(caller);
     Ok(next.run(req).await)
 }
 

@@ -19,12 +19,14 @@ pub const SQLITE: &[File] = &[
     ("0003_leases.sql", include_str!("../../../migrations/sqlite/0003_leases.sql")),
     ("0004_open_jobs.sql", include_str!("../../../migrations/sqlite/0004_open_jobs.sql")),
     ("0005_blobs.sql", include_str!("../../../migrations/sqlite/0005_blobs.sql")),
+    ("0006_keys.sql", include_str!("../../../migrations/sqlite/0006_keys.sql")),
 ];
 
 pub const POSTGRES: &[File] = &[
     ("0001_init.sql", include_str!("../../../migrations/postgres/0001_init.sql")),
     ("0002_open_jobs.sql", include_str!("../../../migrations/postgres/0002_open_jobs.sql")),
     ("0003_blobs.sql", include_str!("../../../migrations/postgres/0003_blobs.sql")),
+    ("0004_keys.sql", include_str!("../../../migrations/postgres/0004_keys.sql")),
 ];
 
 /// The migrator of a backend's files, with the versions, descriptions and

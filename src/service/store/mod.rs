@@ -28,8 +28,8 @@ pub use postgres::PgStore;
 pub use sqlite::SqliteStore;
 pub(crate) use types::status_of;
 pub use types::{
-    CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus, Lease, MadeFrame, ResultEntry,
-    ResultIndex, StoreError, StoreResult, StoredResults, Which, CHECKPOINT_PAGE,
+    Admission, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow, JobRow, JobStatus, KeyRow, Lease,
+    MadeFrame, ResultEntry, ResultIndex, StoreError, StoreResult, StoredResults, Which, CHECKPOINT_PAGE,
     HISTORY_ROW_BYTES,
 };
 
@@ -57,15 +57,39 @@ pub trait JobStore: Send + Sync + 'static {
     /// Whether the database takes writes now (readiness): an error if not.
     async fn writable(&self) -> StoreResult<()>;
     /// Insert a new accepted job and the rows of its inputs (already in the blob
-    /// store; `heads`: name and first bytes of each), in one transaction.
-    async fn insert_rows(&self, id: &str, spec: &str, heads: &[(String, Vec<u8>)]) -> StoreResult<JobRow>;
+    /// store; `heads`: name and first bytes of each), in one transaction, owned by
+    /// `admit.owner`; refused ([`StoreError::ActiveQuota`], [`StoreError::QueueFull`])
+    /// if it would pass `admit`'s limits, which the transaction checks atomically.
+    async fn insert_rows(
+        &self,
+        id: &str,
+        spec: &str,
+        heads: &[(String, Vec<u8>)],
+        admit: &Admission,
+    ) -> StoreResult<JobRow>;
     /// The first bytes (at most 8) of each uploaded input of a job.
     async fn input_magics(&self, id: &str) -> StoreResult<Vec<Vec<u8>>>;
     async fn input_rows(&self, id: &str) -> StoreResult<Vec<InputRow>>;
     async fn job(&self, id: &str) -> StoreResult<Option<JobRow>>;
-    /// Jobs newest first, optionally of one status and submitted before `before`
-    /// (a `seq`), at most `limit`.
-    async fn list(&self, status: Option<JobStatus>, before: Option<i64>, limit: i64) -> StoreResult<Vec<JobRow>>;
+    /// Jobs newest first, optionally of one status, submitted before `before`
+    /// (a `seq`) and owned by `owner`, at most `limit`.
+    async fn list(
+        &self,
+        status: Option<JobStatus>,
+        before: Option<i64>,
+        limit: i64,
+        owner: Option<&str>,
+    ) -> StoreResult<Vec<JobRow>>;
+    /// Store a new key; `false` if one of that name exists (revoked or not).
+    async fn insert_key(&self, key: &KeyRow) -> StoreResult<bool>;
+    /// Every key, revoked ones too, by name.
+    async fn keys(&self) -> StoreResult<Vec<KeyRow>>;
+    /// Revoke the key `name`; `false` if there is no such key not yet revoked.
+    async fn revoke_key(&self, name: &str) -> StoreResult<bool>;
+    /// The key (not revoked) whose hash is `hash`.
+    async fn key_by_hash(&self, hash: &str) -> StoreResult<Option<KeyRow>>;
+    /// Whether any key (not revoked) exists: then every `/v1` route needs one.
+    async fn has_keys(&self) -> StoreResult<bool>;
     /// Single node only (SQLite): jobs left running by a crash or a stop go back to
     /// the queue at start. On a shared database this is the leases' work: 0.
     async fn requeue_running(&self) -> StoreResult<u64>;
@@ -136,13 +160,24 @@ pub trait JobStore: Send + Sync + 'static {
     }
 
     /// Store a new accepted job: its inputs in the blob store, then its rows.
-    async fn insert_job(&self, id: &str, spec: &str, inputs: &HashMap<String, Vec<u8>>) -> StoreResult<JobRow> {
+    async fn insert_job(
+        &self,
+        id: &str,
+        spec: &str,
+        inputs: &HashMap<String, Vec<u8>>,
+        admit: &Admission,
+    ) -> StoreResult<JobRow> {
         let mut heads = Vec::with_capacity(inputs.len());
         for (name, data) in inputs {
             self.blobs().put(&input_key(id, name), data.clone()).await?;
             heads.push((name.clone(), data[..data.len().min(8)].to_vec()));
         }
-        self.insert_rows(id, spec, &heads).await
+        let inserted = self.insert_rows(id, spec, &heads, admit).await;
+        if inserted.is_err() && !inputs.is_empty() {
+            // refused or failed: its inputs are not kept
+            let _ = self.blobs().delete_all(&["jobs", id]).await;
+        }
+        inserted
     }
 
     /// The uploaded inputs of a job, by name.

@@ -61,6 +61,30 @@ pub struct JobRow {
     pub progress: Option<Progress>,
     /// The stored result files, once written.
     pub results: Option<ResultIndex>,
+    /// The name of the key that created the job (`None`: no key, or the token).
+    pub owner: Option<String>,
+}
+
+/// An API key: its name, the SHA-256 of the key (hex), whether it is an admin's,
+/// its quota of jobs accepted or running, and whether it was revoked.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct KeyRow {
+    pub name: String,
+    pub hash: String,
+    pub admin: bool,
+    pub max_active: Option<i64>,
+    pub created_at: String,
+    pub revoked: bool,
+}
+
+/// Who a new job belongs to and what it may not pass when it is inserted.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Admission {
+    pub owner: Option<String>,
+    /// Jobs of `owner` accepted or running at most (with this one).
+    pub max_active: Option<i64>,
+    /// Jobs accepted (waiting) on the whole service at most (with this one).
+    pub max_queued: Option<i64>,
 }
 
 /// A checkpoint's frame, serialized: its iteration, time and JSON.
@@ -113,6 +137,12 @@ pub enum StoreError {
     /// The blob store refused or failed.
     #[error("blob store: {0}")]
     Blob(#[from] BlobError),
+    /// A new job was not inserted: its key has `max_active` jobs accepted or running.
+    #[error("the key has {0} jobs accepted or running, its quota")]
+    ActiveQuota(i64),
+    /// A new job was not inserted: the service has `max_queued` jobs waiting.
+    #[error("the service has {0} jobs waiting, as many as it queues")]
+    QueueFull(i64),
 }
 
 pub type StoreResult<T> = Result<T, StoreError>;

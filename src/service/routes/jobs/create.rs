@@ -7,14 +7,19 @@
 use crate::jobs::{parse_spec, prepare, MemoryEstimate};
 use crate::service::isolation::parent::validate;
 use crate::service::isolation::Isolation;
+use crate::service::keys::Caller;
 use crate::service::min_rate::is_slow_body;
+use crate::service::store::{Admission, StoreError};
 use crate::service::wire::JobView;
 use crate::service::{ApiError, AppState, MAX_BODY_BYTES, MAX_UPLOAD_BYTES};
 use axum::extract::{FromRequest, Multipart, Request, State};
 use axum::http::{header, StatusCode};
 use axum::response::{IntoResponse, Response};
-use axum::Json;
+use axum::{Extension, Json};
 use std::collections::HashMap;
+
+/// The `Retry-After` of a refused submission (quota or full queue), in seconds.
+const QUOTA_RETRY_SECONDS: u64 = 10;
 
 /// Most parts of a multipart body (a spec and its inputs).
 pub const MAX_PARTS: usize = 256;
@@ -120,15 +125,14 @@ fn unreferenced_input(spec: &serde_json::Value, inputs: &HashMap<String, Vec<u8>
 
 pub(in crate::service::routes) async fn create(
     State(state): State<AppState>,
+    Extension(caller): Extension<Caller>,
     req: Request,
 ) -> Result<Response, ApiError> {
     let ctype = req.headers().get(header::CONTENT_TYPE).and_then(|v| v.to_str().ok()).unwrap_or("").to_string();
     let (text, inputs) = if ctype.starts_with("application/json") {
-        let body = axum::body::to_bytes(req.into_body(), MAX_BODY_BYTES).await.map_err(|e| {
-            match is_slow_body(&e) {
-                true => ApiError::Timeout(e.to_string()),
-                false => ApiError::TooLarge(MAX_BODY_BYTES),
-            }
+        let body = axum::body::to_bytes(req.into_body(), MAX_BODY_BYTES).await.map_err(|e| match is_slow_body(&e) {
+            true => ApiError::Timeout(e.to_string()),
+            false => ApiError::TooLarge(MAX_BODY_BYTES),
         })?;
         let text = String::from_utf8(body.to_vec()).map_err(|_| ApiError::BadRequest("body is not UTF-8".into()))?;
         (text, HashMap::new())
@@ -175,7 +179,23 @@ pub(in crate::service::routes) async fn create(
     .map_err(|e| ApiError::Internal(e.to_string()))??;
     unreferenced_input(&tree, &inputs)?;
     let id = uuid::Uuid::new_v4().to_string();
-    let job = state.store.insert_job(&id, &normalized, &inputs).await?;
+    let admit = Admission {
+        owner: caller.owner().map(str::to_string),
+        max_active: caller.max_active(),
+        max_queued: state.max_queued,
+    };
+    let job = match state.store.insert_job(&id, &normalized, &inputs, &admit).await {
+        Ok(job) => job,
+        Err(StoreError::ActiveQuota(max)) => {
+            let detail = format!("this key may have {max} jobs accepted or running at a time, and has them");
+            return Err(ApiError::TooMany { detail, retry_after: QUOTA_RETRY_SECONDS });
+        }
+        Err(StoreError::QueueFull(max)) => {
+            let detail = format!("the service has {max} jobs waiting, as many as it queues");
+            return Err(ApiError::Busy { detail, retry_after: QUOTA_RETRY_SECONDS });
+        }
+        Err(e) => return Err(e.into()),
+    };
     state.wake.notify_one();
     let location = format!("/v1/jobs/{id}");
     Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(JobView::from(&job))).into_response())

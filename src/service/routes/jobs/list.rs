@@ -2,12 +2,14 @@
 //! default 100) per page; `next_page_token` is present when more jobs follow.
 
 use super::super::query;
+use crate::service::keys::Caller;
 use crate::service::store::JobStatus;
 use crate::service::wire::{JobList, JobView};
 use crate::service::{ApiError, AppState};
 use axum::extract::rejection::QueryRejection;
 use axum::extract::{Query, State};
 use axum::response::{IntoResponse, Response};
+use axum::Extension;
 use axum::Json;
 use serde::Deserialize;
 
@@ -21,6 +23,7 @@ pub(in crate::service::routes) struct ListQuery {
 
 pub(in crate::service::routes) async fn list(
     State(state): State<AppState>,
+    Extension(caller): Extension<Caller>,
     q: Result<Query<ListQuery>, QueryRejection>,
 ) -> Result<Response, ApiError> {
     let q = query(q)?;
@@ -52,7 +55,8 @@ pub(in crate::service::routes) async fn list(
                 })?,
         ),
     };
-    let mut jobs = state.store.list(status, before, limit + 1).await?;
+    let owner = caller.owner().filter(|_| !caller.sees_all());
+    let mut jobs = state.store.list(status, before, limit + 1, owner).await?;
     let more = jobs.len() as i64 > limit;
     jobs.truncate(limit as usize);
     let next_page_token = jobs.last().filter(|_| more).map(|last| format!("p{:x}", last.seq));

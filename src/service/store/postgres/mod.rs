@@ -7,8 +7,8 @@
 mod listen;
 
 use super::{
-    migrations, now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow,
-    JobRow, JobStatus, JobStore, Lease, StoreError, StoreResult, Which,
+    migrations, now, results_of, status_of, Admission, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed,
+    InputRow, JobRow, JobStatus, JobStore, KeyRow, Lease, StoreError, StoreResult, Which,
 };
 use crate::flow::Progress;
 use sqlx::postgres::{PgConnectOptions, PgPool, PgPoolOptions, PgRow};
@@ -37,6 +37,17 @@ pub struct PgStore {
     blobs: Blobs,
 }
 
+fn key_from_row(r: &PgRow) -> KeyRow {
+    KeyRow {
+        name: r.get("name"),
+        hash: r.get("hash"),
+        admin: r.get("admin"),
+        max_active: r.get("max_active"),
+        created_at: r.get("created_at"),
+        revoked: r.get::<Option<String>, _>("revoked_at").is_some(),
+    }
+}
+
 fn job_from_row(r: &PgRow) -> JobRow {
     let iteration: Option<i64> = r.get("iteration");
     JobRow {
@@ -58,6 +69,7 @@ fn job_from_row(r: &PgRow) -> JobRow {
             components: r.get::<i64, _>("components") as usize,
         }),
         results: results_of(r.get("results")),
+        owner: r.get("owner"),
     }
 }
 
@@ -102,15 +114,44 @@ impl JobStore for PgStore {
         true
     }
 
-    async fn insert_rows(&self, id: &str, spec: &str, heads: &[(String, Vec<u8>)]) -> StoreResult<JobRow> {
+    async fn insert_rows(
+        &self,
+        id: &str,
+        spec: &str,
+        heads: &[(String, Vec<u8>)],
+        admit: &Admission,
+    ) -> StoreResult<JobRow> {
         let mut tx = self.pool.begin().await?;
-        let r =
-            sqlx::query("INSERT INTO jobs (id, status, spec, created_at) VALUES ($1, 'accepted', $2, $3) RETURNING *")
-                .bind(id)
-                .bind(spec)
-                .bind(now())
-                .fetch_one(&mut *tx)
-                .await?;
+        if admit.max_active.is_some() || admit.max_queued.is_some() {
+            // one admission at a time on every node: the counts cannot change before the insert
+            sqlx::query("SELECT pg_advisory_xact_lock(hashtext('shapeflow admission'))").execute(&mut *tx).await?;
+        }
+        if let (Some(owner), Some(max)) = (&admit.owner, admit.max_active) {
+            let active: i64 =
+                sqlx::query_scalar("SELECT COUNT(*) FROM jobs WHERE owner = $1 AND status IN ('accepted', 'running')")
+                    .bind(owner)
+                    .fetch_one(&mut *tx)
+                    .await?;
+            if active >= max {
+                return Err(StoreError::ActiveQuota(max));
+            }
+        }
+        if let Some(max) = admit.max_queued {
+            let queued: i64 =
+                sqlx::query_scalar("SELECT COUNT(*) FROM jobs WHERE status = 'accepted'").fetch_one(&mut *tx).await?;
+            if queued >= max {
+                return Err(StoreError::QueueFull(max));
+            }
+        }
+        let r = sqlx::query(
+            "INSERT INTO jobs (id, status, spec, created_at, owner) VALUES ($1, 'accepted', $2, $3, $4) RETURNING *",
+        )
+        .bind(id)
+        .bind(spec)
+        .bind(now())
+        .bind(&admit.owner)
+        .fetch_one(&mut *tx)
+        .await?;
         for (name, head) in heads {
             sqlx::query("INSERT INTO inputs (job_id, name, data, in_blob, head) VALUES ($1, $2, '', TRUE, $3)")
                 .bind(id)
@@ -149,18 +190,68 @@ impl JobStore for PgStore {
         Ok(r.as_ref().map(job_from_row))
     }
 
-    async fn list(&self, status: Option<JobStatus>, before: Option<i64>, limit: i64) -> StoreResult<Vec<JobRow>> {
+    async fn list(
+        &self,
+        status: Option<JobStatus>,
+        before: Option<i64>,
+        limit: i64,
+        owner: Option<&str>,
+    ) -> StoreResult<Vec<JobRow>> {
         let status = status.map(JobStatus::as_str);
         let rows = sqlx::query(
             "SELECT * FROM jobs WHERE ($1::text IS NULL OR status = $1) AND ($2::bigint IS NULL OR seq < $2) \
-             ORDER BY seq DESC LIMIT $3",
+             AND ($4::text IS NULL OR owner = $4) ORDER BY seq DESC LIMIT $3",
         )
         .bind(status)
         .bind(before)
         .bind(limit)
+        .bind(owner)
         .fetch_all(&self.pool)
         .await?;
         Ok(rows.iter().map(job_from_row).collect())
+    }
+
+    async fn insert_key(&self, key: &KeyRow) -> StoreResult<bool> {
+        let done = sqlx::query(
+            "INSERT INTO keys (name, hash, admin, max_active, created_at) VALUES ($1, $2, $3, $4, $5) \
+             ON CONFLICT DO NOTHING",
+        )
+        .bind(&key.name)
+        .bind(&key.hash)
+        .bind(key.admin)
+        .bind(key.max_active)
+        .bind(&key.created_at)
+        .execute(&self.pool)
+        .await?;
+        Ok(done.rows_affected() == 1)
+    }
+
+    async fn keys(&self) -> StoreResult<Vec<KeyRow>> {
+        let rows = sqlx::query("SELECT * FROM keys ORDER BY name").fetch_all(&self.pool).await?;
+        Ok(rows.iter().map(key_from_row).collect())
+    }
+
+    async fn revoke_key(&self, name: &str) -> StoreResult<bool> {
+        let done = sqlx::query("UPDATE keys SET revoked_at = $2 WHERE name = $1 AND revoked_at IS NULL")
+            .bind(name)
+            .bind(now())
+            .execute(&self.pool)
+            .await?;
+        Ok(done.rows_affected() == 1)
+    }
+
+    async fn key_by_hash(&self, hash: &str) -> StoreResult<Option<KeyRow>> {
+        let row = sqlx::query("SELECT * FROM keys WHERE hash = $1 AND revoked_at IS NULL")
+            .bind(hash)
+            .fetch_optional(&self.pool)
+            .await?;
+        Ok(row.as_ref().map(key_from_row))
+    }
+
+    async fn has_keys(&self) -> StoreResult<bool> {
+        let n: i64 =
+            sqlx::query_scalar("SELECT COUNT(*) FROM keys WHERE revoked_at IS NULL").fetch_one(&self.pool).await?;
+        Ok(n > 0)
     }
 
     /// Nodes share the database: a running job belongs to its lease holder until
@@ -368,7 +459,8 @@ impl JobStore for PgStore {
     }
 
     async fn history_count(&self, id: &str) -> StoreResult<u64> {
-        let n: i64 = sqlx::query_scalar("SELECT COUNT(*) FROM history WHERE job_id = $1").bind(id).fetch_one(&self.pool).await?;
+        let n: i64 =
+            sqlx::query_scalar("SELECT COUNT(*) FROM history WHERE job_id = $1").bind(id).fetch_one(&self.pool).await?;
         Ok(n as u64)
     }
 

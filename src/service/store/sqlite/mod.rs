@@ -5,8 +5,8 @@
 //! queue.
 
 use super::{
-    migrations, now, results_of, status_of, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed, InputRow,
-    JobRow, JobStatus, JobStore, Lease, StoreResult, Which,
+    migrations, now, results_of, status_of, Admission, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed,
+    InputRow, JobRow, JobStatus, JobStore, KeyRow, Lease, StoreError, StoreResult, Which,
 };
 use crate::flow::Progress;
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous};
@@ -61,6 +61,18 @@ fn job_from_row(r: &sqlx::sqlite::SqliteRow) -> JobRow {
             components: r.get::<i64, _>("components") as usize,
         }),
         results: results_of(r.get("results")),
+        owner: r.get("owner"),
+    }
+}
+
+fn key_from_row(r: &sqlx::sqlite::SqliteRow) -> KeyRow {
+    KeyRow {
+        name: r.get("name"),
+        hash: r.get("hash"),
+        admin: r.get("admin"),
+        max_active: r.get("max_active"),
+        created_at: r.get("created_at"),
+        revoked: r.get::<Option<String>, _>("revoked_at").is_some(),
     }
 }
 
@@ -116,15 +128,40 @@ impl JobStore for SqliteStore {
         &self.blobs
     }
 
-    async fn insert_rows(&self, id: &str, spec: &str, heads: &[(String, Vec<u8>)]) -> StoreResult<JobRow> {
+    async fn insert_rows(
+        &self,
+        id: &str,
+        spec: &str,
+        heads: &[(String, Vec<u8>)],
+        admit: &Admission,
+    ) -> StoreResult<JobRow> {
+        // the one writer's transaction: the counts cannot change before the insert
         let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
+        if let (Some(owner), Some(max)) = (&admit.owner, admit.max_active) {
+            let active: i64 =
+                sqlx::query_scalar("SELECT COUNT(*) FROM jobs WHERE owner = ?1 AND status IN ('accepted', 'running')")
+                    .bind(owner)
+                    .fetch_one(&mut *tx)
+                    .await?;
+            if active >= max {
+                return Err(StoreError::ActiveQuota(max));
+            }
+        }
+        if let Some(max) = admit.max_queued {
+            let queued: i64 =
+                sqlx::query_scalar("SELECT COUNT(*) FROM jobs WHERE status = 'accepted'").fetch_one(&mut *tx).await?;
+            if queued >= max {
+                return Err(StoreError::QueueFull(max));
+            }
+        }
         sqlx::query(
-            "INSERT INTO jobs (id, seq, status, spec, created_at) \
-             VALUES (?1, (SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs), 'accepted', ?2, ?3)",
+            "INSERT INTO jobs (id, seq, status, spec, created_at, owner) \
+             VALUES (?1, (SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs), 'accepted', ?2, ?3, ?4)",
         )
         .bind(id)
         .bind(spec)
         .bind(now())
+        .bind(&admit.owner)
         .execute(&mut *tx)
         .await?;
         for (name, head) in heads {
@@ -163,18 +200,68 @@ impl JobStore for SqliteStore {
         Ok(r.as_ref().map(job_from_row))
     }
 
-    async fn list(&self, status: Option<JobStatus>, before: Option<i64>, limit: i64) -> StoreResult<Vec<JobRow>> {
+    async fn list(
+        &self,
+        status: Option<JobStatus>,
+        before: Option<i64>,
+        limit: i64,
+        owner: Option<&str>,
+    ) -> StoreResult<Vec<JobRow>> {
         let status = status.map(JobStatus::as_str);
         let rows = sqlx::query(
             "SELECT * FROM jobs WHERE (?1 IS NULL OR status = ?1) AND (?2 IS NULL OR seq < ?2) \
-             ORDER BY seq DESC LIMIT ?3",
+             AND (?4 IS NULL OR owner = ?4) ORDER BY seq DESC LIMIT ?3",
         )
         .bind(status)
         .bind(before)
         .bind(limit)
+        .bind(owner)
         .fetch_all(&self.reader)
         .await?;
         Ok(rows.iter().map(job_from_row).collect())
+    }
+
+    async fn insert_key(&self, key: &KeyRow) -> StoreResult<bool> {
+        let done = sqlx::query(
+            "INSERT INTO keys (name, hash, admin, max_active, created_at) VALUES (?1, ?2, ?3, ?4, ?5) \
+             ON CONFLICT DO NOTHING",
+        )
+        .bind(&key.name)
+        .bind(&key.hash)
+        .bind(key.admin)
+        .bind(key.max_active)
+        .bind(&key.created_at)
+        .execute(&self.pool)
+        .await?;
+        Ok(done.rows_affected() == 1)
+    }
+
+    async fn keys(&self) -> StoreResult<Vec<KeyRow>> {
+        let rows = sqlx::query("SELECT * FROM keys ORDER BY name").fetch_all(&self.reader).await?;
+        Ok(rows.iter().map(key_from_row).collect())
+    }
+
+    async fn revoke_key(&self, name: &str) -> StoreResult<bool> {
+        let done = sqlx::query("UPDATE keys SET revoked_at = ?2 WHERE name = ?1 AND revoked_at IS NULL")
+            .bind(name)
+            .bind(now())
+            .execute(&self.pool)
+            .await?;
+        Ok(done.rows_affected() == 1)
+    }
+
+    async fn key_by_hash(&self, hash: &str) -> StoreResult<Option<KeyRow>> {
+        let row = sqlx::query("SELECT * FROM keys WHERE hash = ?1 AND revoked_at IS NULL")
+            .bind(hash)
+            .fetch_optional(&self.reader)
+            .await?;
+        Ok(row.as_ref().map(key_from_row))
+    }
+
+    async fn has_keys(&self) -> StoreResult<bool> {
+        let n: i64 =
+            sqlx::query_scalar("SELECT COUNT(*) FROM keys WHERE revoked_at IS NULL").fetch_one(&self.reader).await?;
+        Ok(n > 0)
     }
 
     /// The write lock taken and given back.
@@ -348,7 +435,10 @@ impl JobStore for SqliteStore {
     }
 
     async fn history_count(&self, id: &str) -> StoreResult<u64> {
-        let n: i64 = sqlx::query_scalar("SELECT COUNT(*) FROM history WHERE job_id = ?1").bind(id).fetch_one(&self.reader).await?;
+        let n: i64 = sqlx::query_scalar("SELECT COUNT(*) FROM history WHERE job_id = ?1")
+            .bind(id)
+            .fetch_one(&self.reader)
+            .await?;
         Ok(n as u64)
     }
 
@@ -380,7 +470,7 @@ mod tests {
     async fn the_rows_of_a_batch_are_fenced_by_the_lease() {
         let dir = tempfile::tempdir().unwrap();
         let store = SqliteStore::open(&dir.path().join("jobs.db"), Blobs::local(dir.path()).unwrap()).await.unwrap();
-        store.insert_rows("j1", "{}", &[]).await.unwrap();
+        store.insert_rows("j1", "{}", &[], &Default::default()).await.unwrap();
         let claimed = store.claim_next("node", &ClaimPolicy::default()).await.unwrap().unwrap();
         let lease = claimed.lease;
         let row = |iteration| Progress { iteration, time: 0.1, tau: 0.1, energy: 2.0, vertices: 8, components: 1 };
