@@ -15,6 +15,7 @@ pub mod history;
 pub mod http;
 pub mod isolation;
 pub mod keys;
+pub mod metrics;
 pub(crate) mod min_rate;
 mod recorder;
 mod routes;
@@ -52,6 +53,8 @@ pub struct AppState {
     pub keys: Arc<keys::Keys>,
     /// Jobs waiting at most on the whole service (`serve --max-queued`).
     pub max_queued: Option<i64>,
+    /// What `/metrics` shows.
+    pub metrics: Arc<metrics::Metrics>,
     /// Set when the server shuts down: open event streams end.
     pub closing: Arc<AtomicBool>,
     /// A job's id after each of its history batches and its outcome, from this
@@ -166,6 +169,7 @@ impl Service {
             wake: Arc::new(Notify::new()),
             keys: Arc::new(keys::Keys::new(config.token)),
             max_queued: config.max_queued,
+            metrics: Arc::default(),
             closing: Arc::new(AtomicBool::new(false)),
             events,
             validations: Arc::new(tokio::sync::Semaphore::new(
@@ -208,6 +212,7 @@ impl Service {
                     isolation: config.isolation.clone(),
                     budgets: config.budgets,
                     faults: faults.clone(),
+                    metrics: state.metrics.clone(),
                 };
                 std::thread::Builder::new()
                     .name(format!("worker-{k}"))

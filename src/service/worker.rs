@@ -58,6 +58,8 @@ pub struct Worker {
     pub budgets: Budgets,
     /// Faults injected into jobs by submission number (tests of isolation only).
     pub faults: Arc<Vec<(i64, String)>>,
+    /// Where attempts, takeovers and run times are counted.
+    pub metrics: Arc<super::metrics::Metrics>,
 }
 
 impl Worker {
@@ -67,6 +69,11 @@ impl Worker {
             return Ok(Outcome::Idle);
         };
         let id = claimed.job.id.clone();
+        self.metrics.attempts.inc();
+        if claimed.takeover {
+            self.metrics.takeovers.inc();
+        }
+        let started = std::time::Instant::now();
         // a panic in the worker's own work (the result files, say) ends the attempt,
         // not the worker: the job goes on at its next claim
         let ran =
@@ -76,6 +83,7 @@ impl Worker {
                 self.rt.block_on(retrying(|| self.store.abandon(&id, &claimed.lease, &why)))?;
                 Ok(JobStatus::Running)
             });
+        self.metrics.run_seconds.observe(started.elapsed().as_secs_f64());
         match ran {
             Ok(status) => Ok(Outcome::Ran { id, status }),
             Err(StoreError::LeaseLost(_)) => Ok(Outcome::Lost { id }),

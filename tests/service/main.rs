@@ -11,6 +11,7 @@ mod isolation;
 mod keys;
 mod lifecycle;
 mod nodes;
+mod operations;
 mod requests;
 mod results;
 mod storage;

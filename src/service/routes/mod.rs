@@ -6,6 +6,7 @@ mod checkpoints;
 mod energy;
 mod events;
 mod jobs;
+mod metrics;
 mod openapi;
 mod origin;
 mod readyz;
@@ -23,6 +24,8 @@ use axum::middleware::{self, Next};
 use axum::response::Response;
 use axum::routing::{get, post};
 use axum::Router;
+use tower_http::request_id::{MakeRequestUuid, PropagateRequestIdLayer, SetRequestIdLayer};
+use tower_http::trace::TraceLayer;
 
 pub use openapi::{openapi_json, OPENAPI_YAML};
 
@@ -31,6 +34,7 @@ pub use openapi::{openapi_json, OPENAPI_YAML};
 pub const ROUTES: &[(&str, &str)] = &[
     ("GET", "/healthz"),
     ("GET", "/readyz"),
+    ("GET", "/metrics"),
     ("GET", "/"),
     ("GET", "/jobs/{id}"),
     ("GET", "/ui/{path}"),
@@ -64,6 +68,7 @@ pub fn router(state: AppState) -> Router {
     let app = Router::new()
         .route("/healthz", get(|| async { "ok" }))
         .route("/readyz", get(readyz::readyz))
+        .route("/metrics", get(metrics::metrics))
         .route("/", get(ui::index))
         .route("/jobs/{id}", get(ui::job_page))
         .route("/ui/{*path}", get(ui::asset))
@@ -81,6 +86,7 @@ pub fn router(state: AppState) -> Router {
         .route("/v1/jobs/{id}/results/{image}", get(results::image_result))
         .route("/v1/jobs/{id}/checkpoints", get(checkpoints::list))
         .route("/v1/jobs/{id}/checkpoints/{file}", get(checkpoints::glb))
+        .route_layer(middleware::from_fn_with_state(state.clone(), metrics::observe))
         .fallback(no_route)
         .layer(DefaultBodyLimit::disable())
         .layer(middleware::from_fn_with_state(state.clone(), authorize))
@@ -90,7 +96,20 @@ pub fn router(state: AppState) -> Router {
         Some(cors) => app.layer(cors),
         None => app,
     };
-    app.with_state(state)
+    app.layer(PropagateRequestIdLayer::x_request_id())
+        .layer(
+            TraceLayer::new_for_http()
+                .make_span_with(|req: &Request| {
+                    let id = req.headers().get("x-request-id").and_then(|v| v.to_str().ok()).unwrap_or("");
+                    tracing::info_span!("request", request_id = %id, method = %req.method(), uri = %req.uri().path())
+                })
+                .on_request(())
+                .on_response(|res: &Response, latency: std::time::Duration, _: &tracing::Span| {
+                    tracing::info!(status = res.status().as_u16(), ms = latency.as_secs_f64() * 1e3, "answered");
+                }),
+        )
+        .layer(SetRequestIdLayer::x_request_id(MakeRequestUuid))
+        .with_state(state)
 }
 
 async fn no_route(req: Request) -> ApiError {

@@ -80,6 +80,8 @@ pub trait JobStore: Send + Sync + 'static {
         limit: i64,
         owner: Option<&str>,
     ) -> StoreResult<Vec<JobRow>>;
+    /// The number of jobs of each status present.
+    async fn counts_by_status(&self) -> StoreResult<Vec<(String, i64)>>;
     /// Store a new key; `false` if one of that name exists (revoked or not).
     async fn insert_key(&self, key: &KeyRow) -> StoreResult<bool>;
     /// Every key, revoked ones too, by name.

@@ -221,6 +221,12 @@ impl JobStore for SqliteStore {
         Ok(rows.iter().map(job_from_row).collect())
     }
 
+    async fn counts_by_status(&self) -> StoreResult<Vec<(String, i64)>> {
+        let rows =
+            sqlx::query("SELECT status, COUNT(*) AS n FROM jobs GROUP BY status").fetch_all(&self.reader).await?;
+        Ok(rows.iter().map(|r| (r.get("status"), r.get("n"))).collect())
+    }
+
     async fn insert_key(&self, key: &KeyRow) -> StoreResult<bool> {
         let done = sqlx::query(
             "INSERT INTO keys (name, hash, admin, max_active, created_at) VALUES (?1, ?2, ?3, ?4, ?5) \

@@ -1,0 +1,82 @@
+//! What operators read and set (docs/operations.md): `/metrics` in the
+//! OpenMetrics text format with job counts that match the jobs submitted,
+//! settings from `SHAPEFLOW_*` variables and a token file, and JSON log lines
+//! with a request id.
+
+use super::nodes::{Node, STEADY};
+use super::*;
+use std::collections::HashMap;
+use std::process::{Command, Stdio};
+
+/// The samples of an OpenMetrics text: `name{labels}` → value; every line a
+/// comment (`# TYPE`, `# HELP`, `# UNIT`, `# EOF`) or a sample.
+fn samples(text: &str) -> HashMap<String, f64> {
+    assert!(text.ends_with("# EOF\n"), "{text}");
+    let mut out = HashMap::new();
+    for line in text.lines().filter(|l| !l.starts_with('#')) {
+        let (name, value) = line.rsplit_once(' ').unwrap_or_else(|| panic!("not a sample: {line:?}"));
+        out.insert(name.to_string(), value.parse::<f64>().unwrap_or_else(|_| panic!("{line:?}")));
+    }
+    out
+}
+
+#[test]
+fn metrics_count_the_jobs_requests_and_attempts() {
+    let dir = tempfile::tempdir().unwrap();
+    let node = Node::start(dir.path(), &["--workers", "1"], "");
+    let ids: Vec<String> = (0..3).map(|_| node.submit(STEADY)).collect();
+    ids.iter().for_each(|id| drop(node.wait_final(id)));
+    let (status, _) = http_json(node.addr, "POST", "/v1/jobs", Some(r#"{"problem": {}}"#));
+    assert_eq!(status, 422);
+    let (status, head, text) = http(node.addr, "GET", "/metrics", None, "");
+    assert_eq!(status, 200);
+    assert!(head.to_ascii_lowercase().contains("content-type: application/openmetrics-text"), "{head}");
+    let m = samples(&text);
+    assert_eq!(m["shapeflow_jobs{status=\"successful\"}"], 3.0, "{text}");
+    assert_eq!(m["shapeflow_jobs{status=\"accepted\"}"], 0.0, "{text}");
+    assert_eq!(m["shapeflow_job_attempts_total"], 3.0, "{text}");
+    assert_eq!(m["shapeflow_job_takeovers_total"], 0.0, "{text}");
+    assert_eq!(m["shapeflow_job_run_seconds_count"], 3.0, "{text}");
+    assert_eq!(m["shapeflow_http_requests_total{route=\"/v1/jobs\",method=\"POST\",status=\"201\"}"], 3.0, "{text}");
+    assert_eq!(m["shapeflow_http_requests_total{route=\"/v1/jobs\",method=\"POST\",status=\"422\"}"], 1.0, "{text}");
+    assert!(m["shapeflow_http_request_seconds_count{route=\"/v1/jobs/{id}\"}"] >= 3.0, "{text}");
+}
+
+#[test]
+fn settings_come_from_the_environment_and_logs_can_be_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let port = super::nodes::free_port();
+    std::fs::write(dir.path().join("token"), "from-a-file\n").unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_shapeflow"))
+        .arg("serve")
+        .env("SHAPEFLOW_BIND", format!("127.0.0.1:{port}"))
+        .env("SHAPEFLOW_DATA_DIR", dir.path())
+        .env("SHAPEFLOW_WORKERS", "1")
+        .env("SHAPEFLOW_LOG_FORMAT", "json")
+        .env("SHAPEFLOW_TOKEN_FILE", dir.path().join("token"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let addr: SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
+    let start = Instant::now();
+    while TcpStream::connect(addr).is_err() {
+        assert!(start.elapsed() < Duration::from_secs(20), "the server did not come up");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(http(addr, "GET", "/v1/jobs", None, "").0, 401);
+    let (status, head, _) = http(addr, "GET", "/v1/jobs", None, "Authorization: Bearer from-a-file\r\n");
+    assert_eq!(status, 200);
+    let id = head.lines().find_map(|l| l.to_ascii_lowercase().strip_prefix("x-request-id: ").map(str::to_string));
+    let id = id.unwrap_or_else(|| panic!("no request id: {head}"));
+    child.kill().unwrap();
+    let mut logs = String::new();
+    child.stderr.take().unwrap().read_to_string(&mut logs).unwrap();
+    child.wait().unwrap();
+    let lines: Vec<Value> = logs.lines().map(|l| serde_json::from_str(l).unwrap_or_else(|_| panic!("{l:?}"))).collect();
+    assert!(lines.iter().any(|l| l["message"] == "shapeflow serving"), "{logs}");
+    assert!(
+        lines.iter().any(|l| l["span"]["request_id"] == id.as_str() && l["span"]["uri"] == "/v1/jobs"),
+        "a log line of the request with its id {id}: {logs}"
+    );
+}
