@@ -19,5 +19,8 @@ COPY examples /usr/share/shapeflow/examples
 USER shapeflow
 VOLUME /data
 EXPOSE 8080
+# readiness: the database takes writes, the blobs can be written, the disk has room
+HEALTHCHECK --interval=15s --timeout=6s --start-period=10s --retries=3 \
+    CMD ["shapeflow", "health", "--url", "127.0.0.1:8080/readyz"]
 ENTRYPOINT ["shapeflow"]
 CMD ["serve", "--bind", "0.0.0.0:8080", "--data-dir", "/data"]

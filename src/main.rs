@@ -70,6 +70,13 @@ enum Command {
         #[command(flatten)]
         store: StoreArgs,
     },
+    /// Exit 0 if a service answers 200 at `--url` (a container's health check:
+    /// `GET /readyz`), 1 otherwise.
+    Health {
+        /// host:port and path of the check.
+        #[arg(long, default_value = "127.0.0.1:8080/readyz")]
+        url: String,
+    },
     /// Run one job sent on standard input (the process a worker starts for each
     /// job under process isolation; not for use by hand).
     #[command(hide = true)]
@@ -349,6 +356,21 @@ fn main() -> ExitCode {
                 ExitCode::from(1)
             }
         },
+        Command::Health { url } => {
+            let url = url.trim_start_matches("http://");
+            let (addr, path) = url.find('/').map_or((url, "/readyz"), |i| (&url[..i], &url[i..]));
+            match shapeflow::service::http::probe(addr, path, std::time::Duration::from_secs(5)) {
+                Ok(200) => ExitCode::SUCCESS,
+                Ok(status) => {
+                    eprintln!("{url}: {status}");
+                    ExitCode::from(1)
+                }
+                Err(e) => {
+                    eprintln!("{url}: {e}");
+                    ExitCode::from(1)
+                }
+            }
+        }
         Command::Worker { node } => {
             let result = node.config(None, false).and_then(|config| {
                 let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;

@@ -147,3 +147,19 @@ async fn crowded(req: Request, next: Next) -> Response {
     }
     next.run(req).await
 }
+
+/// The status of `GET path` on `addr` (HTTP/1.1, no body read): the container
+/// health check (`shapeflow health`), which needs no curl in the image.
+pub fn probe(addr: &str, path: &str, timeout: Duration) -> std::io::Result<u16> {
+    use std::io::{Read, Write};
+    use std::net::ToSocketAddrs;
+    let target = addr.to_socket_addrs()?.next().ok_or_else(|| std::io::Error::other(format!("no address {addr}")))?;
+    let mut stream = std::net::TcpStream::connect_timeout(&target, timeout)?;
+    stream.set_read_timeout(Some(timeout))?;
+    stream.set_write_timeout(Some(timeout))?;
+    write!(stream, "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n")?;
+    let mut head = [0u8; 12];
+    stream.read_exact(&mut head)?;
+    let text = String::from_utf8_lossy(&head);
+    text.get(9..12).and_then(|s| s.parse().ok()).ok_or_else(|| std::io::Error::other(format!("not HTTP: {text:?}")))
+}
