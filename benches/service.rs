@@ -148,6 +148,7 @@ fn main() {
         faults: Vec::new(),
         cors_origins: Vec::new(),
         max_queued: None,
+        retain: None,
     };
     let service = rt.block_on(Service::start_with(config)).unwrap();
     println!("backend: {}", service.state.store.backend());

@@ -228,6 +228,10 @@ struct NodeArgs {
     /// is 503 with Retry-After.
     #[arg(long, env = "SHAPEFLOW_MAX_QUEUED", default_value_t = 10_000)]
     max_queued: u64,
+    /// Delete jobs that ended longer ago than this (`30d`, `12h`, `90s`), with
+    /// their history, checkpoints and files; default: keep them.
+    #[arg(long, env = "SHAPEFLOW_RETAIN", value_parser = shapeflow::service::retention::parse_duration)]
+    retain: Option<std::time::Duration>,
     /// Log lines as `text` or `json` (one object a line, with each request's id).
     #[arg(long, env = "SHAPEFLOW_LOG_FORMAT", value_enum, default_value_t = LogFormat::Text)]
     log_format: LogFormat,
@@ -292,6 +296,7 @@ impl NodeArgs {
             faults: test_faults(),
             cors_origins: Vec::new(),
             max_queued: (self.max_queued > 0).then_some(self.max_queued as i64),
+            retain: self.retain,
         })
     }
 }

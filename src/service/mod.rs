@@ -18,6 +18,7 @@ pub mod keys;
 pub mod metrics;
 pub(crate) mod min_rate;
 mod recorder;
+pub mod retention;
 mod routes;
 pub mod store;
 mod wire;
@@ -111,6 +112,8 @@ pub struct ServiceConfig {
     pub cors_origins: Vec<String>,
     /// Jobs waiting (accepted) at most on the whole service; beyond, 503.
     pub max_queued: Option<i64>,
+    /// Jobs that ended longer ago than this are deleted (`None`: kept).
+    pub retain: Option<std::time::Duration>,
 }
 
 /// A running service: the HTTP state and the worker threads.
@@ -145,6 +148,7 @@ impl Service {
             faults: Vec::new(),
             cors_origins: Vec::new(),
             max_queued: None,
+            retain: None,
         })
         .await
     }
@@ -195,6 +199,9 @@ impl Service {
                 }
             }
         });
+        if let Some(retain) = config.retain {
+            tokio::spawn(retention::sweep_forever(state.store.clone(), retain, state.closing.clone()));
+        }
         let shutdown = Arc::new(AtomicBool::new(false));
         let rt = tokio::runtime::Handle::current();
         let faults = Arc::new(config.faults);

@@ -80,3 +80,61 @@ fn settings_come_from_the_environment_and_logs_can_be_json() {
         "a log line of the request with its id {id}: {logs}"
     );
 }
+
+/// `--retain 2s`: a job that ended is gone a few seconds later with its rows and
+/// blobs, and the SQLite file gives the space back; a job still running stays.
+#[test]
+fn retention_deletes_ended_jobs_and_the_database_shrinks() {
+    let dir = tempfile::tempdir().unwrap();
+    let id = {
+        let node = Node::start(dir.path(), &["--workers", "1"], "");
+        let id = node.submit(STEADY);
+        node.assert_complete(&id, 500, 11);
+        id
+    };
+    // 300,000 more history rows: a file of some megabytes
+    let db = dir.path().join("shapeflow.db");
+    let rt = tokio::runtime::Builder::new_current_thread().build().unwrap();
+    rt.block_on(async {
+        use sqlx::Connection;
+        let mut conn = sqlx::SqliteConnection::connect(&format!("sqlite:{}", db.display())).await.unwrap();
+        sqlx::query(
+            "WITH RECURSIVE n(x) AS (SELECT 501 UNION ALL SELECT x + 1 FROM n WHERE x < 300500) \
+             INSERT INTO history SELECT ?1, x, x * 1e-4, 1e-4, 1.0, 128, 1 FROM n",
+        )
+        .bind(&id)
+        .execute(&mut conn)
+        .await
+        .unwrap();
+        sqlx::query("PRAGMA wal_checkpoint(TRUNCATE)").execute(&mut conn).await.unwrap();
+        conn.close().await.unwrap();
+    });
+    let full = std::fs::metadata(&db).unwrap().len();
+    assert!(full > 8 << 20, "{full} bytes");
+    assert!(dir.path().join("blobs/jobs").join(&id).exists());
+
+    let node = Node::start(dir.path(), &["--workers", "1", "--retain", "2s"], "");
+    let running = node.submit(
+        r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 256},
+            "flow": {"tau": 1e-9, "end_time": 1.0, "max_iterations": 1000000, "tolerance": 0},
+            "output": {"checkpoint_every": 100000}}"#,
+    );
+    let start = Instant::now();
+    while http_json(node.addr, "GET", &format!("/v1/jobs/{id}"), None).0 != 404 {
+        assert!(start.elapsed() < Duration::from_secs(20), "the ended job is still there");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    // its blobs after its rows, and the space after the batch
+    let gone = || !dir.path().join("blobs/jobs").join(&id).exists() && std::fs::metadata(&db).unwrap().len() < full / 4;
+    while !gone() && start.elapsed() < Duration::from_secs(20) {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert!(!dir.path().join("blobs/jobs").join(&id).exists(), "its blobs are gone");
+    let (_, energy) = http_json(node.addr, "GET", &format!("/v1/jobs/{id}/energy"), None);
+    assert_eq!(energy["status"], 404, "{energy}");
+    let shrunk = std::fs::metadata(&db).unwrap().len();
+    assert!(shrunk < full / 4, "the database file went from {full} to {shrunk} bytes");
+    let (status, job) = http_json(node.addr, "GET", &format!("/v1/jobs/{running}"), None);
+    assert_eq!(status, 200, "a running job is kept: {job}");
+    assert_eq!(http(node.addr, "POST", &format!("/v1/jobs/{running}/cancel"), None, "").0, 202);
+}

@@ -80,6 +80,13 @@ pub trait JobStore: Send + Sync + 'static {
         limit: i64,
         owner: Option<&str>,
     ) -> StoreResult<Vec<JobRow>>;
+    /// Jobs that ended before `before` (RFC 3339), oldest first, at most `limit`.
+    async fn ended_before(&self, before: &str, limit: i64) -> StoreResult<Vec<String>>;
+    /// Give the space of deleted rows back to the disk (SQLite: an incremental
+    /// vacuum and a checkpoint of the WAL); nothing to do elsewhere.
+    async fn reclaim(&self) -> StoreResult<()> {
+        Ok(())
+    }
     /// The number of jobs of each status present.
     async fn counts_by_status(&self) -> StoreResult<Vec<(String, i64)>>;
     /// Store a new key; `false` if one of that name exists (revoked or not).
@@ -371,8 +378,17 @@ pub(crate) fn results_of(text: Option<String>) -> Option<ResultIndex> {
 /// RFC 3339 UTC from the system clock (timestamps shown to users; leases use the
 /// database's clock).
 pub(crate) fn now() -> String {
-    let secs =
-        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs_f64()).unwrap_or(0.0);
+    rfc3339_ago(0.0)
+}
+
+/// RFC 3339 UTC of `ago` seconds before now (fixed width: such strings compare as
+/// their times).
+pub fn rfc3339_ago(ago: f64) -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs_f64() - ago)
+        .unwrap_or(0.0)
+        .max(0.0);
     let days = (secs / 86400.0).floor() as i64;
     let rem = secs - days as f64 * 86400.0;
     let (h, m, s) = ((rem / 3600.0) as i64, ((rem % 3600.0) / 60.0) as i64, rem % 60.0);

@@ -211,6 +211,18 @@ impl JobStore for PgStore {
         Ok(rows.iter().map(job_from_row).collect())
     }
 
+    async fn ended_before(&self, before: &str, limit: i64) -> StoreResult<Vec<String>> {
+        let ids = sqlx::query_scalar(
+            "SELECT id FROM jobs WHERE status IN ('successful', 'failed', 'dismissed') AND finished_at < $1 \
+             ORDER BY finished_at LIMIT $2",
+        )
+        .bind(before)
+        .bind(limit)
+        .fetch_all(&self.pool)
+        .await?;
+        Ok(ids)
+    }
+
     async fn counts_by_status(&self) -> StoreResult<Vec<(String, i64)>> {
         let rows = sqlx::query("SELECT status, COUNT(*) AS n FROM jobs GROUP BY status").fetch_all(&self.pool).await?;
         Ok(rows.iter().map(|r| (r.get("status"), r.get("n"))).collect())

@@ -9,7 +9,9 @@ use super::{
     InputRow, JobRow, JobStatus, JobStore, KeyRow, Lease, StoreError, StoreResult, Which,
 };
 use crate::flow::Progress;
-use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous};
+use sqlx::sqlite::{
+    SqliteAutoVacuum, SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous,
+};
 use sqlx::{Row, Sqlite};
 use std::path::Path;
 use std::time::Duration;
@@ -106,7 +108,9 @@ impl SqliteStore {
             // a connection whose COMMIT failed (a full disk) is still in its
             // transaction for sqlx: closed, and the next write opens a new one
             .after_release(|conn, _| Box::pin(async move { Ok(!sqlx::Connection::is_in_transaction(conn)) }))
-            .connect_with(options.clone())
+            // deleted rows' pages go back to the disk by `reclaim` (for a new file;
+            // an older one needs a VACUUM once, docs/operations.md)
+            .connect_with(options.clone().auto_vacuum(SqliteAutoVacuum::Incremental))
             .await?;
         migrations::migrator(migrations::SQLITE).run(&pool).await?;
         let reader = SqlitePoolOptions::new()
@@ -219,6 +223,24 @@ impl JobStore for SqliteStore {
         .fetch_all(&self.reader)
         .await?;
         Ok(rows.iter().map(job_from_row).collect())
+    }
+
+    async fn ended_before(&self, before: &str, limit: i64) -> StoreResult<Vec<String>> {
+        let ids = sqlx::query_scalar(
+            "SELECT id FROM jobs WHERE status IN ('successful', 'failed', 'dismissed') AND finished_at < ?1 \
+             ORDER BY finished_at LIMIT ?2",
+        )
+        .bind(before)
+        .bind(limit)
+        .fetch_all(&self.reader)
+        .await?;
+        Ok(ids)
+    }
+
+    async fn reclaim(&self) -> StoreResult<()> {
+        sqlx::query("PRAGMA incremental_vacuum").execute(&self.pool).await?;
+        sqlx::query("PRAGMA wal_checkpoint(TRUNCATE)").execute(&self.pool).await?;
+        Ok(())
     }
 
     async fn counts_by_status(&self) -> StoreResult<Vec<(String, i64)>> {
