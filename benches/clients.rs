@@ -9,45 +9,16 @@
 //! `cargo bench --bench clients`.
 
 use std::io::{BufRead, BufReader, Read, Write};
-use std::net::{SocketAddr, TcpStream};
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::net::TcpStream;
+use std::process::Command;
+use std::time::Instant;
+
+#[path = "common/node.rs"]
+mod node;
+use node::Node;
 
 const SPEC: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 64},
   "flow": {"tau": 1e-4, "max_iterations": 10}}"#;
-
-struct Node {
-    child: Child,
-    addr: SocketAddr,
-}
-
-impl Node {
-    fn start(exe: &str, dir: &std::path::Path, args: &[&str]) -> Node {
-        let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
-        let addr: SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
-        let child = Command::new(exe)
-            .args(["serve", "--bind", &addr.to_string(), "--workers", "0", "--data-dir"])
-            .arg(dir)
-            .args(args)
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
-        let t = Instant::now();
-        while TcpStream::connect(addr).is_err() {
-            assert!(t.elapsed() < Duration::from_secs(20));
-            std::thread::sleep(Duration::from_millis(10));
-        }
-        Node { child, addr }
-    }
-}
-
-impl Drop for Node {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
 
 /// One request on a kept-alive connection: its status and body.
 fn request(conn: &mut BufReader<TcpStream>, method: &str, path: &str, auth: &str, body: &str) -> (u16, String) {
@@ -117,26 +88,26 @@ fn main() {
         let dir = tempfile::tempdir().unwrap();
         row(
             "before (axum::serve, one shared token at most), no token",
-            latencies(&Node::start(&old, dir.path(), &[]), ""),
+            latencies(&Node::start(&old, dir.path(), &["--workers", "0"]), ""),
         );
         let dir = tempfile::tempdir().unwrap();
-        let node = Node::start(&old, dir.path(), &["--token", "t0ken"]);
+        let node = Node::start(&old, dir.path(), &["--workers", "0", "--token", "t0ken"]);
         row("before, with --token", latencies(&node, "Authorization: Bearer t0ken\r\n"));
     }
     let dir = tempfile::tempdir().unwrap();
-    row("now, no key", latencies(&Node::start(new, dir.path(), &[]), ""));
+    row("now, no key", latencies(&Node::start(new, dir.path(), &["--workers", "0"]), ""));
     let dir = tempfile::tempdir().unwrap();
-    let node = Node::start(new, dir.path(), &["--token", "t0ken"]);
+    let node = Node::start(new, dir.path(), &["--workers", "0", "--token", "t0ken"]);
     row("now, with --token", latencies(&node, "Authorization: Bearer t0ken\r\n"));
     let dir = tempfile::tempdir().unwrap();
     let out = Command::new(new).args(["keys", "create", "bench", "--data-dir"]).arg(dir.path()).output().unwrap();
     let key = String::from_utf8(out.stdout).unwrap().lines().last().unwrap().to_string();
-    let node = Node::start(new, dir.path(), &[]);
+    let node = Node::start(new, dir.path(), &["--workers", "0"]);
     row("now, a stored key", latencies(&node, &format!("Authorization: Bearer {key}\r\n")));
 
     // 1,000 idle connections open (within the header timeout of 10 s)
     let dir = tempfile::tempdir().unwrap();
-    let node = Node::start(new, dir.path(), &["--max-connections", "2000"]);
+    let node = Node::start(new, dir.path(), &["--workers", "0", "--max-connections", "2000"]);
     let idle: Vec<TcpStream> = (0..1000).map(|_| TcpStream::connect(node.addr).unwrap()).collect();
     row("now, no key, 1,000 idle connections open", latencies(&node, ""));
     drop(idle);

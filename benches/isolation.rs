@@ -9,9 +9,14 @@
 //! `cargo bench --bench isolation` (`-- fixed`: the fixed cost only).
 
 use std::io::{Read, Write};
-use std::net::{SocketAddr, TcpStream};
-use std::process::{Child, Command, Stdio};
+use std::net::TcpStream;
 use std::time::{Duration, Instant};
+
+#[path = "common/node.rs"]
+mod node;
+use node::Node;
+
+const EXE: &str = env!("CARGO_BIN_EXE_shapeflow");
 
 const ONE_STEP: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"shape": "circle", "radius": 1.0, "resolution": 256},
   "flow": {"tau": 1e-4, "end_time": 0.1, "max_iterations": 1, "tolerance": 0}, "output": {"checkpoint_every": 100}}"#;
@@ -20,31 +25,7 @@ const RUNAWAY: &str = r#"{"problem": {"type": "curvature_flow"}, "initial": {"sh
   "flow": {"tau": 1e-9, "end_time": 1.0, "max_iterations": 10000000, "tolerance": 0}, "mesh": {"adapt": false},
   "output": {"checkpoint_every": 1}}"#;
 
-struct Node {
-    child: Child,
-    addr: SocketAddr,
-}
-
 impl Node {
-    fn start(dir: &std::path::Path, args: &[&str]) -> Node {
-        let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
-        let addr: SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
-        let child = Command::new(env!("CARGO_BIN_EXE_shapeflow"))
-            .args(["serve", "--bind", &addr.to_string(), "--workers", "1", "--data-dir"])
-            .arg(dir)
-            .args(args)
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
-        let t = Instant::now();
-        while TcpStream::connect(addr).is_err() {
-            assert!(t.elapsed() < Duration::from_secs(20));
-            std::thread::sleep(Duration::from_millis(10));
-        }
-        Node { child, addr }
-    }
-
     fn memory(&self, field: &str) -> u64 {
         let status = std::fs::read_to_string(format!("/proc/{}/status", self.child.id())).unwrap();
         let line = status.lines().find(|l| l.starts_with(field)).unwrap();
@@ -85,13 +66,6 @@ impl Node {
     }
 }
 
-impl Drop for Node {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
@@ -106,7 +80,7 @@ fn fixed_cost() {
     println!("|---|---|");
     for isolation in ["thread", "process"] {
         let dir = tempfile::tempdir().unwrap();
-        let node = Node::start(dir.path(), &["--isolation", isolation]);
+        let node = Node::start(EXE, dir.path(), &["--workers", "1", "--isolation", isolation]);
         node.wait_final(&node.submit(ONE_STEP)); // warm up
         let times: Vec<f64> = (0..21)
             .map(|_| {
@@ -122,7 +96,7 @@ fn fixed_cost() {
 
 fn runaway() {
     let dir = tempfile::tempdir().unwrap();
-    let node = Node::start(dir.path(), &["--job-disk", "1GiB"]);
+    let node = Node::start(EXE, dir.path(), &["--workers", "1", "--job-disk", "1GiB"]);
     let idle = node.memory("VmRSS");
     let t = Instant::now();
     let done = node.wait_final(&node.submit(RUNAWAY));
@@ -153,7 +127,7 @@ fn walk(dir: &std::path::Path) -> u64 {
 fn million_rows() {
     let dir = tempfile::tempdir().unwrap();
     let id = {
-        let node = Node::start(dir.path(), &[]);
+        let node = Node::start(EXE, dir.path(), &["--workers", "1"]);
         let id = node.submit(ONE_STEP);
         node.wait_final(&id);
         id
@@ -178,7 +152,7 @@ fn million_rows() {
         ("energy (CSV)", format!("/v1/jobs/{id}/energy?format=csv")),
         ("energy.svg", format!("/v1/jobs/{id}/energy.svg")),
     ] {
-        let node = Node::start(dir.path(), &[]);
+        let node = Node::start(EXE, dir.path(), &["--workers", "1"]);
         let idle = node.memory("VmRSS");
         let t = Instant::now();
         let (status, body) = node.request("GET", &path, "");
