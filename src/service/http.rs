@@ -68,7 +68,8 @@ pub async fn serve(
     let app = app.layer(axum::middleware::from_fn(crowded)).layer(axum::middleware::from_fn_with_state(
         limits,
         |axum::extract::State(limits): axum::extract::State<HttpLimits>, req: Request, next: Next| async move {
-            let req = req.map(|body| axum::body::Body::new(super::min_rate::MinRate::new(body, limits)));
+            let (rate, grace) = (limits.body_min_rate, limits.body_grace);
+            let req = req.map(|body| axum::body::Body::new(super::min_rate::MinRate::new(body, rate, grace)));
             next.run(req).await
         },
     ));

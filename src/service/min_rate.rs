@@ -5,7 +5,6 @@
 //! works; a client that sends a byte now and then, or stops, does not hold the
 //! service.
 
-use super::http::HttpLimits;
 use axum::body::{Body, Bytes};
 use http_body::{Frame, SizeHint};
 use std::future::Future;
@@ -39,19 +38,21 @@ pub struct MinRate {
     inner: Body,
     start: Instant,
     received: u64,
-    limits: HttpLimits,
+    /// Bytes a second, on average, once `grace` has passed.
+    rate: u64,
+    grace: Duration,
     /// When the bytes received so far fall behind the rate, if nothing more comes.
     due: Option<Pin<Box<Sleep>>>,
 }
 
 impl MinRate {
-    pub fn new(inner: Body, limits: HttpLimits) -> MinRate {
-        MinRate { inner, start: Instant::now(), received: 0, limits, due: None }
+    pub fn new(inner: Body, rate: u64, grace: Duration) -> MinRate {
+        MinRate { inner, start: Instant::now(), received: 0, rate, grace, due: None }
     }
 
     fn deadline(&self) -> Instant {
-        let ahead = self.received as f64 / self.limits.body_min_rate.max(1) as f64;
-        self.start + self.limits.body_grace + Duration::from_secs_f64(ahead.min(1e9))
+        let ahead = self.received as f64 / self.rate.max(1) as f64;
+        self.start + self.grace + Duration::from_secs_f64(ahead.min(1e9))
     }
 }
 
@@ -73,10 +74,9 @@ impl http_body::Body for MinRate {
                 let deadline = this.deadline();
                 let due = this.due.get_or_insert_with(|| Box::pin(tokio::time::sleep_until(deadline)));
                 match due.as_mut().poll(cx) {
-                    Poll::Ready(()) => Poll::Ready(Some(Err(Box::new(SlowBody {
-                        rate: this.limits.body_min_rate,
-                        grace: this.limits.body_grace.as_secs(),
-                    })))),
+                    Poll::Ready(()) => {
+                        Poll::Ready(Some(Err(Box::new(SlowBody { rate: this.rate, grace: this.grace.as_secs() }))))
+                    }
                     Poll::Pending => Poll::Pending,
                 }
             }
