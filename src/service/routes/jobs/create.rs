@@ -8,7 +8,7 @@ use crate::jobs::{parse_spec, prepare, MemoryEstimate};
 use crate::service::isolation::parent::validate;
 use crate::service::isolation::Isolation;
 use crate::service::keys::Caller;
-use crate::service::min_rate::is_slow_body;
+use crate::service::min_rate::{is_slow_body, SlowBody};
 use crate::service::store::{Admission, StoreError};
 use crate::service::wire::JobView;
 use crate::service::{ApiError, AppState, MAX_BODY_BYTES, MAX_UPLOAD_BYTES};
@@ -28,7 +28,7 @@ pub const MAX_PARTS: usize = 256;
 fn unreadable(e: &(dyn std::error::Error + 'static), limit: usize) -> ApiError {
     let mut next = Some(e);
     while let Some(e) = next {
-        if is_slow_body(e) {
+        if e.is::<SlowBody>() {
             return ApiError::Timeout(e.to_string());
         }
         if e.is::<http_body_util::LengthLimitError>() {
