@@ -185,6 +185,11 @@ enum KeysAction {
         /// Jobs accepted or running at most at a time; the next POST is 429.
         #[arg(long)]
         max_active: Option<u32>,
+        /// Bytes its jobs keep at most (checkpoints, result files, history;
+        /// `500MB`, `2GiB`): no new job once they keep that much (429), and a
+        /// running job stops at what is left.
+        #[arg(long, value_parser = shapeflow::jobs::parse_size)]
+        max_storage: Option<u64>,
     },
     /// The keys, one a line: name, admin or not, quota, created, revoked.
     List,
@@ -403,17 +408,23 @@ fn keys(action: KeysAction, args: &StoreArgs) -> Result<()> {
             .await
             .with_context(|| format!("cannot open database {}", redact(&database)))?;
         match action {
-            KeysAction::Create { name, admin, max_active } => {
-                let key = keys::create(&store, &name, admin, max_active.map(i64::from)).await?;
+            KeysAction::Create { name, admin, max_active, max_storage } => {
+                let grant = keys::Grant {
+                    admin,
+                    max_active: max_active.map(i64::from),
+                    max_storage: max_storage.map(|b| b.min(i64::MAX as u64) as i64),
+                };
+                let key = keys::create(&store, &name, grant).await?;
                 println!("created the key {name:?}; it is shown only now:");
                 println!("{key}");
             }
             KeysAction::List => {
                 for k in store.keys().await? {
                     let quota = k.max_active.map_or("-".to_string(), |n| n.to_string());
+                    let storage = k.max_storage.map_or("-".to_string(), |n| shapeflow::jobs::format_size(n as u64));
                     let state = if k.revoked { "revoked" } else { "active" };
                     println!(
-                        "{}\t{}\tmax-active {quota}\t{}\t{state}",
+                        "{}\t{}\tmax-active {quota}\tmax-storage {storage}\t{}\t{state}",
                         k.name,
                         if k.admin { "admin" } else { "user" },
                         k.created_at

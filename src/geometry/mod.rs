@@ -20,6 +20,7 @@ mod measures;
 mod mesh;
 mod objects;
 pub mod simplex;
+mod surface_intersections;
 mod surface_remesh;
 mod surfaces;
 mod unions;
@@ -36,6 +37,7 @@ pub use intersect::{find_periodic_intersections, find_segment_intersections, seg
 pub use measures::{vertex_normals, MeshQuality};
 pub use mesh::{components, segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};
 pub use objects::Objects;
+pub use surface_intersections::{first_surface_intersection, surface_intersections};
 pub use surface_remesh::{
     adapt_surface, edge_statistics, regularize_surface, surface_edges, SurfaceEdge, SurfaceRemeshSettings,
 };

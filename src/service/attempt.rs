@@ -67,7 +67,7 @@ impl Worker {
         let resumed_at = resume.map(|c| c.iteration);
         let frames = std::mem::take(&mut written.frames).into_frames();
         frames.into_iter().filter(|f| Some(f.state.iteration) != resumed_at).for_each(|f| kept.push(f));
-        Ok(Attempt { end, written, results: Results::Frames(prepared, kept.into_frames()) })
+        Ok(Attempt { end, written, results: Results::Frames(prepared, kept.into_frames()), needed: 0 })
     }
 
     /// The attempt in a process of its own (`exe job-runner`).
@@ -99,7 +99,8 @@ impl Worker {
         let asked = parse_spec(&job.spec).ok().and_then(|s| s.limits.resolve().ok()).unwrap_or_default();
         // what the earlier attempts stored counts against the disk budget too
         let stored = self.rt.block_on(store.stored_bytes(&job.id))?;
-        let mut process = match JobProcess::start(runner, self.budgets.within(asked), &job.id, stored, cancel.clone()) {
+        let budgets = self.budgets.within(asked).within_quota(self.key_room(job)?);
+        let mut process = match JobProcess::start(runner, budgets, &job.id, stored, cancel.clone()) {
             Ok(p) => p,
             Err(e) => return Ok(Attempt::ended(AttemptEnd::Crashed(format!("the job's process cannot start: {e}")))),
         };
@@ -175,6 +176,7 @@ impl Worker {
         if written.error.is_none() {
             written.error = context_error;
         }
+        let needed = process.stored();
         let end = match process.finish(reported) {
             ProcessEnd::Reported(RunEnd::Stopped { stop, note }) => AttemptEnd::Stopped { stop, note },
             ProcessEnd::Reported(RunEnd::Cancelled) | ProcessEnd::Cancelled => AttemptEnd::Cancelled,
@@ -186,7 +188,7 @@ impl Worker {
                 AttemptEnd::Crashed(format!("the job's process answered as a validation: {other:?}"))
             }
         };
-        Ok(Attempt { end, written, results: Results::Files(files) })
+        Ok(Attempt { end, written, results: Results::Files(files), needed })
     }
 }
 

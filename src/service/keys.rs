@@ -25,8 +25,8 @@ pub enum Caller {
     Open,
     /// The `--token` of the service, or a key created with `--admin` (its name).
     Admin(Option<String>),
-    /// A key: its name and its quota of jobs accepted or running.
-    Key { name: String, max_active: Option<i64> },
+    /// A key: its name and its quotas (jobs accepted or running, bytes kept).
+    Key { name: String, max_active: Option<i64>, max_storage: Option<i64> },
 }
 
 impl Caller {
@@ -54,6 +54,13 @@ impl Caller {
             _ => None,
         }
     }
+
+    pub fn max_storage(&self) -> Option<i64> {
+        match self {
+            Caller::Key { max_storage, .. } => *max_storage,
+            _ => None,
+        }
+    }
 }
 
 /// Why a key cannot be created.
@@ -67,9 +74,17 @@ pub enum KeyError {
     Store(#[from] super::store::StoreError),
 }
 
+/// What a new key may do: see everything, and its quotas.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Grant {
+    pub admin: bool,
+    pub max_active: Option<i64>,
+    pub max_storage: Option<i64>,
+}
+
 /// Create the key `name` in `store`: the new key, to be shown once (only its hash
 /// is stored).
-pub async fn create(store: &Store, name: &str, admin: bool, max_active: Option<i64>) -> Result<String, KeyError> {
+pub async fn create(store: &Store, name: &str, grant: Grant) -> Result<String, KeyError> {
     let valid = |c: char| c.is_ascii_alphanumeric() || "-_.".contains(c);
     if name.is_empty() || name.len() > 64 || !name.chars().all(valid) {
         return Err(KeyError::BadName(name.into()));
@@ -78,8 +93,9 @@ pub async fn create(store: &Store, name: &str, admin: bool, max_active: Option<i
     let row = KeyRow {
         name: name.into(),
         hash: key_hash(&key),
-        admin,
-        max_active,
+        admin: grant.admin,
+        max_active: grant.max_active,
+        max_storage: grant.max_storage,
         created_at: super::store::now(),
         revoked: false,
     };
@@ -161,7 +177,7 @@ impl Keys {
         };
         Ok(key.filter(|k| bool::from(k.hash.as_bytes().ct_eq(hash.as_bytes()))).map(|k| match k.admin {
             true => Caller::Admin(Some(k.name)),
-            false => Caller::Key { name: k.name, max_active: k.max_active },
+            false => Caller::Key { name: k.name, max_active: k.max_active, max_storage: k.max_storage },
         }))
     }
 }
@@ -177,7 +193,7 @@ mod tests {
         assert_eq!(a.len(), 3 + 64);
         assert_eq!(key_hash(&a).len(), 64);
         assert_ne!(key_hash(&a), key_hash(&b));
-        let key = Caller::Key { name: "ana".into(), max_active: None };
+        let key = Caller::Key { name: "ana".into(), max_active: None, max_storage: None };
         assert!(key.may_see(Some("ana")) && !key.may_see(Some("ben")) && !key.may_see(None));
         assert!(Caller::Admin(None).may_see(Some("ben")) && Caller::Open.may_see(None));
     }

@@ -199,9 +199,7 @@ impl Service {
                 }
             }
         });
-        if let Some(retain) = config.retain {
-            tokio::spawn(retention::sweep_forever(state.store.clone(), retain, state.closing.clone()));
-        }
+        tokio::spawn(retention::sweep_forever(state.store.clone(), config.retain, node.clone(), state.closing.clone()));
         let shutdown = Arc::new(AtomicBool::new(false));
         let rt = tokio::runtime::Handle::current();
         let faults = Arc::new(config.faults);

@@ -1,15 +1,24 @@
-//! Retention (`serve --retain DURATION`): jobs that ended longer ago than that
-//! are deleted with their rows and blobs, a batch at a time, and (SQLite) the
-//! space goes back to the disk. Every node with the setting sweeps; deleting a
-//! job twice is harmless, so nodes of a cluster need no coordination.
+//! The sweep of deleted and expired jobs. `DELETE /v1/jobs/{id}` only marks a
+//! job deleted (it is gone from every read at once); this sweep then deletes its
+//! blobs and its rows a few thousand at a time, and with `serve --retain
+//! DURATION` it first marks the jobs that ended longer ago than that. On SQLite
+//! the space then goes back to the disk. One node of a cluster sweeps at a time
+//! (it leads the task `sweep` in the store); a purge cut short (a crash) is taken
+//! up again by the next sweep.
 
-use super::store::{rfc3339_ago, Store};
+use super::store::{rfc3339_ago, Store, StoreError};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
-/// Jobs deleted per batch of a sweep.
+/// Jobs marked or purged per batch of a sweep.
 const BATCH: i64 = 100;
+
+/// How often the store is looked at for deleted jobs.
+const PERIOD: Duration = Duration::from_secs(1);
+
+/// How long a node leads the sweep without renewing its lead.
+const LEAD: Duration = Duration::from_secs(30);
 
 /// A duration: a number of seconds, or a number and a unit (`s`, `m`, `h`, `d`):
 /// `90`, `2s`, `30m`, `12h`, `30d`.
@@ -30,38 +39,76 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
     }
 }
 
-/// Sweep every `retain / 4` (at least a second, at most a minute) until
-/// `closing`, deleting the jobs that ended more than `retain` ago.
-pub async fn sweep_forever(store: Store, retain: Duration, closing: Arc<AtomicBool>) {
-    let period = (retain / 4).clamp(Duration::from_secs(1), Duration::from_secs(60));
+/// Sweep every [`PERIOD`] until `closing`: the jobs marked deleted are purged,
+/// and with `retain`, every `retain / 4` (at least a second, at most a minute)
+/// the jobs that ended more than `retain` ago are marked first. `node` names
+/// this node for the lead.
+pub async fn sweep_forever(store: Store, retain: Option<Duration>, node: String, closing: Arc<AtomicBool>) {
+    let expire_every = retain.map(|r| (r / 4).clamp(Duration::from_secs(1), Duration::from_secs(60)));
+    let mut expired_at: Option<Instant> = None;
     while !closing.load(Ordering::Relaxed) {
-        match sweep(&store, retain).await {
-            Ok(0) => {}
-            Ok(n) => tracing::info!(deleted = n, "retention: jobs that ended more than {retain:?} ago deleted"),
-            Err(e) => tracing::warn!("retention: {e}"),
+        let expire = match (retain, expire_every) {
+            (Some(r), Some(every)) if expired_at.is_none_or(|t| t.elapsed() >= every) => {
+                expired_at = Some(Instant::now());
+                Some(r)
+            }
+            _ => None,
+        };
+        match sweep(&store, expire, &node).await {
+            Ok(Swept { expired: 0, purged: 0 }) => {}
+            Ok(Swept { expired, purged }) => tracing::info!(expired, purged, "sweep: deleted jobs purged"),
+            Err(e) => tracing::warn!("sweep: {e}"),
         }
-        tokio::time::sleep(period).await;
+        tokio::time::sleep(PERIOD).await;
     }
 }
 
-/// One sweep: the number of jobs deleted.
-pub async fn sweep(store: &Store, retain: Duration) -> Result<usize, super::store::StoreError> {
-    let before = rfc3339_ago(retain.as_secs_f64());
-    let mut deleted = 0;
-    loop {
-        let ids = store.ended_before(&before, BATCH).await?;
-        for id in &ids {
-            store.delete(id).await?;
+/// What one sweep did: jobs marked deleted for their age, jobs purged.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Swept {
+    pub expired: usize,
+    pub purged: usize,
+}
+
+/// One sweep (see [`sweep_forever`]), if this node leads it: with `expire`, the
+/// jobs that ended longer ago are marked deleted first.
+pub async fn sweep(store: &Store, expire: Option<Duration>, node: &str) -> Result<Swept, StoreError> {
+    let mut swept = Swept { expired: 0, purged: 0 };
+    let mut led = false;
+    if let Some(retain) = expire {
+        let before = rfc3339_ago(retain.as_secs_f64());
+        loop {
+            let ids = store.ended_before(&before, BATCH).await?;
+            if ids.is_empty() || !leads(store, node, &mut led).await? {
+                break;
+            }
+            for id in &ids {
+                swept.expired += store.mark_deleted(id).await? as usize;
+            }
         }
-        deleted += ids.len();
-        if (ids.len() as i64) < BATCH {
+    }
+    loop {
+        let ids = store.deleted_jobs(BATCH).await?;
+        if ids.is_empty() || !leads(store, node, &mut led).await? {
             break;
         }
+        for id in &ids {
+            store.purge(id).await?;
+        }
+        swept.purged += ids.len();
     }
-    if deleted > 0 {
+    if swept.purged > 0 {
         store.reclaim().await?;
     }
-    Ok(deleted)
+    Ok(swept)
+}
+
+/// Whether this node leads the sweep (asked once a sweep, when there is work).
+async fn leads(store: &Store, node: &str, led: &mut bool) -> Result<bool, StoreError> {
+    if !*led {
+        *led = store.lead("sweep", node, LEAD).await?;
+    }
+    Ok(*led)
 }
 
 #[cfg(test)]

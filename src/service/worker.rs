@@ -138,8 +138,30 @@ impl Worker {
         });
     }
 
+    /// Note in the job's row what it keeps now, or `needed` if more (a job stopped
+    /// at its key's storage quota uses the quota up): its key's `max_storage`
+    /// counts it.
+    fn note_stored(&self, id: &str, needed: u64) {
+        let noted =
+            self.rt.block_on(async { self.store.set_stored(id, self.store.stored_bytes(id).await?.max(needed)).await });
+        if let Err(e) = noted {
+            tracing::warn!(job = %id, "cannot note the bytes the job keeps: {e}");
+        }
+    }
+
+    /// What is left of the storage quota of the job's key for it (the bytes the
+    /// key's other jobs keep taken off), if its key has one.
+    pub(super) fn key_room(&self, job: &super::store::JobRow) -> Result<Option<u64>, StoreError> {
+        let Some(owner) = &job.owner else { return Ok(None) };
+        let keys = self.rt.block_on(self.store.keys())?;
+        let Some(max) = keys.iter().find(|k| &k.name == owner).and_then(|k| k.max_storage) else { return Ok(None) };
+        let others = self.rt.block_on(self.store.owner_storage(owner, &job.id))?;
+        Ok(Some((max.max(0) as u64).saturating_sub(others)))
+    }
+
     fn run(&self, claimed: &Claimed) -> Result<JobStatus, StoreError> {
         let (job, lease) = (&claimed.job, &claimed.lease);
+        let needed = std::cell::Cell::new(0);
         // the outcome, with the row pointed to the result files in the same transaction
         let finish_with = |status: JobStatus,
                            stop: Option<&str>,
@@ -147,6 +169,8 @@ impl Worker {
                            stored: Option<&StoredResults>|
          -> Result<JobStatus, StoreError> {
             let index = stored.map(|s| s.index.as_str());
+            // before the outcome: a client that sees it sees the bytes counted
+            self.note_stored(&job.id, needed.get());
             let ended =
                 self.rt.block_on(retrying(|| self.store.finish(&job.id, Some(lease), status, stop, msg, index)));
             // the folder no longer pointed to: the old one, or ours if the lease was lost
@@ -184,6 +208,7 @@ impl Worker {
         };
         drop(_running);
         let attempt = attempt?;
+        needed.set(attempt.needed);
         if attempt.written.lost || lost.load(Ordering::Relaxed) {
             tracing::warn!(job = %job.id, "the job was taken over by another worker; this run's results are dropped");
             return Err(StoreError::LeaseLost(job.id.clone()));
@@ -197,6 +222,7 @@ impl Worker {
         if let AttemptEnd::Crashed(why) = &end {
             tracing::warn!(job = %job.id, "attempt ended: {why}");
             self.rt.block_on(retrying(|| self.store.abandon(&job.id, lease, why)))?;
+            self.note_stored(&job.id, attempt.needed);
             let _ = self.events.send(Arc::from(job.id.as_str()));
             return Ok(JobStatus::Running);
         }
@@ -279,10 +305,13 @@ pub(super) struct Attempt {
     pub end: AttemptEnd,
     pub written: WriteState,
     pub results: Results,
+    /// The bytes the job's process stored or tried to store (process isolation):
+    /// past its disk budget, more than the store keeps.
+    pub needed: u64,
 }
 
 impl Attempt {
     pub(super) fn ended(end: AttemptEnd) -> Attempt {
-        Attempt { end, written: WriteState::default(), results: Results::None }
+        Attempt { end, written: WriteState::default(), results: Results::None, needed: 0 }
     }
 }

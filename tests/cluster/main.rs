@@ -11,6 +11,7 @@
 //! show as ignored, with the reason; `.ci/run` sets `SHAPEFLOW_REQUIRE_POSTGRES=1`
 //! and `SHAPEFLOW_REQUIRE_S3=1`, which make a missing one fail the build.
 
+mod keys;
 mod postgres;
 mod seaweedfs;
 
@@ -100,12 +101,17 @@ impl Drop for Node {
 
 /// One HTTP/1.1 request: status and body; `None` if the node does not answer.
 fn http(addr: SocketAddr, method: &str, path: &str, body: Option<&str>) -> Option<(u16, Vec<u8>)> {
+    http_with(addr, method, path, body, "")
+}
+
+/// [`http`] with more header lines (each ending in `\r\n`).
+fn http_with(addr: SocketAddr, method: &str, path: &str, body: Option<&str>, headers: &str) -> Option<(u16, Vec<u8>)> {
     let mut s = TcpStream::connect_timeout(&addr, Duration::from_secs(2)).ok()?;
     s.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
     let body = body.unwrap_or("");
     let req = format!(
         "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nContent-Type: application/json\r\n\
-         Content-Length: {}\r\n\r\n{body}",
+         {headers}Content-Length: {}\r\n\r\n{body}",
         body.len()
     );
     s.write_all(req.as_bytes()).ok()?;

@@ -119,3 +119,48 @@ fn the_service_queues_at_most_its_cap_of_jobs() {
     assert!(head.to_ascii_lowercase().contains("retry-after: "), "{head}");
     assert!(body.contains("2 jobs waiting"), "{body}");
 }
+
+/// Checkpoints at every step: a job that stores a lot quickly.
+const HOARDER: &str = r#"{"problem": {"type": "curvature_flow"},
+    "initial": {"shape": "circle", "radius": 1.0, "resolution": 256},
+    "flow": {"tau": 1e-6, "end_time": 1.0, "max_iterations": 400, "tolerance": 0},
+    "output": {"checkpoint_every": 1}}"#;
+
+/// `--max-storage`: a running job stops at what is left of its key's quota
+/// (failed, its checkpoints kept), the next POST is 429 while the key's jobs
+/// keep that much, and deleting them makes room again.
+#[test]
+fn a_key_with_a_storage_quota_stops_at_it_and_is_refused_until_it_deletes() {
+    let dir = tempfile::tempdir().unwrap();
+    let node = Node::start(dir.path(), &["--workers", "1"], "");
+    let cara = keys(dir.path(), &["create", "cara", "--max-storage", "300KiB"]).lines().last().unwrap().to_string();
+    assert!(keys(dir.path(), &["list"]).contains("cara\tuser\tmax-active -\tmax-storage 300 KiB"));
+    std::thread::sleep(shapeflow::service::keys::KEY_CACHE + Duration::from_millis(200));
+    let submit = || http(node.addr, "POST", "/v1/jobs", Some(("application/json", HOARDER)), &with(&cara));
+    let (status, _, body) = submit();
+    assert_eq!(status, 201, "{body}");
+    let id = serde_json::from_str::<Value>(&body).unwrap()["id"].as_str().unwrap().to_string();
+    let start = Instant::now();
+    let done = loop {
+        let (_, _, body) = http(node.addr, "GET", &format!("/v1/jobs/{id}"), None, &with(&cara));
+        let job: Value = serde_json::from_str(&body).unwrap();
+        if job["status"] != "accepted" && job["status"] != "running" {
+            break job;
+        }
+        assert!(start.elapsed() < Duration::from_secs(60), "{job}");
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert_eq!(done["status"], "failed", "{done}");
+    assert!(done["message"].as_str().unwrap().contains("storage quota"), "{done}");
+    let (_, _, cps) = http(node.addr, "GET", &format!("/v1/jobs/{id}/checkpoints"), None, &with(&cara));
+    let kept = serde_json::from_str::<Value>(&cps).unwrap()["checkpoints"].as_array().unwrap().len();
+    assert!((2..400).contains(&kept), "its checkpoints so far are kept: {kept}");
+
+    let (status, head, body) = submit();
+    assert_eq!(status, 429, "{body}");
+    assert!(body.contains("storage quota is 300 KiB"), "{body}");
+    assert!(head.to_ascii_lowercase().contains("retry-after: "), "{head}");
+    assert_eq!(http(node.addr, "DELETE", &format!("/v1/jobs/{id}"), None, &with(&cara)).0, 204);
+    let (status, _, body) = submit();
+    assert_eq!(status, 201, "room again once deleted: {body}");
+}

@@ -7,6 +7,7 @@
 mod clients;
 #[path = "../common/mod.rs"]
 mod common;
+mod contract;
 mod isolation;
 mod keys;
 mod lifecycle;

@@ -3,7 +3,7 @@
 //! settings from `SHAPEFLOW_*` variables and a token file, and JSON log lines
 //! with a request id.
 
-use super::nodes::{Node, STEADY};
+use super::nodes::{Liveness, Node, STEADY};
 use super::*;
 use std::collections::HashMap;
 use std::process::{Command, Stdio};
@@ -137,4 +137,54 @@ fn retention_deletes_ended_jobs_and_the_database_shrinks() {
     let (status, job) = http_json(node.addr, "GET", &format!("/v1/jobs/{running}"), None);
     assert_eq!(status, 200, "a running job is kept: {job}");
     assert_eq!(http(node.addr, "POST", &format!("/v1/jobs/{running}/cancel"), None, "").0, 202);
+}
+
+/// A DELETE answers at once: the job is gone from every read right away, and its
+/// rows (here a million history rows) and blobs go in the background, a few
+/// thousand rows a statement, while the service answers.
+#[test]
+fn a_delete_answers_at_once_and_the_rows_go_in_the_background() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("shapeflow.db");
+    let node = Node::start(dir.path(), &["--workers", "1"], "");
+    let id = node.submit(STEADY);
+    node.assert_complete(&id, 500, 11);
+    let rt = tokio::runtime::Builder::new_current_thread().build().unwrap();
+    // one query on a connection of its own: a count, or (`insert`) the rows it adds
+    let query = |sql: &'static str, insert: bool| {
+        rt.block_on(async {
+            use sqlx::Connection;
+            let mut conn = sqlx::SqliteConnection::connect(&format!("sqlite:{}", db.display())).await.unwrap();
+            let n = match insert {
+                true => sqlx::query(sql).bind(&id).execute(&mut conn).await.unwrap().rows_affected() as i64,
+                false => sqlx::query_scalar(sql).bind(&id).fetch_one(&mut conn).await.unwrap(),
+            };
+            conn.close().await.unwrap();
+            n
+        })
+    };
+    let rows = |sql| query(sql, false);
+    query(
+        "WITH RECURSIVE n(x) AS (SELECT 501 UNION ALL SELECT x + 1 FROM n WHERE x < 1000500) \
+         INSERT INTO history SELECT ?1, x, x * 1e-4, 1e-4, 1.0, 128, 1 FROM n",
+        true,
+    );
+    assert!(rows("SELECT COUNT(*) FROM history WHERE job_id = ?1") > 1_000_000);
+
+    let liveness = Liveness::watch(node.addr);
+    assert_eq!(http(node.addr, "DELETE", &format!("/v1/jobs/{id}"), None, "").0, 204);
+    assert_eq!(http_json(node.addr, "GET", &format!("/v1/jobs/{id}"), None).0, 404, "gone from reads at once");
+    assert_eq!(http(node.addr, "DELETE", &format!("/v1/jobs/{id}"), None, "").0, 404);
+    let (_, list) = http_json(node.addr, "GET", "/v1/jobs", None);
+    assert!(list["jobs"].as_array().unwrap().is_empty(), "{list}");
+    let start = Instant::now();
+    while rows("SELECT COUNT(*) FROM jobs WHERE id = ?1") > 0 {
+        assert!(start.elapsed() < Duration::from_secs(60), "the deleted job's rows are still there");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    assert_eq!(rows("SELECT COUNT(*) FROM history WHERE job_id = ?1"), 0);
+    assert_eq!(rows("SELECT COUNT(*) FROM checkpoints WHERE job_id = ?1"), 0);
+    assert!(!dir.path().join("blobs/jobs").join(&id).exists(), "its blobs are gone");
+    let slowest = liveness.slowest();
+    assert!(slowest < 5_000, "/healthz answered within {slowest} ms while the rows went");
 }

@@ -39,6 +39,9 @@ pub struct Budgets {
     pub seconds: Option<Duration>,
     /// Bytes the job stores: checkpoints, result files and history rows.
     pub disk: Option<u64>,
+    /// Whether `disk` is what is left of its key's storage quota (`keys create
+    /// --max-storage`) rather than a budget per job.
+    pub disk_is_quota: bool,
 }
 
 impl Budgets {
@@ -48,7 +51,12 @@ impl Budgets {
     pub fn defaults(workers: usize) -> Budgets {
         let total = machine_memory().unwrap_or(8 << 30);
         let memory = (total / 4 * 3 / workers.max(1) as u64).max(1 << 30);
-        Budgets { memory: Some(memory), seconds: Some(Duration::from_secs(86_400)), disk: Some(16 << 30) }
+        Budgets {
+            memory: Some(memory),
+            seconds: Some(Duration::from_secs(86_400)),
+            disk: Some(16 << 30),
+            disk_is_quota: false,
+        }
     }
 }
 
@@ -63,7 +71,17 @@ impl Budgets {
             memory: memory.or(Budgets::defaults(workers).memory),
             seconds: (seconds > 0.0).then(|| Duration::from_secs_f64(seconds)),
             disk: Some(disk),
+            disk_is_quota: false,
         })
+    }
+
+    /// These budgets, with the disk budget lowered to `room`, what is left of the
+    /// job's key's storage quota, if it has one.
+    pub fn within_quota(self, room: Option<u64>) -> Budgets {
+        match (room, self.disk) {
+            (Some(r), d) if d.is_none_or(|d| r < d) => Budgets { disk: Some(r), disk_is_quota: true, ..self },
+            _ => self,
+        }
     }
 
     /// These budgets, lowered to what a job's `limits` ask for.
@@ -80,6 +98,7 @@ impl Budgets {
                 (a, b) => a.or(b),
             },
             disk: min(self.disk, asked.disk),
+            disk_is_quota: false,
         }
     }
 

@@ -179,6 +179,12 @@ impl JobProcess {
         Next::Report(report, payload)
     }
 
+    /// The bytes the job stored or tried to store: what it stored before, and
+    /// what it reported since (the report that passed its disk budget too).
+    pub fn stored(&self) -> u64 {
+        self.shared.disk.load(Ordering::Relaxed)
+    }
+
     /// Wait for the process to end and say how it did; `reported`: its outcome,
     /// if it sent one.
     pub fn finish(mut self, reported: Option<RunEnd>) -> ProcessEnd {
@@ -197,6 +203,10 @@ impl JobProcess {
             (Some(Kill::Time), _) => ProcessEnd::OverBudget(format!(
                 "exceeded its time budget of {} s at iteration {at}",
                 b.seconds.map_or(0.0, |s| s.as_secs_f64())
+            )),
+            (Some(Kill::Disk), _) if b.disk_is_quota => ProcessEnd::OverBudget(format!(
+                "reached its key's storage quota at iteration {at} ({} were left of it for this job)",
+                super::format_size(b.disk.unwrap_or(0))
             )),
             (Some(Kill::Disk), _) => ProcessEnd::OverBudget(format!(
                 "exceeded its disk budget of {} at iteration {at}",

@@ -20,6 +20,7 @@ pub const SQLITE: &[File] = &[
     ("0004_open_jobs.sql", include_str!("../../../migrations/sqlite/0004_open_jobs.sql")),
     ("0005_blobs.sql", include_str!("../../../migrations/sqlite/0005_blobs.sql")),
     ("0006_keys.sql", include_str!("../../../migrations/sqlite/0006_keys.sql")),
+    ("0007_deletes_storage.sql", include_str!("../../../migrations/sqlite/0007_deletes_storage.sql")),
 ];
 
 pub const POSTGRES: &[File] = &[
@@ -27,6 +28,7 @@ pub const POSTGRES: &[File] = &[
     ("0002_open_jobs.sql", include_str!("../../../migrations/postgres/0002_open_jobs.sql")),
     ("0003_blobs.sql", include_str!("../../../migrations/postgres/0003_blobs.sql")),
     ("0004_keys.sql", include_str!("../../../migrations/postgres/0004_keys.sql")),
+    ("0005_deletes_storage.sql", include_str!("../../../migrations/postgres/0005_deletes_storage.sql")),
 ];
 
 /// The migrator of a backend's files, with the versions, descriptions and

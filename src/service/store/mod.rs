@@ -1,7 +1,8 @@
 //! The job store: one trait, [`JobStore`], with a SQLite implementation (the
 //! embedded default, one node) and a PostgreSQL one (any number of nodes); SQL
 //! lives only in those two files. Each backend has its own migrations
-//! (`migrations/sqlite`, `migrations/postgres`). The large bytes (inputs,
+//! (`migrations/sqlite`, `migrations/postgres`); what the two share is written
+//! once, in `shared`. The large bytes (inputs,
 //! checkpoints with their fields, result files) go to the blob store
 //! ([`Blobs`]) before the rows that point to them; `types` has the rows.
 //!
@@ -12,6 +13,8 @@
 //! partitioned) changes nothing. A job whose lease expired is claimed again by
 //! any node and resumes from its last checkpoint.
 
+#[macro_use]
+mod shared;
 mod migrations;
 mod postgres;
 mod sqlite;
@@ -99,6 +102,14 @@ pub trait JobStore: Send + Sync + 'static {
     async fn key_by_hash(&self, hash: &str) -> StoreResult<Option<KeyRow>>;
     /// Whether any key (not revoked) exists: then every `/v1` route needs one.
     async fn has_keys(&self) -> StoreResult<bool>;
+    /// The bytes kept by the jobs of `owner` other than `except` (as of their
+    /// attempts' ends, [`JobStore::set_stored`]).
+    async fn owner_storage(&self, owner: &str, except: &str) -> StoreResult<u64>;
+    /// Note the bytes a job keeps now (its checkpoints, result files and history).
+    async fn set_stored(&self, id: &str, bytes: u64) -> StoreResult<()>;
+    /// Whether `node` leads `task` (a sweep that one node of a cluster at a time
+    /// does) for the next `ttl`: taken if free or expired, extended if held.
+    async fn lead(&self, task: &str, node: &str, ttl: std::time::Duration) -> StoreResult<bool>;
     /// Single node only (SQLite): jobs left running by a crash or a stop go back to
     /// the queue at start. On a shared database this is the leases' work: 0.
     async fn requeue_running(&self) -> StoreResult<u64>;
@@ -157,8 +168,15 @@ pub trait JobStore: Send + Sync + 'static {
     /// flagged (its worker, on whichever node, sees the flag at its next write).
     /// Returns the status before the request, `None` if unknown.
     async fn request_cancel(&self, id: &str) -> StoreResult<Option<JobStatus>>;
-    /// Delete the job's rows (history, checkpoints and inputs with them).
-    async fn delete_rows(&self, id: &str) -> StoreResult<()>;
+    /// Mark an ended job deleted: from now on it is absent from every read
+    /// ([`JobStore::job`], lists, counts) and its rows and blobs go in the
+    /// background ([`JobStore::purge`]). `false` if there is no such ended job.
+    async fn mark_deleted(&self, id: &str) -> StoreResult<bool>;
+    /// Jobs marked deleted and not yet purged, the oldest marks first.
+    async fn deleted_jobs(&self, limit: i64) -> StoreResult<Vec<String>>;
+    /// Delete a few thousand rows of a job marked deleted (history, then
+    /// checkpoints), or its row once they are gone: `true` when the row is gone.
+    async fn purge_rows(&self, id: &str) -> StoreResult<bool>;
     /// The number of a job's history rows.
     async fn history_count(&self, id: &str) -> StoreResult<u64>;
     /// History rows from iteration `from` on, at most `limit`.
@@ -348,10 +366,15 @@ pub trait JobStore: Send + Sync + 'static {
         Ok(serde_json::from_slice(&bytes).ok())
     }
 
-    /// Delete a job: its rows, then its blobs.
-    async fn delete(&self, id: &str) -> StoreResult<()> {
-        self.delete_rows(id).await?;
-        Ok(self.blobs().delete_all(&["jobs", id]).await?)
+    /// Delete a job marked deleted: its blobs, then its rows a statement of a few
+    /// thousand at a time (the writer is never held long), the job's row last,
+    /// so that a purge cut short is taken up again by the next.
+    async fn purge(&self, id: &str) -> StoreResult<()> {
+        self.blobs().delete_all(&["jobs", id]).await?;
+        while !self.purge_rows(id).await? {
+            tokio::task::yield_now().await;
+        }
+        Ok(())
     }
 }
 

@@ -66,13 +66,15 @@ pub struct JobRow {
 }
 
 /// An API key: its name, the SHA-256 of the key (hex), whether it is an admin's,
-/// its quota of jobs accepted or running, and whether it was revoked.
+/// its quotas (jobs accepted or running, bytes its jobs keep), and whether it
+/// was revoked.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct KeyRow {
     pub name: String,
     pub hash: String,
     pub admin: bool,
     pub max_active: Option<i64>,
+    pub max_storage: Option<i64>,
     pub created_at: String,
     pub revoked: bool,
 }
@@ -85,6 +87,15 @@ pub struct Admission {
     pub max_active: Option<i64>,
     /// Jobs accepted (waiting) on the whole service at most (with this one).
     pub max_queued: Option<i64>,
+    /// Bytes the jobs of `owner` keep at most: no new job once they keep that much.
+    pub max_storage: Option<i64>,
+}
+
+impl Admission {
+    /// Whether any limit is to be checked.
+    pub fn limited(&self) -> bool {
+        self.max_queued.is_some() || (self.owner.is_some() && (self.max_active.is_some() || self.max_storage.is_some()))
+    }
 }
 
 /// A checkpoint's frame, serialized: its iteration, time and JSON.
@@ -143,6 +154,9 @@ pub enum StoreError {
     /// A new job was not inserted: the service has `max_queued` jobs waiting.
     #[error("the service has {0} jobs waiting, as many as it queues")]
     QueueFull(i64),
+    /// A new job was not inserted: the key's jobs keep `.0` bytes of its `max_storage` `.1`.
+    #[error("the key's jobs keep {0} bytes, its storage quota is {1} bytes")]
+    StorageQuota(i64, i64),
 }
 
 pub type StoreResult<T> = Result<T, StoreError>;

@@ -4,7 +4,7 @@
 //! meshes read) before anything is stored; job and inputs are stored in one
 //! transaction before 201 is answered.
 
-use crate::jobs::{parse_spec, prepare, MemoryEstimate};
+use crate::jobs::{format_size, parse_spec, prepare, MemoryEstimate};
 use crate::service::isolation::parent::validate;
 use crate::service::isolation::Isolation;
 use crate::service::keys::Caller;
@@ -183,11 +183,20 @@ pub(in crate::service::routes) async fn create(
         owner: caller.owner().map(str::to_string),
         max_active: caller.max_active(),
         max_queued: state.max_queued,
+        max_storage: caller.max_storage(),
     };
     let job = match state.store.insert_job(&id, &normalized, &inputs, &admit).await {
         Ok(job) => job,
         Err(StoreError::ActiveQuota(max)) => {
             let detail = format!("this key may have {max} jobs accepted or running at a time, and has them");
+            return Err(ApiError::TooMany { detail, retry_after: QUOTA_RETRY_SECONDS });
+        }
+        Err(StoreError::StorageQuota(kept, max)) => {
+            let detail = format!(
+                "this key's jobs keep {}, its storage quota is {}: delete some of them to make room",
+                format_size(kept.max(0) as u64),
+                format_size(max.max(0) as u64)
+            );
             return Err(ApiError::TooMany { detail, retry_after: QUOTA_RETRY_SECONDS });
         }
         Err(StoreError::QueueFull(max)) => {

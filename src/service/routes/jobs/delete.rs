@@ -1,5 +1,6 @@
-//! `DELETE /v1/jobs/{id}`: a job that has ended, with its history, checkpoints and
-//! inputs; 409 while it is accepted or running.
+//! `DELETE /v1/jobs/{id}`: a job that has ended, with its history, checkpoints,
+//! inputs and files; 409 while it is accepted or running. It is gone from every
+//! read at once; its rows and blobs go in the background (`retention`).
 
 use super::super::find;
 use crate::service::{ApiError, AppState};
@@ -14,6 +15,9 @@ pub(in crate::service::routes) async fn delete(
     if !job.status.is_final() {
         return Err(ApiError::Conflict(format!("job {id} is {}; cancel it first", job.status.as_str())));
     }
-    state.store.delete(&id).await?;
-    Ok(StatusCode::NO_CONTENT)
+    match state.store.mark_deleted(&id).await? {
+        true => Ok(StatusCode::NO_CONTENT),
+        // deleted meanwhile by another request
+        false => Err(ApiError::NotFound(format!("no job {id}"))),
+    }
 }

@@ -2,7 +2,7 @@
 //! transactions, renewals and the fence, all on the database's clock.
 
 use super::{job_from_row, CHANNEL};
-use crate::service::store::{crash_message, now, ClaimPolicy, Claimed, Lease, StoreError, StoreResult, ABANDONED};
+use crate::service::store::{crash_message, now, ClaimPolicy, Claimed, Lease, StoreError, StoreResult};
 use sqlx::postgres::PgPool;
 use sqlx::{Postgres, Row, Transaction};
 
@@ -71,22 +71,6 @@ pub(super) async fn claim_next(pool: &PgPool, owner: &str, policy: &ClaimPolicy)
     }
 }
 
-/// Extend `lease` by the policy's length, on the database's clock; false if it
-/// is no longer the job's lease.
-pub(super) async fn renew(pool: &PgPool, id: &str, lease: &Lease, policy: &ClaimPolicy) -> StoreResult<bool> {
-    let done = sqlx::query(concat!(
-        "UPDATE jobs SET lease_expires = ",
-        clock_ms!(),
-        " + $3 WHERE id = $1 AND lease_epoch = $2 AND status = 'running'"
-    ))
-    .bind(id)
-    .bind(lease.epoch)
-    .bind(policy.lease.as_millis() as i64)
-    .execute(pool)
-    .await?;
-    Ok(done.rows_affected() == 1)
-}
-
 /// Give the job back to the queue (its node stops); fenced.
 pub(super) async fn release(pool: &PgPool, id: &str, lease: &Lease) -> StoreResult<()> {
     let mut tx = pool.begin().await?;
@@ -97,17 +81,4 @@ pub(super) async fn release(pool: &PgPool, id: &str, lease: &Lease) -> StoreResu
         .await?;
     sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind("queue").execute(&mut *tx).await?;
     Ok(tx.commit().await?)
-}
-
-/// Expire the job's lease now, saying why ([`crate::service::store::JobStore::abandon`]); fenced.
-pub(super) async fn abandon(pool: &PgPool, id: &str, lease: &Lease, why: &str) -> StoreResult<()> {
-    let done = sqlx::query(
-        "UPDATE jobs SET lease_expires = 0, message = $3 WHERE id = $1 AND lease_epoch = $2 AND status = 'running'",
-    )
-    .bind(id)
-    .bind(lease.epoch)
-    .bind(format!("{ABANDONED}{why}"))
-    .execute(pool)
-    .await?;
-    (done.rows_affected() == 1).then_some(()).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
 }

@@ -12,7 +12,7 @@ use super::{
 };
 use crate::flow::Progress;
 use sqlx::postgres::{PgConnectOptions, PgPool, PgPoolOptions, PgRow};
-use sqlx::Row;
+use sqlx::{Postgres, Row};
 use std::str::FromStr;
 use std::sync::Arc;
 use std::time::Duration;
@@ -37,40 +37,15 @@ pub struct PgStore {
     blobs: Blobs,
 }
 
-fn key_from_row(r: &PgRow) -> KeyRow {
-    KeyRow {
-        name: r.get("name"),
-        hash: r.get("hash"),
-        admin: r.get("admin"),
-        max_active: r.get("max_active"),
-        created_at: r.get("created_at"),
-        revoked: r.get::<Option<String>, _>("revoked_at").is_some(),
-    }
-}
+const BEGIN: &str = "BEGIN";
+/// One admission at a time on every node: the counts cannot change before the insert.
+const ADMISSION_LOCK: Option<&str> = Some("SELECT pg_advisory_xact_lock(hashtext('shapeflow admission'))");
+const INSERT_JOB: &str = "INSERT INTO jobs (id, status, spec, created_at, owner) VALUES ($1, 'accepted', $2, $3, $4)";
 
-fn job_from_row(r: &PgRow) -> JobRow {
-    let iteration: Option<i64> = r.get("iteration");
-    JobRow {
-        id: r.get("id"),
-        seq: r.get("seq"),
-        status: status_of(r.get::<&str, _>("status")),
-        spec: r.get("spec"),
-        created_at: r.get("created_at"),
-        started_at: r.get("started_at"),
-        finished_at: r.get("finished_at"),
-        message: r.get("message"),
-        stop_reason: r.get("stop_reason"),
-        progress: iteration.map(|it| Progress {
-            iteration: it as usize,
-            time: r.get("time"),
-            tau: r.get("tau"),
-            energy: r.get("energy"),
-            vertices: r.get::<i64, _>("vertices") as usize,
-            components: r.get::<i64, _>("components") as usize,
-        }),
-        results: results_of(r.get("results")),
-        owner: r.get("owner"),
-    }
+/// Tell every node's event streams (and idle workers: `"queue"`) about `what`.
+async fn notify(tx: &mut sqlx::Transaction<'_, Postgres>, what: &str) -> StoreResult<()> {
+    sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind(what).execute(&mut **tx).await?;
+    Ok(())
 }
 
 impl PgStore {
@@ -93,14 +68,9 @@ impl PgStore {
     }
 }
 
-#[async_trait::async_trait]
-impl JobStore for PgStore {
+job_store!(PgStore, PgRow, read: pool, write: pool, {
     fn backend(&self) -> &'static str {
         "postgres"
-    }
-
-    fn blobs(&self) -> &Blobs {
-        &self.blobs
     }
 
     /// Forward the notifications of [`CHANNEL`] to `events` (the job's id), from a
@@ -112,163 +82,6 @@ impl JobStore for PgStore {
 
     fn announces(&self) -> bool {
         true
-    }
-
-    async fn insert_rows(
-        &self,
-        id: &str,
-        spec: &str,
-        heads: &[(String, Vec<u8>)],
-        admit: &Admission,
-    ) -> StoreResult<JobRow> {
-        let mut tx = self.pool.begin().await?;
-        if admit.max_active.is_some() || admit.max_queued.is_some() {
-            // one admission at a time on every node: the counts cannot change before the insert
-            sqlx::query("SELECT pg_advisory_xact_lock(hashtext('shapeflow admission'))").execute(&mut *tx).await?;
-        }
-        if let (Some(owner), Some(max)) = (&admit.owner, admit.max_active) {
-            let active: i64 =
-                sqlx::query_scalar("SELECT COUNT(*) FROM jobs WHERE owner = $1 AND status IN ('accepted', 'running')")
-                    .bind(owner)
-                    .fetch_one(&mut *tx)
-                    .await?;
-            if active >= max {
-                return Err(StoreError::ActiveQuota(max));
-            }
-        }
-        if let Some(max) = admit.max_queued {
-            let queued: i64 =
-                sqlx::query_scalar("SELECT COUNT(*) FROM jobs WHERE status = 'accepted'").fetch_one(&mut *tx).await?;
-            if queued >= max {
-                return Err(StoreError::QueueFull(max));
-            }
-        }
-        let r = sqlx::query(
-            "INSERT INTO jobs (id, status, spec, created_at, owner) VALUES ($1, 'accepted', $2, $3, $4) RETURNING *",
-        )
-        .bind(id)
-        .bind(spec)
-        .bind(now())
-        .bind(&admit.owner)
-        .fetch_one(&mut *tx)
-        .await?;
-        for (name, head) in heads {
-            sqlx::query("INSERT INTO inputs (job_id, name, data, in_blob, head) VALUES ($1, $2, '', TRUE, $3)")
-                .bind(id)
-                .bind(name)
-                .bind(head.as_slice())
-                .execute(&mut *tx)
-                .await?;
-        }
-        sqlx::query("SELECT pg_notify($1, $2)").bind(CHANNEL).bind("queue").execute(&mut *tx).await?;
-        tx.commit().await?;
-        Ok(job_from_row(&r))
-    }
-
-    async fn input_magics(&self, id: &str) -> StoreResult<Vec<Vec<u8>>> {
-        let rows =
-            sqlx::query("SELECT COALESCE(head, substring(data from 1 for 8)) AS head FROM inputs WHERE job_id = $1")
-                .bind(id)
-                .fetch_all(&self.pool)
-                .await?;
-        Ok(rows.iter().map(|r| r.get::<Vec<u8>, _>("head")).collect())
-    }
-
-    async fn input_rows(&self, id: &str) -> StoreResult<Vec<InputRow>> {
-        let rows = sqlx::query("SELECT name, in_blob, data FROM inputs WHERE job_id = $1")
-            .bind(id)
-            .fetch_all(&self.pool)
-            .await?;
-        Ok(rows
-            .iter()
-            .map(|r| InputRow { name: r.get("name"), in_blob: r.get("in_blob"), data: r.get("data") })
-            .collect())
-    }
-
-    async fn job(&self, id: &str) -> StoreResult<Option<JobRow>> {
-        let r = sqlx::query("SELECT * FROM jobs WHERE id = $1").bind(id).fetch_optional(&self.pool).await?;
-        Ok(r.as_ref().map(job_from_row))
-    }
-
-    async fn list(
-        &self,
-        status: Option<JobStatus>,
-        before: Option<i64>,
-        limit: i64,
-        owner: Option<&str>,
-    ) -> StoreResult<Vec<JobRow>> {
-        let status = status.map(JobStatus::as_str);
-        let rows = sqlx::query(
-            "SELECT * FROM jobs WHERE ($1::text IS NULL OR status = $1) AND ($2::bigint IS NULL OR seq < $2) \
-             AND ($4::text IS NULL OR owner = $4) ORDER BY seq DESC LIMIT $3",
-        )
-        .bind(status)
-        .bind(before)
-        .bind(limit)
-        .bind(owner)
-        .fetch_all(&self.pool)
-        .await?;
-        Ok(rows.iter().map(job_from_row).collect())
-    }
-
-    async fn ended_before(&self, before: &str, limit: i64) -> StoreResult<Vec<String>> {
-        let ids = sqlx::query_scalar(
-            "SELECT id FROM jobs WHERE status IN ('successful', 'failed', 'dismissed') AND finished_at < $1 \
-             ORDER BY finished_at LIMIT $2",
-        )
-        .bind(before)
-        .bind(limit)
-        .fetch_all(&self.pool)
-        .await?;
-        Ok(ids)
-    }
-
-    async fn counts_by_status(&self) -> StoreResult<Vec<(String, i64)>> {
-        let rows = sqlx::query("SELECT status, COUNT(*) AS n FROM jobs GROUP BY status").fetch_all(&self.pool).await?;
-        Ok(rows.iter().map(|r| (r.get("status"), r.get("n"))).collect())
-    }
-
-    async fn insert_key(&self, key: &KeyRow) -> StoreResult<bool> {
-        let done = sqlx::query(
-            "INSERT INTO keys (name, hash, admin, max_active, created_at) VALUES ($1, $2, $3, $4, $5) \
-             ON CONFLICT DO NOTHING",
-        )
-        .bind(&key.name)
-        .bind(&key.hash)
-        .bind(key.admin)
-        .bind(key.max_active)
-        .bind(&key.created_at)
-        .execute(&self.pool)
-        .await?;
-        Ok(done.rows_affected() == 1)
-    }
-
-    async fn keys(&self) -> StoreResult<Vec<KeyRow>> {
-        let rows = sqlx::query("SELECT * FROM keys ORDER BY name").fetch_all(&self.pool).await?;
-        Ok(rows.iter().map(key_from_row).collect())
-    }
-
-    async fn revoke_key(&self, name: &str) -> StoreResult<bool> {
-        let done = sqlx::query("UPDATE keys SET revoked_at = $2 WHERE name = $1 AND revoked_at IS NULL")
-            .bind(name)
-            .bind(now())
-            .execute(&self.pool)
-            .await?;
-        Ok(done.rows_affected() == 1)
-    }
-
-    async fn key_by_hash(&self, hash: &str) -> StoreResult<Option<KeyRow>> {
-        let row = sqlx::query("SELECT * FROM keys WHERE hash = $1 AND revoked_at IS NULL")
-            .bind(hash)
-            .fetch_optional(&self.pool)
-            .await?;
-        Ok(row.as_ref().map(key_from_row))
-    }
-
-    async fn has_keys(&self) -> StoreResult<bool> {
-        let n: i64 =
-            sqlx::query_scalar("SELECT COUNT(*) FROM keys WHERE revoked_at IS NULL").fetch_one(&self.pool).await?;
-        Ok(n > 0)
     }
 
     /// Nodes share the database: a running job belongs to its lease holder until
@@ -290,46 +103,8 @@ impl JobStore for PgStore {
         leases::claim_next(&self.pool, owner, policy).await
     }
 
-    async fn renew(&self, id: &str, lease: &Lease, policy: &ClaimPolicy) -> StoreResult<bool> {
-        leases::renew(&self.pool, id, lease, policy).await
-    }
-
     async fn release(&self, id: &str, lease: &Lease) -> StoreResult<()> {
         leases::release(&self.pool, id, lease).await
-    }
-
-    async fn abandon(&self, id: &str, lease: &Lease, why: &str) -> StoreResult<()> {
-        leases::abandon(&self.pool, id, lease, why).await
-    }
-
-    async fn checkpoint_index(&self, id: &str, after: i64) -> StoreResult<Vec<(i64, f64)>> {
-        let rows = sqlx::query("SELECT iteration, time FROM checkpoints WHERE job_id = $1 AND iteration > $2 ORDER BY iteration LIMIT 4096")
-            .bind(id)
-            .bind(after)
-            .fetch_all(&self.pool)
-            .await?;
-        Ok(rows.iter().map(|r| (r.get::<i64, _>("iteration"), r.get::<f64, _>("time"))).collect())
-    }
-
-    async fn checkpoint_rows(&self, id: &str, which: Which) -> StoreResult<Vec<CheckpointRow>> {
-        let (sql, iteration) = match which {
-            Which::Last => (
-                "SELECT iteration, blob, data FROM checkpoints WHERE job_id = $1 AND $2::bigint = $2 \
-                 ORDER BY iteration DESC LIMIT 1",
-                0,
-            ),
-            Which::At(n) => ("SELECT iteration, blob, data FROM checkpoints WHERE job_id = $1 AND iteration = $2", n),
-            Which::After(n) => (
-                "SELECT iteration, blob, data FROM checkpoints WHERE job_id = $1 AND iteration > $2 \
-                 ORDER BY iteration LIMIT 4096",
-                n,
-            ),
-        };
-        let rows = sqlx::query(sql).bind(id).bind(iteration).fetch_all(&self.pool).await?;
-        Ok(rows
-            .iter()
-            .map(|r| CheckpointRow { iteration: r.get("iteration"), blob: r.get("blob"), data: r.get("data") })
-            .collect())
     }
 
     /// The fence, the job's progress, the batch's history rows, its checkpoints'
@@ -387,31 +162,6 @@ impl JobStore for PgStore {
         held.map(|r| r.get::<bool, _>(0)).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
     }
 
-    async fn truncate_history(&self, id: &str, lease: &Lease, after: usize) -> StoreResult<()> {
-        let mut tx = self.pool.begin().await?;
-        fence(&mut tx, id, lease).await?;
-        sqlx::query("DELETE FROM history WHERE job_id = $1 AND iteration > $2")
-            .bind(id)
-            .bind(after as i64)
-            .execute(&mut *tx)
-            .await?;
-        Ok(tx.commit().await?)
-    }
-
-    async fn set_results(&self, id: &str, lease: Option<&Lease>, index: &str) -> StoreResult<bool> {
-        let mut tx = self.pool.begin().await?;
-        let sql = match lease {
-            Some(lease) => {
-                fence(&mut tx, id, lease).await?;
-                "UPDATE jobs SET results = $2 WHERE id = $1"
-            }
-            None => "UPDATE jobs SET results = $2 WHERE id = $1 AND results IS NULL",
-        };
-        let done = sqlx::query(sql).bind(id).bind(index).execute(&mut *tx).await?;
-        tx.commit().await?;
-        Ok(done.rows_affected() == 1)
-    }
-
     /// One statement: the fence (the lease's epoch in the update's condition), the
     /// outcome and the notification.
     async fn finish(
@@ -445,12 +195,6 @@ impl JobStore for PgStore {
         }
     }
 
-    async fn cancel_requested(&self, id: &str) -> StoreResult<bool> {
-        let r =
-            sqlx::query("SELECT cancel_requested FROM jobs WHERE id = $1").bind(id).fetch_optional(&self.pool).await?;
-        Ok(r.map(|r| r.get::<bool, _>("cancel_requested")).unwrap_or(true))
-    }
-
     async fn request_cancel(&self, id: &str) -> StoreResult<Option<JobStatus>> {
         let mut tx = self.pool.begin().await?;
         let Some(r) =
@@ -474,36 +218,4 @@ impl JobStore for PgStore {
         tx.commit().await?;
         Ok(Some(status))
     }
-
-    async fn history_count(&self, id: &str) -> StoreResult<u64> {
-        let n: i64 =
-            sqlx::query_scalar("SELECT COUNT(*) FROM history WHERE job_id = $1").bind(id).fetch_one(&self.pool).await?;
-        Ok(n as u64)
-    }
-
-    async fn delete_rows(&self, id: &str) -> StoreResult<()> {
-        sqlx::query("DELETE FROM jobs WHERE id = $1").bind(id).execute(&self.pool).await?;
-        Ok(())
-    }
-
-    async fn history_from(&self, id: &str, from: usize, limit: usize) -> StoreResult<Vec<Progress>> {
-        let rows =
-            sqlx::query("SELECT * FROM history WHERE job_id = $1 AND iteration >= $2 ORDER BY iteration LIMIT $3")
-                .bind(id)
-                .bind(from as i64)
-                .bind(limit.min(i64::MAX as usize) as i64)
-                .fetch_all(&self.pool)
-                .await?;
-        Ok(rows
-            .iter()
-            .map(|r| Progress {
-                iteration: r.get::<i64, _>("iteration") as usize,
-                time: r.get("time"),
-                tau: r.get("tau"),
-                energy: r.get("energy"),
-                vertices: r.get::<i64, _>("vertices") as usize,
-                components: r.get::<i64, _>("components") as usize,
-            })
-            .collect())
-    }
-}
+});

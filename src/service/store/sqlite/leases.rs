@@ -98,22 +98,6 @@ pub(super) async fn claim_next(pool: &SqlitePool, owner: &str, policy: &ClaimPol
     }
 }
 
-/// Extend `lease` by the policy's length, on the database's clock; false if it
-/// is no longer the job's lease.
-pub(super) async fn renew(pool: &SqlitePool, id: &str, lease: &Lease, policy: &ClaimPolicy) -> StoreResult<bool> {
-    let done = sqlx::query(concat!(
-        "UPDATE jobs SET lease_expires = ",
-        clock_ms!(),
-        " + ?3 WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running'"
-    ))
-    .bind(id)
-    .bind(lease.epoch)
-    .bind(policy.lease.as_millis() as i64)
-    .execute(pool)
-    .await?;
-    Ok(done.rows_affected() == 1)
-}
-
 /// Give the job back to the queue (its node stops); fenced.
 pub(super) async fn release(pool: &SqlitePool, id: &str, lease: &Lease) -> StoreResult<()> {
     let done = sqlx::query(
@@ -122,19 +106,6 @@ pub(super) async fn release(pool: &SqlitePool, id: &str, lease: &Lease) -> Store
     )
     .bind(id)
     .bind(lease.epoch)
-    .execute(pool)
-    .await?;
-    (done.rows_affected() == 1).then_some(()).ok_or_else(|| StoreError::LeaseLost(id.to_string()))
-}
-
-/// Expire the job's lease now, saying why ([`crate::service::store::JobStore::abandon`]); fenced.
-pub(super) async fn abandon(pool: &SqlitePool, id: &str, lease: &Lease, why: &str) -> StoreResult<()> {
-    let done = sqlx::query(
-        "UPDATE jobs SET lease_expires = 0, message = ?3 WHERE id = ?1 AND lease_epoch = ?2 AND status = 'running'",
-    )
-    .bind(id)
-    .bind(lease.epoch)
-    .bind(format!("{ABANDONED}{why}"))
     .execute(pool)
     .await?;
     (done.rows_affected() == 1).then_some(()).ok_or_else(|| StoreError::LeaseLost(id.to_string()))

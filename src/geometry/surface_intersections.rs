@@ -1,0 +1,249 @@
+//! Intersections of triangulated surfaces: whether any two triangles that share
+//! no vertex meet (touch or cross), across all components of a mesh and within
+//! each. The broad phase lays the triangles' bounding boxes on a uniform grid
+//! (cells of about two mean edge lengths) and tests each pair once, in the cell
+//! that holds the lowest corner of the intersection of their boxes; the narrow
+//! phase decides with Shewchuk's exact `orient3d` (the `robust` crate): two
+//! triangles that do not lie in one plane meet exactly when an edge of one meets
+//! the other, and an edge meets a triangle when its ends are not strictly on one
+//! side of the triangle's plane and it passes on the same side of (or on) the
+//! three edges of the triangle. Coplanar pairs are decided in the plane of the
+//! largest projection by `orient2d`.
+//!
+//! Triangles that share a vertex are not tested: their contact is a fold of the
+//! surface, which the flow's tangling rule rejects.
+
+use super::Point;
+use robust::{orient2d, orient3d, Coord, Coord3D};
+use std::collections::HashMap;
+
+/// Cells of the broad phase, in mean edge lengths.
+const CELL_EDGES: f64 = 2.0;
+
+/// Cells a triangle may cover at most before it is kept aside and tested against
+/// every other (a triangle far larger than the mean: a coarse cap).
+const MAX_CELLS: usize = 512;
+
+/// The first pair of triangles `(a, b)`, `a < b`, that share no vertex and meet;
+/// `None` if no two such triangles meet.
+pub fn first_surface_intersection(positions: &[Point<3>], triangles: &[[usize; 3]]) -> Option<(usize, usize)> {
+    let mut hits = surface_intersections(positions, triangles, 1);
+    hits.pop()
+}
+
+/// Up to `most` pairs of triangles that share no vertex and meet, each once.
+pub fn surface_intersections(positions: &[Point<3>], triangles: &[[usize; 3]], most: usize) -> Vec<(usize, usize)> {
+    let mut hits = Vec::new();
+    if triangles.len() < 2 || most == 0 {
+        return hits;
+    }
+    let boxes: Vec<([f64; 3], [f64; 3])> = triangles.iter().map(|t| bounds(positions, t)).collect();
+    let mut edge_sum = 0.0;
+    for t in triangles {
+        for k in 0..3 {
+            edge_sum += (positions[t[(k + 1) % 3]] - positions[t[k]]).norm();
+        }
+    }
+    let cell = CELL_EDGES * edge_sum / (3 * triangles.len()) as f64;
+    if !(cell.is_finite() && cell > 0.0) {
+        return hits;
+    }
+    let index = |x: f64| (x / cell).floor() as i64;
+    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::with_capacity(triangles.len());
+    let mut large = Vec::new();
+    for (t, (lo, hi)) in boxes.iter().enumerate() {
+        let (l, h) = (lo.map(index), hi.map(index));
+        let count = (0..3).map(|k| (h[k] - l[k] + 1) as usize).product::<usize>();
+        if count > MAX_CELLS {
+            large.push(t);
+            continue;
+        }
+        for i in l[0]..=h[0] {
+            for j in l[1]..=h[1] {
+                for k in l[2]..=h[2] {
+                    grid.entry([i, j, k]).or_default().push(t as u32);
+                }
+            }
+        }
+    }
+    let test = |a: usize, b: usize, hits: &mut Vec<(usize, usize)>| {
+        let (ta, tb) = (&triangles[a], &triangles[b]);
+        if ta.iter().any(|v| tb.contains(v)) || !overlap(&boxes[a], &boxes[b]) {
+            return;
+        }
+        if triangles_meet(positions, ta, tb) {
+            hits.push((a.min(b), a.max(b)));
+        }
+    };
+    for (key, members) in &grid {
+        for (m, &a) in members.iter().enumerate() {
+            for &b in &members[m + 1..] {
+                let (a, b) = (a as usize, b as usize);
+                // once: in the cell of the lowest corner of the boxes' overlap
+                let corner = [0, 1, 2].map(|k| index(boxes[a].0[k].max(boxes[b].0[k])));
+                if corner == *key {
+                    test(a, b, &mut hits);
+                    if hits.len() >= most {
+                        return hits;
+                    }
+                }
+            }
+        }
+    }
+    for (m, &a) in large.iter().enumerate() {
+        for b in 0..triangles.len() {
+            // a pair of two large ones once
+            if b == a || large[..m].contains(&b) {
+                continue;
+            }
+            test(a, b, &mut hits);
+            if hits.len() >= most {
+                return hits;
+            }
+        }
+    }
+    hits
+}
+
+fn bounds(x: &[Point<3>], t: &[usize; 3]) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for &v in t {
+        for k in 0..3 {
+            lo[k] = lo[k].min(x[v][k]);
+            hi[k] = hi[k].max(x[v][k]);
+        }
+    }
+    (lo, hi)
+}
+
+fn overlap(a: &([f64; 3], [f64; 3]), b: &([f64; 3], [f64; 3])) -> bool {
+    (0..3).all(|k| a.0[k] <= b.1[k] && b.0[k] <= a.1[k])
+}
+
+fn c3(p: &Point<3>) -> Coord3D<f64> {
+    Coord3D { x: p[0], y: p[1], z: p[2] }
+}
+
+/// Whether triangles `a` and `b` (sharing no vertex) touch or cross.
+fn triangles_meet(x: &[Point<3>], a: &[usize; 3], b: &[usize; 3]) -> bool {
+    let (pa, pb) = (a.map(|v| x[v]), b.map(|v| x[v]));
+    let side = |t: &[Point<3>; 3], p: &Point<3>| orient3d(c3(&t[0]), c3(&t[1]), c3(&t[2]), c3(p));
+    let sa = pa.map(|p| side(&pb, &p));
+    let sb = pb.map(|p| side(&pa, &p));
+    // all of one strictly on one side of the other's plane
+    let apart = |s: &[f64; 3]| s.iter().all(|&v| v > 0.0) || s.iter().all(|&v| v < 0.0);
+    if apart(&sa) || apart(&sb) {
+        return false;
+    }
+    if sa.iter().all(|&v| v == 0.0) {
+        return coplanar_meet(&pa, &pb);
+    }
+    (0..3).any(|k| edge_meets(&pa[k], &pa[(k + 1) % 3], &pb))
+        || (0..3).any(|k| edge_meets(&pb[k], &pb[(k + 1) % 3], &pa))
+}
+
+/// Whether the segment `p q` meets the triangle `t` (not in its plane as a whole).
+fn edge_meets(p: &Point<3>, q: &Point<3>, t: &[Point<3>; 3]) -> bool {
+    let (sp, sq) = (orient3d(c3(&t[0]), c3(&t[1]), c3(&t[2]), c3(p)), orient3d(c3(&t[0]), c3(&t[1]), c3(&t[2]), c3(q)));
+    if (sp > 0.0 && sq > 0.0) || (sp < 0.0 && sq < 0.0) || (sp == 0.0 && sq == 0.0) {
+        return false;
+    }
+    // the line p q passes each edge of t on the same side, or on it
+    let around: [f64; 3] = [0, 1, 2].map(|k| orient3d(c3(p), c3(q), c3(&t[k]), c3(&t[(k + 1) % 3])));
+    around.iter().all(|&v| v >= 0.0) || around.iter().all(|&v| v <= 0.0)
+}
+
+/// Two triangles in one plane: an edge of one crosses an edge of the other, or a
+/// vertex of one lies in the other (in the projection that drops the axis of the
+/// plane's largest normal component).
+fn coplanar_meet(a: &[Point<3>; 3], b: &[Point<3>; 3]) -> bool {
+    let n = (a[1] - a[0]).cross(&(a[2] - a[0]));
+    let drop = (0..3).max_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs())).unwrap_or(2);
+    let (u, v) = match drop {
+        0 => (1, 2),
+        1 => (0, 2),
+        _ => (0, 1),
+    };
+    let c = |p: &Point<3>| Coord { x: p[u], y: p[v] };
+    let o = |p: &Point<3>, q: &Point<3>, r: &Point<3>| orient2d(c(p), c(q), c(r));
+    let inside = |t: &[Point<3>; 3], p: &Point<3>| {
+        let s = [o(&t[0], &t[1], p), o(&t[1], &t[2], p), o(&t[2], &t[0], p)];
+        s.iter().all(|&x| x >= 0.0) || s.iter().all(|&x| x <= 0.0)
+    };
+    let cross = |p: &Point<3>, q: &Point<3>, r: &Point<3>, s: &Point<3>| {
+        let (d1, d2) = (o(p, q, r), o(p, q, s));
+        let (d3, d4) = (o(r, s, p), o(r, s, q));
+        (d1 * d2 <= 0.0) && (d3 * d4 <= 0.0) && !(d1 == 0.0 && d2 == 0.0 && d3 == 0.0 && d4 == 0.0)
+    };
+    (0..3).any(|i| (0..3).any(|j| cross(&a[i], &a[(i + 1) % 3], &b[j], &b[(j + 1) % 3])))
+        || a.iter().any(|p| inside(b, p))
+        || b.iter().any(|p| inside(a, p))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::icosphere;
+
+    fn shifted(mesh: &crate::geometry::SurfaceMesh, dx: f64) -> (Vec<Point<3>>, Vec<[usize; 3]>) {
+        let x = mesh.positions().iter().map(|p| p + Point::<3>::new(dx, 0.0, 0.0)).collect();
+        (x, mesh.elements().to_vec())
+    }
+
+    /// Two unit spheres: apart, touching in a thin lens, overlapping; every hit is a
+    /// pair of triangles of different spheres, and a brute-force search over all
+    /// pairs finds the same pairs.
+    #[test]
+    fn two_spheres_meet_exactly_when_they_overlap() {
+        let s = icosphere([0.0; 3], 1.0, 3).unwrap();
+        let n = s.elements().len();
+        for (gap, meet) in [(2.05, false), (1.9, true), (1.0, true)] {
+            let (mut x, mut t) = shifted(&s, 0.0);
+            let (x2, t2) = shifted(&s, gap);
+            let offset = x.len();
+            x.extend(x2);
+            t.extend(t2.iter().map(|e| e.map(|v| v + offset)));
+            let mut hits = surface_intersections(&x, &t, usize::MAX);
+            hits.sort();
+            assert_eq!(!hits.is_empty(), meet, "gap {gap}");
+            assert!(hits.iter().all(|&(a, b)| a < n && b >= n), "only pairs across the spheres");
+            let mut brute = Vec::new();
+            for a in 0..t.len() {
+                for b in a + 1..t.len() {
+                    if !t[a].iter().any(|v| t[b].contains(v)) && triangles_meet(&x, &t[a], &t[b]) {
+                        brute.push((a, b));
+                    }
+                }
+            }
+            assert_eq!(hits, brute, "gap {gap}");
+        }
+    }
+
+    #[test]
+    fn crossing_touching_and_coplanar_triangles() {
+        let p = |x: f64, y: f64, z: f64| Point::<3>::new(x, y, z);
+        let x = vec![
+            p(0.0, 0.0, 0.0),
+            p(1.0, 0.0, 0.0),
+            p(0.0, 1.0, 0.0),
+            // pierces the first through its middle
+            p(0.2, 0.2, -1.0),
+            p(0.2, 0.2, 1.0),
+            p(0.3, 0.4, 1.0),
+            // coplanar, overlapping
+            p(0.1, 0.1, 0.0),
+            p(2.0, 0.1, 0.0),
+            p(0.1, 2.0, 0.0),
+            // above, apart
+            p(0.0, 0.0, 0.5),
+            p(1.0, 0.0, 0.5),
+            p(0.0, 1.0, 0.5),
+        ];
+        let meet = |a: [usize; 3], b: [usize; 3]| triangles_meet(&x, &a, &b);
+        assert!(meet([0, 1, 2], [3, 4, 5]));
+        assert!(meet([0, 1, 2], [6, 7, 8]));
+        assert!(!meet([0, 1, 2], [9, 10, 11]));
+        assert!(meet([3, 4, 5], [9, 10, 11]), "the piercing one crosses the plane z = 0.5 inside");
+    }
+}
