@@ -198,7 +198,15 @@ fn main() {
     let n = mesh.num_vertices();
     let (t_step, t_solve) = l2_step_time(&mesh);
     let (params, pinch) = SurfaceManager::defaults_for(&mesh);
-    let mut manager = SurfaceManager { regularize: true, sweeps: 3, adapt: true, params, pinch_curvature: Some(pinch) };
+    let mut manager = SurfaceManager {
+        regularize: true,
+        sweeps: 3,
+        adapt: true,
+        params,
+        pinch_curvature: Some(pinch),
+        surgery: None,
+        declined: None,
+    };
     let t_manage = time_it(0.5, || {
         black_box(manager.manage(&mesh).unwrap());
     });

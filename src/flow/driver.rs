@@ -5,7 +5,9 @@
 //! `V⃗`, and then
 //! 1. *geometric control* (paper §4.1): if `τ max_T |V⃗(z_a) − V⃗(z_b)| / h_T > ε`
 //!    the step is retried with `τ ← 0.9 ε τ / ratio`;
-//! 2. *tangling*: an element that degenerates or flips halves `τ`; so does a change
+//! 2. *tangling*: an element that degenerates or flips halves `τ`; so does a trial
+//!    surface on which two triangles sharing no vertex meet (components passing
+//!    through each other, or one through itself: never accepted); so does a change
 //!    of the enclosed measure above `conservation` (relative, when set; down to
 //!    `4 τ_min`); an accepted change below it is then removed by offsetting each
 //!    component along its normals ([`Mesh::with_component_measures`]), after the
@@ -243,6 +245,23 @@ impl<'p, const D: usize> Flow<'p, D> {
             // stops with `tau_min` on the last good state
             if let Some(shorter) = report.retry(rules::tangling(&self.mesh, &candidate, tau)) {
                 tangled = true;
+                tau = shorter;
+                continue;
+            }
+            if let Some(shorter) = report.retry(rules::intersection(&self.mesh, &candidate, tau)) {
+                if shorter < rules::CONTACT * s.tau {
+                    // the surfaces are in contact: shorter steps would only creep
+                    // closer, each accepted. They merge if the mesh management
+                    // does merges; else the run ends on the last state before
+                    if let Some(merged) = self.manager.as_mut().and_then(|m| m.merge(&self.mesh)) {
+                        self.take_surgery(merged)?;
+                        report.rejected = None;
+                        report.merged = true;
+                        return Ok(report);
+                    }
+                    report.stop = Some(StopReason::TauMin);
+                    return Ok(report);
+                }
                 tau = shorter;
                 continue;
             }

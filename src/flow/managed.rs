@@ -61,6 +61,15 @@ impl<const D: usize> Flow<'_, D> {
             );
             return Ok(None);
         }
+        let intersecting = super::acceptance::surface_intersection(&mesh);
+        if let Some((a, b)) = intersecting.filter(|_| super::acceptance::surface_intersection(&self.mesh).is_none()) {
+            // the remeshed or regularized surface passes through itself (a vertex
+            // moved across a close sheet, by a fold at a sharp ring): the accepted
+            // mesh, which does not, is kept this time (one that starts with
+            // touching parts, a segmentation's objects split at a neck, may keep them)
+            tracing::debug!(iteration = self.iteration, a, b, "management left an intersecting surface; not applied");
+            return Ok(None);
+        }
         self.mesh = mesh;
         if remeshed {
             self.pattern = Pattern::new(self.mesh.num_vertices(), self.mesh.elements());
@@ -68,6 +77,22 @@ impl<const D: usize> Flow<'_, D> {
         }
         self.energy = energy;
         Ok(None)
+    }
+}
+
+impl<const D: usize> Flow<'_, D> {
+    /// Replace the state by `mesh`, the result of a surgery (a merge): a new
+    /// connectivity, its energy evaluated.
+    pub(super) fn take_surgery(&mut self, mesh: crate::geometry::Mesh<D>) -> Result<(), FlowError> {
+        let energy = self.problem.energy(&mesh).map_err(|e| FlowError::Problem(e.0))?;
+        if !energy.is_finite() {
+            return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration });
+        }
+        self.mesh = mesh;
+        self.pattern = Pattern::new(self.mesh.num_vertices(), self.mesh.elements());
+        self.solver.reset();
+        self.energy = energy;
+        Ok(())
     }
 }
 

@@ -26,6 +26,20 @@ pub enum Managed<const D: usize> {
 /// Called by the driver after every accepted step.
 pub trait MeshManager<const D: usize>: Send {
     fn manage(&mut self, mesh: &Mesh<D>) -> Result<Managed<D>, FlowError>;
+    /// Components in contact (the flow's intersection rule stopped them a hair
+    /// apart) joined into one, if this manager does merges ([`Surgery::merge`]).
+    fn merge(&mut self, _mesh: &Mesh<D>) -> Option<Mesh<D>> {
+        None
+    }
+}
+
+/// Topological surgery of surfaces ([`super::surgery`]): necks cut where the
+/// flow would stop with `pinch_off`, and (`merge`) components in contact joined.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Surgery {
+    pub merge: bool,
+    /// The flow conserves the enclosed volume: the surgery restores it.
+    pub conserve: bool,
 }
 
 /// What a pass did: a new connectivity wins over moved vertices.
@@ -202,6 +216,12 @@ pub struct SurfaceManager {
     /// its two triangles over its length: a principal curvature) above this, i.e. a
     /// neck radius below its inverse, which the mesh (`h ≥ h_min`) cannot resolve.
     pub pinch_curvature: Option<f64>,
+    /// With surgery, a pinch-off cuts the neck and the flow goes on.
+    pub surgery: Option<Surgery>,
+    /// Run state (`None` at the start): the sharpest ring's `β/h` at which a cut
+    /// last did not part the surface (a crease, not a neck); no cut is tried
+    /// again until a ring is twice as sharp.
+    pub declined: Option<f64>,
 }
 
 impl SurfaceManager {
@@ -239,8 +259,11 @@ impl MeshManager<3> for SurfaceManager {
     /// `h_min` around a ring that small).
     fn manage(&mut self, mesh: &SurfaceMesh) -> Result<Managed<3>, FlowError> {
         let curvature = self.pinch_curvature.map(|k| (k, edge_stats(mesh).1 .1));
-        if curvature.is_some_and(|(k, c)| c > k) {
-            return Ok(Managed::PinchOff);
+        if let Some((_, c)) = curvature.filter(|&(k, c)| c > k) {
+            match self.pinch(mesh, c) {
+                Managed::Unchanged => {}
+                done => return Ok(done),
+            }
         }
         let remeshed = if self.adapt { adapt_surface(mesh, &self.params) } else { None };
         let moved = if self.regularize {
@@ -248,12 +271,87 @@ impl MeshManager<3> for SurfaceManager {
         } else {
             None
         };
-        if curvature.is_some_and(|(k, c)| c > 0.125 * k) {
+        if let Some((_, c)) = curvature.filter(|&(k, c)| c > 0.125 * k) {
             let result = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
             if result.quality().min_angle_deg < PINCH_MIN_ANGLE_DEG {
-                return Ok(Managed::PinchOff);
+                match self.pinch(mesh, c) {
+                    Managed::Unchanged => {}
+                    done => return Ok(done),
+                }
             }
         }
         Ok(outcome(remeshed, moved))
+    }
+
+    /// Two sheets in contact become one (a merge on a grid of the initial mean
+    /// edge, bridged over twice that), if the surgery merges.
+    fn merge(&mut self, mesh: &SurfaceMesh) -> Option<SurfaceMesh> {
+        self.surgery.filter(|s| s.merge)?;
+        let spacing = self.surgery_spacing();
+        let merged = self.operate(mesh, super::surgery::Operation::Merge { blend: 2.0 * spacing })?;
+        tracing::info!(components = merged.component_labels().1, vertices = merged.num_vertices(), "surfaces merged");
+        Some(merged)
+    }
+}
+
+impl SurfaceManager {
+    /// The grid of a surgery: the mean edge the management's sizes aim at (4
+    /// `h_min`: the initial mean edge by default).
+    fn surgery_spacing(&self) -> f64 {
+        (4.0 * self.params.h_min).min(self.params.h_max)
+    }
+
+    /// `mesh` rebuilt by `op`, tidied (four rounds of the management's adaptation
+    /// and regularization: the slivers of marching tetrahedra made sound) and,
+    /// for a conserving flow, given back its volume; `None` if the rebuild fails.
+    fn operate(&self, mesh: &SurfaceMesh, op: super::surgery::Operation) -> Option<SurfaceMesh> {
+        let mut m = match super::surgery::rebuild(mesh, self.surgery_spacing(), op) {
+            Ok(m) => m?,
+            Err(e) => {
+                tracing::warn!("the surface a surgery rebuilt is invalid: {e}");
+                return None;
+            }
+        };
+        for _ in 0..4 {
+            if let Some(a) = adapt_surface(&m, &self.params) {
+                m = a;
+            }
+            m = regularize_surface(&m, self.sweeps.max(3));
+        }
+        match self.surgery.is_some_and(|s| s.conserve) {
+            true => Some(super::surgery::with_volume(m, mesh.enclosed_measure())),
+            false => Some(m),
+        }
+    }
+
+    /// A neck too thin for the mesh: cut at its sharpest edge (the level lowered by
+    /// two grid spacings within three of it) with surgery, else the run's
+    /// `pinch_off` stop.
+    fn pinch(&mut self, mesh: &SurfaceMesh, sharpness: f64) -> Managed<3> {
+        let (Some(_), Some(at)) = (self.surgery, super::surgery::sharpest_edge(mesh)) else {
+            return Managed::PinchOff;
+        };
+        if self.declined.is_some_and(|d| sharpness < 2.0 * d) {
+            return Managed::Unchanged;
+        }
+        let spacing = self.surgery_spacing();
+        let op = super::surgery::Operation::Cut { at, radius: 3.0 * spacing, depth: 2.0 * spacing };
+        match self.operate(mesh, op) {
+            // a cut that parts the surface: the neck was one
+            Some(cut) if cut.component_labels().1 > mesh.component_labels().1 => {
+                self.declined = None;
+                let (at, components) = ([at[0], at[1], at[2]], cut.component_labels().1);
+                tracing::info!(?at, components, vertices = cut.num_vertices(), "neck cut (pinch-off surgery)");
+                Managed::Remeshed(cut)
+            }
+            // no neck there (a crease, such as a fresh merge's bridge, which the
+            // flow opens): the management goes on as usual
+            Some(_) => {
+                self.declined = Some(sharpness);
+                tracing::debug!(at = ?[at[0], at[1], at[2]], "a sharp ring that a cut does not part: no pinch");
+                Managed::Unchanged
+            }
+            None => Managed::PinchOff,
+        }
     }
 }

@@ -18,6 +18,7 @@ mod schur;
 mod settings;
 mod start;
 mod step;
+pub mod surgery;
 mod system;
 
 pub use crate::linalg::{gmres, solve_cyclic_tridiagonal, GmresOutcome, SparseCholesky};
@@ -25,7 +26,7 @@ pub use driver::{Checkpoint, Flow, MeshData};
 pub use error::FlowError;
 pub use limits::{Confinement, StepLimits};
 pub use linearize::VertexFields;
-pub use mesh_management::{CurveManager, Managed, MeshManager, SurfaceManager, WatchedCurveManager};
+pub use mesh_management::{CurveManager, Managed, MeshManager, SurfaceManager, Surgery, WatchedCurveManager};
 pub(crate) use problem::curvature_and_normals;
 pub use problem::{
     shape_derivative, FlowDefaults, H1Weights, OwnField, Problem, ProblemError, ShapeGradient, SurfaceState,

@@ -67,6 +67,9 @@ pub struct StepReport {
     /// re-evaluated on a fresh one ([`super::Problem::rediscretize`]; module documentation,
     /// item 5): no step was taken, the next call starts from the new energy.
     pub rediscretized: bool,
+    /// Surfaces in contact were merged ([`super::surgery`]): no step was taken, the
+    /// next call starts from the merged surface.
+    pub merged: bool,
 }
 
 /// Why a trial step was rejected (τ then shrinks).
@@ -85,6 +88,8 @@ pub enum Rejection {
     /// The mesh management could not repair the shape the step left (the step is
     /// taken back after it was accepted).
     Management,
+    /// Surfaces would pass through each other, or one through itself.
+    Intersection,
 }
 
 impl Rejection {
@@ -102,6 +107,10 @@ impl Rejection {
                  stressed film: the surface met the substrate or a lateral wall outside its crossing)"
             }
             Rejection::EnergyIncrease => "every trial step increased the energy (backtracking)",
+            Rejection::Intersection => {
+                "every trial step made the surface pass through itself or another component: the surfaces \
+                 are in contact, and the run ends on the last state before the contact"
+            }
             Rejection::Management => {
                 "the mesh management could not repair the curve that every trial step left (a fold it could \
                  not resolve)"
@@ -130,6 +139,7 @@ impl StepReport {
             rejected: None,
             contact: false,
             rediscretized: false,
+            merged: false,
         }
     }
 }

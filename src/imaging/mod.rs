@@ -20,6 +20,7 @@ pub mod labels;
 mod limits;
 mod nrrd;
 mod raster;
+pub mod signed_distance;
 mod smooth;
 mod threshold;
 mod volumes;

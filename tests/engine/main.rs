@@ -8,6 +8,7 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+mod contact;
 mod film;
 mod gltf_results;
 mod mesh_management;

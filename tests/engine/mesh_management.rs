@@ -180,7 +180,15 @@ fn shrinking_sphere_keeps_its_exact_solution_with_surface_management() {
     use shapeflow::flow::SurfaceManager;
     let start = shapeflow::geometry::icosphere([0.0; 3], 1.0, 4).unwrap();
     let (params, pinch) = SurfaceManager::defaults_for(&start);
-    let mgr = SurfaceManager { regularize: true, sweeps: 3, adapt: true, params, pinch_curvature: Some(pinch) };
+    let mgr = SurfaceManager {
+        regularize: true,
+        sweeps: 3,
+        adapt: true,
+        params,
+        pinch_curvature: Some(pinch),
+        surgery: None,
+        declined: None,
+    };
     let settings = FlowSettings {
         tau: 2.5e-4,
         end_time: Some(0.1),

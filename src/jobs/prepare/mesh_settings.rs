@@ -2,7 +2,7 @@
 //! the initial mesh.
 
 use super::checks::positive;
-use crate::flow::{CurveManager, FlowSettings, SurfaceManager};
+use crate::flow::{CurveManager, FlowSettings, SurfaceManager, Surgery};
 use crate::geometry::{CurveMesh, SurfaceMesh};
 use crate::jobs::spec::bounds::{MAX_ANGLE, SWEEPS};
 use crate::jobs::spec::{MeshSpec, SpecError};
@@ -45,6 +45,7 @@ pub(super) fn surface_manager(
     m: &MeshSpec,
     initial: &SurfaceMesh,
     pinch_off: bool,
+    surgery: Option<Surgery>,
     traced_voxel: Option<f64>,
 ) -> Result<Option<SurfaceManager>, SpecError> {
     if !(m.regularize || m.adapt || pinch_off) {
@@ -57,8 +58,22 @@ pub(super) fn surface_manager(
     }
     params.max_angle_deg = MAX_ANGLE.check("mesh.max_angle", m.max_angle)?;
     let sweeps = SWEEPS.check("mesh.sweeps", m.sweeps.unwrap_or(3))?;
-    let pinch_curvature = pinch_off.then_some(2.0 / params.h_min);
-    Ok(Some(SurfaceManager { regularize: m.regularize, sweeps, adapt: m.adapt, params, pinch_curvature }))
+    // surgery: necks cut (detected as for the stop), and with `merge` surfaces in
+    // contact joined
+    let (pinch_curvature, surgery) = match (pinch_off, surgery) {
+        (true, _) => (Some(2.0 / params.h_min), None),
+        (false, Some(s)) => (Some(2.0 / params.h_min), Some(s)),
+        (false, None) => (None, None),
+    };
+    Ok(Some(SurfaceManager {
+        regularize: m.regularize,
+        sweeps,
+        adapt: m.adapt,
+        params,
+        pinch_curvature,
+        surgery,
+        declined: None,
+    }))
 }
 
 /// The management of a coarse start ([`MeshSpec::coarse_start`]): a surface

@@ -20,7 +20,7 @@ mod shapes;
 pub use job::{PreparedJob, ProblemKind};
 pub use segment::{default_min_size, default_mu, default_mu_in, SegmentationSetup};
 
-use crate::flow::{CurveManager, ScalarProduct};
+use crate::flow::{CurveManager, ScalarProduct, Surgery};
 use crate::geometry::AnyMesh;
 use crate::jobs::spec::{
     ColorBy, CurvatureFlowSpec, FilmPolylineShape, FilmShape, InitialSpec, InscribedShape, JobSpec, ProblemSpec,
@@ -109,11 +109,16 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
     let traced = matches!(spec.initial, None | Some(InitialSpec::Threshold(ThresholdShape {})));
     let traced_voxel =
         image.as_ref().filter(|_| traced && matches!(mesh, AnyMesh::Surface(_))).map(|g| 1.0 / g.scale());
-    let (mut curve_manager, surface_manager) = match &mesh {
+    let (mut curve_manager, mut surface_manager) = match &mesh {
         AnyMesh::Curve(c) => (curve_manager(&spec.mesh, c)?, None),
         AnyMesh::Surface(m) => {
-            let pinch_off = spec.mesh.pinch_off.unwrap_or(!matches!(spec.problem, ProblemSpec::Segmentation(_)));
-            (None, surface_manager(&spec.mesh, m, pinch_off, traced_voxel)?)
+            let segmentation = matches!(spec.problem, ProblemSpec::Segmentation(_));
+            let pinch_off = spec.mesh.pinch_off.unwrap_or(!segmentation);
+            // `pinch_off: false` with topology changes: necks are cut, and (but in
+            // segmentation, whose objects are kept apart) surfaces in contact merge
+            let surgery =
+                (!pinch_off && spec.mesh.topology_changes).then_some(Surgery { merge: !segmentation, conserve: false });
+            (None, surface_manager(&spec.mesh, m, pinch_off, surgery, traced_voxel)?)
         }
     };
     if let (Some(m), Some(setup), Some(grid), None) =
@@ -176,6 +181,9 @@ pub fn prepare(spec: JobSpec, inputs: &HashMap<String, Vec<u8>>) -> Result<Prepa
         _ => early.expect("every other problem is built from its fields"),
     };
     let settings = flow_settings(&spec.flow, &problem)?;
+    if let Some(s) = surface_manager.as_mut().and_then(|m| m.surgery.as_mut()) {
+        s.conserve = settings.scalar_product == ScalarProduct::HMinus1 || settings.conservation.is_some();
+    }
     let coarse_manager = coarse_manager(&spec.mesh, surface_manager.as_ref(), traced_voxel, &settings);
     if let Some(m) = curve_manager.as_mut() {
         m.params.keep_area = settings.scalar_product == ScalarProduct::HMinus1;

@@ -137,7 +137,9 @@ pub struct MeshSpec {
     /// Refine where `h_S β_S > epsilon`, coarsen where it is below `epsilon/8`, keep
     /// edge lengths in `[h_min, h_max]`.
     pub adapt: bool,
-    /// Curves: merge and split where segments cross.
+    /// Curves: merge and split where segments cross. Surfaces, with `pinch_off:
+    /// false`: surgery (necks cut, surfaces in contact merged but in
+    /// segmentation; docs/problems/surface-evolution.md).
     pub topology_changes: bool,
     /// Regularization sweeps per step (default 1 for curves, 3 for surfaces).
     #[schemars(range(min = bounds::SWEEPS.min, max = bounds::SWEEPS.max))]
@@ -156,7 +158,8 @@ pub struct MeshSpec {
     #[schemars(range(min = bounds::MAX_ANGLE.min, max = bounds::MAX_ANGLE.max))]
     pub max_angle: f64,
     /// Surfaces: stop with `pinch_off` when a neck radius falls below `h_min/2`
-    /// (default on, except for segmentation, whose creases are not necks).
+    /// (default on, except for segmentation, whose creases are not necks). Off,
+    /// with `topology_changes`: the neck is cut and the run goes on.
     pub pinch_off: Option<bool>,
     /// A surface traced from the image, with neither `h_min` nor `h_max` given,
     /// first converges with its edges between ¾ voxel and two voxels (at ten

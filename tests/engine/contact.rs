@@ -1,0 +1,165 @@
+//! Surfaces that grow into each other (issue: two spheres of radius 0.2 at x =
+//! ±0.25 under curvature flow with γ = 10⁻³, λ = −0.2): no accepted state has two
+//! triangles that meet (checked exhaustively, every step), each radius follows
+//! the ODE `R' = −λ − 2γ/R` before the contact, and the contact comes when that
+//! ODE says (R = 0.25), within 2 %.
+
+use shapeflow::flow::{Checkpoint, Progress, Rejection, StopReason};
+use shapeflow::geometry::{surface_intersections, Point};
+use shapeflow::jobs::{parse_spec, prepare, run_prepared, RunEvents};
+use std::collections::HashMap;
+use std::sync::atomic::AtomicBool;
+
+#[derive(Default)]
+struct Every {
+    states: Vec<Checkpoint>,
+}
+
+impl RunEvents for Every {
+    fn progress(&mut self, _: &Progress) {}
+    fn checkpoint(&mut self, c: &Checkpoint) {
+        self.states.push(c.clone());
+    }
+}
+
+/// Mean distance of the vertices on one side of x = 0 from their centroid.
+fn radius(c: &Checkpoint, left: bool) -> f64 {
+    let side: Vec<Point<3>> =
+        c.mesh.positions.iter().filter(|p| (p[0] < 0.0) == left).map(|p| Point::<3>::new(p[0], p[1], p[2])).collect();
+    let centre = side.iter().fold(Point::<3>::zeros(), |a, p| a + p) / side.len() as f64;
+    side.iter().map(|p| (p - centre).norm()).sum::<f64>() / side.len() as f64
+}
+
+/// The time at which `R' = −λ − 2γ/R` takes `R` from `r0` to `r1` (RK4).
+fn ode_time(r0: f64, r1: f64, gamma: f64, lambda: f64) -> f64 {
+    let f = |r: f64| -lambda - 2.0 * gamma / r;
+    // integrate t(R): dt/dR = 1/f(R)
+    let n = 10_000;
+    let h = (r1 - r0) / n as f64;
+    (0..n)
+        .map(|k| {
+            let r = r0 + k as f64 * h;
+            h / 6.0 * (1.0 / f(r) + 4.0 / f(r + 0.5 * h) + 1.0 / f(r + h))
+        })
+        .sum()
+}
+
+#[test]
+fn growing_spheres_never_pass_through_each_other_and_touch_when_the_ode_says() {
+    let spec = parse_spec(
+        r#"{"problem": {"type": "curvature_flow", "gamma": 1e-3, "lambda": -0.2},
+            "initial": {"shape": "union", "parts": [
+                {"shape": "sphere", "center": [-0.25, 0.0, 0.0], "radius": 0.2, "resolution": 3},
+                {"shape": "sphere", "center": [0.25, 0.0, 0.0], "radius": 0.2, "resolution": 3}]},
+            "flow": {"tau": 1e-3, "end_time": 1.0, "max_iterations": 5000, "tolerance": 0},
+            "output": {"checkpoint_every": 1}}"#,
+    )
+    .unwrap();
+    let job = prepare(spec, &HashMap::new()).unwrap();
+    let mut every = Every::default();
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut every).unwrap();
+    assert!(every.states.len() > 100);
+    for c in &every.states {
+        let x: Vec<Point<3>> = c.mesh.positions.iter().map(|p| Point::<3>::new(p[0], p[1], p[2])).collect();
+        let t: Vec<[usize; 3]> = c.mesh.elements.iter().map(|e| [e[0], e[1], e[2]]).collect();
+        let hits = surface_intersections(&x, &t, 1);
+        assert!(hits.is_empty(), "iteration {}: triangles {:?} meet", c.iteration, hits);
+    }
+    // before the contact each radius follows the ODE (the discrete sphere's mean
+    // radius starts a little below 0.2)
+    let first = &every.states[0];
+    let r0 = radius(first, true);
+    for c in every.states.iter().filter(|c| c.time > 0.0 && c.time < 0.2) {
+        for left in [true, false] {
+            let r = radius(c, left);
+            let t = ode_time(r0, r, 1e-3, -0.2);
+            assert!((t - c.time).abs() < 0.01 * c.time + 2e-3, "t = {}: R = {r} is the ODE's at t = {t}", c.time);
+        }
+    }
+    let last = every.states.last().unwrap();
+    let contact = ode_time(0.2, 0.25, 1e-3, -0.2);
+    eprintln!("stop {:?} ({:?}) at t = {} (ODE contact at {contact})", out.stop, out.note, last.time);
+    assert!((last.time - contact).abs() < 0.02 * contact, "contact at t = {}, the ODE's {contact}", last.time);
+    assert_eq!(out.stop, StopReason::TauMin);
+    assert_eq!(out.note, Some(Rejection::Intersection.describe()));
+}
+
+/// Every state of a run free of intersections (all triangle pairs through the
+/// broad phase), and the number of components of the last.
+fn assert_no_intersections(states: &[Checkpoint]) -> usize {
+    for c in states {
+        let x: Vec<Point<3>> = c.mesh.positions.iter().map(|p| Point::<3>::new(p[0], p[1], p[2])).collect();
+        let t: Vec<[usize; 3]> = c.mesh.elements.iter().map(|e| [e[0], e[1], e[2]]).collect();
+        let hits = surface_intersections(&x, &t, 1);
+        assert!(hits.is_empty(), "iteration {}: triangles {:?} meet", c.iteration, hits);
+    }
+    let last = states.last().unwrap().mesh.to_mesh::<3>().unwrap();
+    last.component_labels().1
+}
+
+/// With `mesh.pinch_off: false` (surgery) the same spheres merge at the contact
+/// and the run goes on to its end time as one surface.
+#[test]
+fn growing_spheres_merge_at_contact_with_surgery_and_go_on() {
+    let spec = parse_spec(
+        r#"{"problem": {"type": "curvature_flow", "gamma": 1e-3, "lambda": -0.2},
+            "initial": {"shape": "union", "parts": [
+                {"shape": "sphere", "center": [-0.25, 0.0, 0.0], "radius": 0.2, "resolution": 3},
+                {"shape": "sphere", "center": [0.25, 0.0, 0.0], "radius": 0.2, "resolution": 3}]},
+            "flow": {"tau": 1e-3, "end_time": 0.32, "max_iterations": 5000, "tolerance": 0},
+            "mesh": {"pinch_off": false},
+            "output": {"checkpoint_every": 1}}"#,
+    )
+    .unwrap();
+    let job = prepare(spec, &HashMap::new()).unwrap();
+    let mut every = Every::default();
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut every).unwrap();
+    assert_eq!(out.stop, StopReason::EndTime);
+    assert_eq!(assert_no_intersections(&every.states), 1, "one surface after the contact");
+    let merged = every.states.iter().find(|c| c.mesh.to_mesh::<3>().unwrap().component_labels().1 == 1).unwrap();
+    let contact = ode_time(0.2, 0.25, 1e-3, -0.2);
+    assert!(
+        (merged.time - contact).abs() < 0.02 * contact,
+        "merged at t = {}, the ODE's contact {contact}",
+        merged.time
+    );
+}
+
+/// The 8×1×1 prism under surface diffusion past its pinch (`mesh.pinch_off:
+/// false`): the neck is cut near the converged pinch time, the run reaches its end
+/// time with two parts, each near a sphere (`36πV²/A³ ≥ 0.97`), and no state
+/// intersects itself. The volume's drift is measured, not asserted to 1e-3 (the
+/// scheme and the management lose about 0.9 % by t = 1.2: BENCHMARKS.md).
+#[test]
+fn the_prism_pinches_into_spheres_with_surgery() {
+    let spec = parse_spec(
+        r#"{"problem": {"type": "surface_diffusion"},
+            "initial": {"shape": "box", "size": [8.0, 1.0, 1.0], "resolution": 8},
+            "flow": {"tau": 5e-4, "step_control": 0.1, "end_time": 1.2, "max_iterations": 100000},
+            "mesh": {"h_max": 0.2, "pinch_off": false},
+            "output": {"checkpoint_every": 1}}"#,
+    )
+    .unwrap();
+    let job = prepare(spec, &HashMap::new()).unwrap();
+    let mut every = Every::default();
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut every).unwrap();
+    assert_eq!(out.stop, StopReason::EndTime);
+    assert!(assert_no_intersections(&every.states) >= 2);
+    let parts = |c: &Checkpoint| c.mesh.to_mesh::<3>().unwrap().component_labels().1;
+    let cut = every.states.iter().find(|c| parts(c) >= 2).unwrap();
+    assert!((0.33..0.42).contains(&cut.time), "cut at t = {}", cut.time);
+    let last = every.states.last().unwrap().mesh.to_mesh::<3>().unwrap();
+    let (labels, count) = last.component_labels();
+    let volumes = last.component_measures();
+    let mut areas = vec![0.0; count];
+    for (e, t) in last.elements().iter().enumerate() {
+        areas[labels[t[0]]] += last.element_geometry(e).0;
+    }
+    for (v, a) in volumes.iter().zip(&areas) {
+        let sphericity = 36.0 * std::f64::consts::PI * v * v / (a * a * a);
+        assert!(sphericity >= 0.97, "a part of volume {v} and area {a}: 36πV²/A³ = {sphericity}");
+    }
+    let volume: f64 = volumes.iter().sum();
+    eprintln!("prism past its pinch: cut at t = {}, {count} parts, volume {volume} of 8", cut.time);
+    assert!((volume / 8.0 - 1.0).abs() < 0.02, "volume {volume}");
+}
