@@ -226,4 +226,62 @@ fn main() {
         t_reg * 1e3
     );
     print_row(n, t_step, t_solve, t_manage);
+
+    // the intersection check of every trial step (3D), beside the L2 step; a merge
+    // and a cut of the surgery, each on about that many vertices
+    let (x, t) = (mesh.positions().to_vec(), mesh.elements().to_vec());
+    let t_check = time_it(0.5, || {
+        black_box(shapeflow::geometry::surface_intersections(&x, &t, 1));
+    });
+    println!();
+    println!("| surface vertices | L2 step (ms) | intersection check (ms) | check / step |");
+    println!("|---:|---:|---:|---:|");
+    println!("| {n} | {:.1} | {:.1} | {:.2} |", t_step * 1e3, t_check * 1e3, t_check / t_step);
+    let a = icosphere([-1.002, 0.0, 0.0], 1.0, 5).unwrap();
+    let b = icosphere([1.002, 0.0, 0.0], 1.0, 5).unwrap();
+    let two = shapeflow::geometry::surface_union(&[a, b]).unwrap();
+    let spacing = shapeflow::geometry::edge_statistics(&two).0;
+    use shapeflow::flow::surgery::{rebuild, Operation};
+    let t_merge = time_it(0.5, || {
+        black_box(rebuild(&two, spacing, Operation::Merge { blend: 2.0 * spacing }).unwrap());
+    });
+    let one = rebuild(&two, spacing, Operation::Merge { blend: 2.0 * spacing }).unwrap().unwrap();
+    // the manager's merge: the rebuild on its grid (4 h_min), tidied by four rounds
+    // of adaptation and regularization
+    let (params, pinch) = SurfaceManager::defaults_for(&two);
+    let surgery = Some(shapeflow::flow::Surgery { merge: true, conserve: true });
+    let mut merger = SurfaceManager {
+        regularize: true,
+        sweeps: 3,
+        adapt: true,
+        params,
+        pinch_curvature: Some(pinch),
+        surgery,
+        declined: None,
+    };
+    let t_managed = time_it(0.5, || {
+        black_box(merger.merge(&two).unwrap());
+    });
+    let tidied = merger.merge(&two).unwrap();
+    let cut = Operation::Cut { at: Point::<3>::zeros(), radius: 3.0 * spacing, depth: 2.0 * spacing };
+    let t_cut = time_it(0.5, || {
+        black_box(rebuild(&one, spacing, cut).unwrap());
+    });
+    println!();
+    println!("| surgery | vertices before → after | time (ms) |");
+    println!("|---|---:|---:|");
+    println!(
+        "| merge of two spheres 0.004 apart | {} → {} | {:.0} |",
+        two.num_vertices(),
+        one.num_vertices(),
+        t_merge * 1e3
+    );
+    let parted = rebuild(&one, spacing, cut).unwrap().unwrap();
+    println!("| cut at the bridge | {} → {} | {:.0} |", one.num_vertices(), parted.num_vertices(), t_cut * 1e3);
+    println!(
+        "| the manager's merge (rebuild, tidied, volume restored) | {} → {} | {:.0} |",
+        two.num_vertices(),
+        tidied.num_vertices(),
+        t_managed * 1e3
+    );
 }

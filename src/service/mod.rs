@@ -17,6 +17,7 @@ pub mod isolation;
 pub mod keys;
 pub mod metrics;
 pub(crate) mod min_rate;
+pub(crate) mod part_headers;
 mod recorder;
 pub mod retention;
 mod routes;

@@ -9,6 +9,7 @@ use crate::service::isolation::parent::validate;
 use crate::service::isolation::Isolation;
 use crate::service::keys::Caller;
 use crate::service::min_rate::{is_slow_body, SlowBody};
+use crate::service::part_headers::{PartHeaderTooLong, PartHeaders};
 use crate::service::store::{Admission, StoreError};
 use crate::service::wire::JobView;
 use crate::service::{ApiError, AppState, MAX_BODY_BYTES, MAX_UPLOAD_BYTES};
@@ -34,6 +35,9 @@ fn unreadable(e: &(dyn std::error::Error + 'static), limit: usize) -> ApiError {
         if e.is::<http_body_util::LengthLimitError>() {
             return ApiError::TooLarge(limit);
         }
+        if e.is::<PartHeaderTooLong>() {
+            return ApiError::BadRequest(e.to_string());
+        }
         next = e.source();
     }
     ApiError::BadRequest(format!("malformed multipart body: {e}"))
@@ -44,7 +48,18 @@ fn unreadable(e: &(dyn std::error::Error + 'static), limit: usize) -> ApiError {
 /// [`MAX_UPLOAD_BYTES`] and [`MAX_PARTS`].
 async fn read_multipart(req: Request, state: &AppState) -> Result<(String, HashMap<String, Vec<u8>>), ApiError> {
     // the whole body, not only the parts' contents, is limited
-    let req = req.map(|b| axum::body::Body::new(http_body_util::Limited::new(b, MAX_UPLOAD_BYTES + (64 << 10))));
+    // and a part's headers end soon after its boundary
+    let boundary = req
+        .headers()
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|t| t.split(';').find_map(|p| p.trim().strip_prefix("boundary=")))
+        .map(|b| b.trim_matches('"').to_string())
+        .unwrap_or_default();
+    let req = req.map(|b| {
+        let limited = axum::body::Body::new(http_body_util::Limited::new(b, MAX_UPLOAD_BYTES + (64 << 10)));
+        axum::body::Body::new(PartHeaders::new(limited, &boundary))
+    });
     let mut mp = Multipart::from_request(req, state)
         .await
         .map_err(|e| ApiError::BadRequest(format!("malformed multipart body: {}", e.body_text())))?;
