@@ -15,7 +15,6 @@
 
 use super::Point;
 use robust::{orient2d, orient3d, Coord, Coord3D};
-use std::collections::HashMap;
 
 /// Cells of the broad phase, in mean edge lengths.
 const CELL_EDGES: f64 = 2.0;
@@ -49,7 +48,13 @@ pub fn surface_intersections(positions: &[Point<3>], triangles: &[[usize; 3]], m
         return hits;
     }
     let index = |x: f64| (x / cell).floor() as i64;
-    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::with_capacity(triangles.len());
+    // (cell, triangle) for every cell a triangle's box covers, sorted by cell: a
+    // cell's triangles are a run of the list (no hashing, no list per cell)
+    let pack = |c: [i64; 3]| -> u64 {
+        let b = |v: i64| (v.rem_euclid(1 << 21)) as u64;
+        b(c[0]) | b(c[1]) << 21 | b(c[2]) << 42
+    };
+    let mut entries: Vec<(u64, u32)> = Vec::with_capacity(8 * triangles.len());
     let mut large = Vec::new();
     for (t, (lo, hi)) in boxes.iter().enumerate() {
         let (l, h) = (lo.map(index), hi.map(index));
@@ -61,11 +66,12 @@ pub fn surface_intersections(positions: &[Point<3>], triangles: &[[usize; 3]], m
         for i in l[0]..=h[0] {
             for j in l[1]..=h[1] {
                 for k in l[2]..=h[2] {
-                    grid.entry([i, j, k]).or_default().push(t as u32);
+                    entries.push((pack([i, j, k]), t as u32));
                 }
             }
         }
     }
+    entries.sort_unstable();
     let test = |a: usize, b: usize, hits: &mut Vec<(usize, usize)>| {
         let (ta, tb) = (&triangles[a], &triangles[b]);
         if ta.iter().any(|v| tb.contains(v)) || !overlap(&boxes[a], &boxes[b]) {
@@ -75,13 +81,20 @@ pub fn surface_intersections(positions: &[Point<3>], triangles: &[[usize; 3]], m
             hits.push((a.min(b), a.max(b)));
         }
     };
-    for (key, members) in &grid {
-        for (m, &a) in members.iter().enumerate() {
-            for &b in &members[m + 1..] {
+    let mut start = 0;
+    while start < entries.len() {
+        let key = entries[start].0;
+        let end = start + entries[start..].iter().take_while(|e| e.0 == key).count();
+        let members = &entries[start..end];
+        for (m, &(_, a)) in members.iter().enumerate() {
+            for &(_, b) in &members[m + 1..] {
                 let (a, b) = (a as usize, b as usize);
+                if !overlap(&boxes[a], &boxes[b]) {
+                    continue;
+                }
                 // once: in the cell of the lowest corner of the boxes' overlap
                 let corner = [0, 1, 2].map(|k| index(boxes[a].0[k].max(boxes[b].0[k])));
-                if corner == *key {
+                if pack(corner) == key {
                     test(a, b, &mut hits);
                     if hits.len() >= most {
                         return hits;
@@ -89,6 +102,7 @@ pub fn surface_intersections(positions: &[Point<3>], triangles: &[[usize; 3]], m
                 }
             }
         }
+        start = end;
     }
     for (m, &a) in large.iter().enumerate() {
         for b in 0..triangles.len() {
