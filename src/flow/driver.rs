@@ -253,7 +253,9 @@ impl<'p, const D: usize> Flow<'p, D> {
                     // the surfaces are in contact: shorter steps would only creep
                     // closer, each accepted. They merge if the mesh management
                     // does merges; else the run ends on the last state before
-                    if let Some(merged) = self.manager.as_mut().and_then(|m| m.merge(&self.mesh)) {
+                    // (a merged surface that the tidying folded through itself is not taken)
+                    let merged = self.manager.as_mut().and_then(|m| m.merge(&self.mesh));
+                    if let Some(merged) = merged.filter(|m| rules::surface_intersection(m).is_none()) {
                         self.take_surgery(merged)?;
                         report.rejected = None;
                         report.merged = true;
