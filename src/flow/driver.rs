@@ -249,13 +249,13 @@ impl<'p, const D: usize> Flow<'p, D> {
                 continue;
             }
             if let Some(shorter) = report.retry(rules::intersection(&self.mesh, &candidate, tau)) {
-                if shorter < rules::CONTACT * s.tau {
+                if shorter < super::intersections::CONTACT * s.tau {
                     // the surfaces are in contact: shorter steps would only creep
                     // closer, each accepted. They merge if the mesh management
                     // does merges; else the run ends on the last state before
                     // (a merged surface that the tidying folded through itself is not taken)
                     let merged = self.manager.as_mut().and_then(|m| m.merge(&self.mesh));
-                    if let Some(merged) = merged.filter(|m| rules::surface_intersection(m).is_none()) {
+                    if let Some(merged) = merged.filter(|m| super::intersections::surface_intersection(m).is_none()) {
                         self.take_surgery(merged)?;
                         report.rejected = None;
                         report.merged = true;

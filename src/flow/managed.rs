@@ -61,8 +61,9 @@ impl<const D: usize> Flow<'_, D> {
             );
             return Ok(None);
         }
-        let intersecting = super::acceptance::surface_intersection(&mesh);
-        if let Some((a, b)) = intersecting.filter(|_| super::acceptance::surface_intersection(&self.mesh).is_none()) {
+        let intersecting = super::intersections::surface_intersection(&mesh);
+        if let Some((a, b)) = intersecting.filter(|_| super::intersections::surface_intersection(&self.mesh).is_none())
+        {
             // the remeshed or regularized surface passes through itself (a vertex
             // moved across a close sheet, by a fold at a sharp ring): the accepted
             // mesh, which does not, is kept this time (one that starts with

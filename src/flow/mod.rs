@@ -8,6 +8,7 @@ mod checkpoint;
 mod contact;
 mod driver;
 mod error;
+mod intersections;
 mod limits;
 mod linearize;
 mod managed;
