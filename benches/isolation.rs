@@ -140,7 +140,7 @@ fn million_rows() {
         sqlx::query("DELETE FROM history WHERE job_id = ?1").bind(&id).execute(&mut db).await.unwrap();
         sqlx::query(
             "WITH RECURSIVE n(x) AS (SELECT 0 UNION ALL SELECT x + 1 FROM n WHERE x < 999999) \
-             INSERT INTO history SELECT ?1, x, x * 1e-4, 1e-4, 6.0 / (1.0 + x * 1e-4), 128, 1 FROM n",
+             INSERT INTO history (job_id, iteration, time, tau, energy, vertices, components) SELECT ?1, x, x * 1e-4, 1e-4, 6.0 / (1.0 + x * 1e-4), 128, 1 FROM n",
         )
         .bind(&id)
         .execute(&mut db)

@@ -80,7 +80,15 @@ async fn batch_rate(st: &store::Store, policy: &ClaimPolicy) {
                     let rows: Vec<Progress> = (0..64)
                         .map(|_| {
                             iteration += 1;
-                            Progress { iteration, time: 0.0, tau: 1e-3, energy: 1.0, vertices: 256, components: 1 }
+                            Progress {
+                                iteration,
+                                time: 0.0,
+                                tau: 1e-3,
+                                energy: 1.0,
+                                vertices: 256,
+                                components: 1,
+                                surgery: None,
+                            }
                         })
                         .collect();
                     let t = Instant::now();

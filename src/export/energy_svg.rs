@@ -121,6 +121,7 @@ mod tests {
                 energy: 10f64.powf(-(i as f64) / 10.0),
                 vertices: 3,
                 components: 1,
+                surgery: None,
             })
             .collect();
         let svg = energy_svg(&h, "job <1>");

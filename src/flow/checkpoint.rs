@@ -1,6 +1,7 @@
 //! Checkpoints as plain data: everything the driver needs to continue a run exactly
 //! as the uninterrupted run would.
 
+use super::report::SurgeryRecord;
 use crate::geometry::{Mesh, MeshError, Point};
 use serde::{Deserialize, Serialize};
 
@@ -113,6 +114,10 @@ pub struct Checkpoint {
     /// of the JSON when empty.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub recent_energies: Vec<f64>,
+    /// The topological surgeries of the run so far, oldest first; left out of the
+    /// JSON when there were none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub surgeries: Vec<SurgeryRecord>,
 }
 
 impl Checkpoint {

@@ -47,7 +47,7 @@ use super::acceptance::{self as rules, Verdict};
 use super::contact::{advanced, first_contact};
 use super::mesh_management::MeshManager;
 use super::problem::Problem;
-use super::report::{Progress, Rejection, StepReport, StopReason};
+use super::report::{Progress, Rejection, StepReport, StopReason, SurgeryRecord};
 use super::settings::FlowSettings;
 use super::step::SemiImplicitStep;
 use super::system::LinearSystem;
@@ -103,6 +103,8 @@ pub struct Flow<'p, const D: usize> {
     /// The most vertices mesh management may give the mesh
     /// ([`crate::limits::MAX_MESH_GROWTH`] times those it started with).
     pub(super) vertex_limit: usize,
+    /// The topological surgeries so far, oldest first.
+    pub(super) surgeries: Vec<SurgeryRecord>,
 }
 
 impl<'p, const D: usize> Flow<'p, D> {
@@ -130,6 +132,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             energy: self.energy,
             vertices: self.mesh.num_vertices(),
             components: self.mesh.num_components(),
+            surgery: self.surgeries.last().filter(|s| s.iteration == self.iteration).map(|s| s.event),
         }
     }
 
@@ -144,6 +147,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             coarse: false,
             settled_tau: self.settled_tau,
             recent_energies: self.recent.clone(),
+            surgeries: self.surgeries.clone(),
         }
     }
 
@@ -196,9 +200,12 @@ impl<'p, const D: usize> Flow<'p, D> {
         let s = &self.settings;
         let matrices = &self.matrices;
         let (ax, grad, product) = (&lin.ax, &lin.grad, &lin.product);
-        let (a0, components) = match s.conservation {
-            Some(_) => (self.mesh.enclosed_measure(), self.mesh.component_measures()),
-            None => (0.0, Vec::new()),
+        // an `H⁻¹` flow conserves each component's measure: the step's `O(τ²)`
+        // change of it is removed whether or not `conservation` also bounds it
+        let conserving = s.conservation.is_some() || s.scalar_product == super::ScalarProduct::HMinus1;
+        let (a0, components) = match conserving {
+            true => (self.mesh.enclosed_measure(), self.mesh.component_measures()),
+            false => (0.0, Vec::new()),
         };
         let mut smallest_rise = f64::INFINITY;
         let mut tangled = false;
@@ -256,9 +263,11 @@ impl<'p, const D: usize> Flow<'p, D> {
                     // (a merged surface that the tidying folded through itself is not taken)
                     let merged = self.manager.as_mut().and_then(|m| m.merge(&self.mesh));
                     if let Some(merged) = merged.filter(|m| super::intersections::surface_intersection(m).is_none()) {
-                        self.take_surgery(merged)?;
+                        let at = super::intersections::contact_point(&self.mesh, &candidate);
+                        self.take_merge(merged, at)?;
                         report.rejected = None;
                         report.merged = true;
+                        report.accepted = true;
                         return Ok(report);
                     }
                     report.stop = Some(StopReason::TauMin);
@@ -271,7 +280,7 @@ impl<'p, const D: usize> Flow<'p, D> {
                 tau = shorter;
                 continue;
             }
-            if s.conservation.is_some() {
+            if conserving {
                 // the step's O(τ²) change of each component's measure (and what the
                 // constraint added) removed
                 candidate = candidate.with_component_measures(&components);

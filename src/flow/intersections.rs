@@ -26,6 +26,19 @@ pub(super) fn new_intersection<const D: usize>(old: &Mesh<D>, new: &Mesh<D>) -> 
     meeting_pairs(new, usize::MAX).into_iter().find(|&p| before.binary_search(&pair(p)).is_err())
 }
 
+/// Where `new` (`D = 3`, the connectivity of `old`) first meets itself anew: the
+/// mean of the centroids of a pair of its triangles that meet ([`new_intersection`]),
+/// or of all its vertices if none do.
+pub(super) fn contact_point<const D: usize>(old: &Mesh<D>, new: &Mesh<D>) -> [f64; 3] {
+    let x = new.positions();
+    let corners: Vec<usize> = match new_intersection(old, new) {
+        Some((a, b)) => new.elements()[a].iter().chain(&new.elements()[b]).copied().collect(),
+        None => (0..x.len()).collect(),
+    };
+    let n = corners.len().max(1) as f64;
+    std::array::from_fn(|k| if k < D { corners.iter().map(|&v| x[v][k]).sum::<f64>() / n } else { 0.0 })
+}
+
 /// Up to `most` pairs of triangles of a surface mesh (`D = 3`) that share no
 /// vertex and meet, sorted; none for curves (their crossings are the mesh
 /// management's: topological changes).

@@ -6,7 +6,7 @@
 
 use super::driver::Flow;
 use super::mesh_management::Managed;
-use super::report::StopReason;
+use super::report::{StopReason, SurgeryEvent, SurgeryKind, SurgeryRecord};
 use super::FlowError;
 use crate::fem::Pattern;
 
@@ -16,12 +16,19 @@ impl<const D: usize> Flow<'_, D> {
     /// Returns the stop the management calls for (`pinch_off`, `vanished`), if any.
     pub(super) fn manage_mesh(&mut self) -> Result<Option<StopReason>, FlowError> {
         let Some(manager) = self.manager.as_mut() else { return Ok(None) };
-        let (mesh, remeshed) = match manager.manage(&self.mesh)? {
+        // what the management changes of a conserving flow's measures (the
+        // volume a collapse, a flip or the regularization's tangential moves
+        // take off a curved surface) is given back, component by component
+        let conserving =
+            self.settings.conservation.is_some() || self.settings.scalar_product == super::ScalarProduct::HMinus1;
+        let measures = conserving.then(|| self.mesh.component_measures());
+        let (mesh, remeshed, cut) = match manager.manage(&self.mesh)? {
             Managed::Unchanged => return Ok(None),
             Managed::PinchOff => return Ok(Some(StopReason::PinchOff)),
             Managed::Vanished => return Ok(Some(StopReason::Vanished)),
-            Managed::Moved(m) => (m, false),
-            Managed::Remeshed(m) => (m, true),
+            Managed::Moved(m) => (m, false, None),
+            Managed::Remeshed(m) => (m, true, None),
+            Managed::Surgery(m, kind, at) => (m, true, Some((kind, at))),
         };
         if mesh.num_vertices() > self.vertex_limit {
             return Err(FlowError::MeshGrowth { vertices: mesh.num_vertices(), limit: self.vertex_limit });
@@ -32,12 +39,15 @@ impl<const D: usize> Flow<'_, D> {
         // state that broke them would make every trial step from it differ by the
         // constraint's change of energy, however short the step. As after a step,
         // a conserving flow then gets back each component's measure (enforcing a
-        // constraint moves vertices, never connects them)
-        let mesh = match self.settings.conservation {
-            Some(_) => {
-                let measures = mesh.component_measures();
-                self.problem.constrain(mesh).with_component_measures(&measures)
-            }
+        // constraint moves vertices, never connects them); a surgery's result has
+        // its own measures (the surgery gave the volume back)
+        let measures = match measures {
+            Some(m) if cut.is_none() && m.len() == mesh.component_labels().1 => Some(m),
+            Some(_) => Some(mesh.component_measures()),
+            None => None,
+        };
+        let mesh = match measures {
+            Some(measures) => self.problem.constrain(mesh).with_component_measures(&measures),
             None => self.problem.constrain(mesh),
         };
         let energy = self.problem.energy(&mesh).map_err(|e| FlowError::Problem(e.0))?;
@@ -77,14 +87,18 @@ impl<const D: usize> Flow<'_, D> {
             self.solver.reset();
         }
         self.energy = energy;
+        if let Some((kind, at)) = cut {
+            self.record_surgery(kind, at);
+        }
         Ok(None)
     }
 }
 
 impl<const D: usize> Flow<'_, D> {
-    /// Replace the state by `mesh`, the result of a surgery (a merge): a new
-    /// connectivity, its energy evaluated.
-    pub(super) fn take_surgery(&mut self, mesh: crate::geometry::Mesh<D>) -> Result<(), FlowError> {
+    /// Replace the state by `mesh`, the result of a merge at `at`: a new
+    /// connectivity, its energy evaluated, as an iteration of its own that takes no
+    /// flow time (so that the history and the checkpoints record it).
+    pub(super) fn take_merge(&mut self, mesh: crate::geometry::Mesh<D>, at: [f64; 3]) -> Result<(), FlowError> {
         let energy = self.problem.energy(&mesh).map_err(|e| FlowError::Problem(e.0))?;
         if !energy.is_finite() {
             return Err(FlowError::NonFiniteEnergy { value: energy, iteration: self.iteration });
@@ -93,7 +107,17 @@ impl<const D: usize> Flow<'_, D> {
         self.pattern = Pattern::new(self.mesh.num_vertices(), self.mesh.elements());
         self.solver.reset();
         self.energy = energy;
+        self.iteration += 1;
+        self.record_surgery(SurgeryKind::Merge, at);
         Ok(())
+    }
+
+    /// Record a surgery that made the current state; the convergence test's window
+    /// starts again (the energy jumps with the surgery).
+    fn record_surgery(&mut self, kind: SurgeryKind, at: [f64; 3]) {
+        let event = SurgeryEvent { kind, at, components: self.mesh.num_components() };
+        self.surgeries.push(SurgeryRecord { iteration: self.iteration, time: self.time, event });
+        self.recent.clear();
     }
 }
 

@@ -2,10 +2,11 @@
 //! stays dimension-independent: regularization, refinement/coarsening and
 //! topological changes. Curves: [`CurveManager`].
 
+use super::report::SurgeryKind;
 use super::FlowError;
 use crate::geometry::{
-    adapt_surface, edge_statistics, manage_curve, manage_curve_holding, regularize_surface, resolve_crossings,
-    CrossingWatch, CurveMesh, CurveRemeshSettings, Hold, Mesh, SurfaceMesh, SurfaceRemeshSettings,
+    adapt_surface, cut_neck, edge_statistics, manage_curve, manage_curve_holding, regularize_surface,
+    resolve_crossings, CrossingWatch, CurveMesh, CurveRemeshSettings, Hold, Mesh, SurfaceMesh, SurfaceRemeshSettings,
 };
 
 /// What mesh management did to the mesh after a step.
@@ -15,6 +16,9 @@ pub enum Managed<const D: usize> {
     Moved(Mesh<D>),
     /// New connectivity (refinement, coarsening, topological change).
     Remeshed(Mesh<D>),
+    /// A topological surgery ([`Surgery`]) at the point given: a neck cut, or
+    /// components that shrank below the mesh's resolution removed.
+    Surgery(Mesh<D>, SurgeryKind, [f64; 3]),
     /// A neck collapsed (3D): the run ends with `pinch_off` on the current mesh.
     PinchOff,
     /// Every component is below the smallest size kept (closed curves with
@@ -258,6 +262,9 @@ impl MeshManager<3> for SurfaceManager {
     /// longer keep its angles above `PINCH_MIN_ANGLE_DEG` (elements of at least
     /// `h_min` around a ring that small).
     fn manage(&mut self, mesh: &SurfaceMesh) -> Result<Managed<3>, FlowError> {
+        if let Some(done) = self.surgery.and_then(|_| self.shrunk_away(mesh)) {
+            return Ok(done);
+        }
         let curvature = self.pinch_curvature.map(|k| (k, edge_stats(mesh).1 .1));
         if let Some((_, c)) = curvature.filter(|&(k, c)| c > k) {
             match self.pinch(mesh, c) {
@@ -289,6 +296,8 @@ impl MeshManager<3> for SurfaceManager {
         self.surgery.filter(|s| s.merge)?;
         let spacing = self.surgery_spacing();
         let merged = self.operate(mesh, super::surgery::Operation::Merge { blend: 2.0 * spacing })?;
+        // a new surface: a ring that a cut did not part before is gone
+        self.declined = None;
         tracing::info!(components = merged.component_labels().1, vertices = merged.num_vertices(), "surfaces merged");
         Some(merged)
     }
@@ -312,16 +321,47 @@ impl SurfaceManager {
                 return None;
             }
         };
-        for _ in 0..4 {
+        m = self.tidy(m, 4);
+        Some(self.conserved(m, mesh))
+    }
+
+    /// `rounds` of the management's adaptation and regularization.
+    fn tidy(&self, mut m: SurfaceMesh, rounds: usize) -> SurfaceMesh {
+        for _ in 0..rounds {
             if let Some(a) = adapt_surface(&m, &self.params) {
                 m = a;
             }
             m = regularize_surface(&m, self.sweeps.max(3));
         }
+        m
+    }
+
+    /// `m`, a surgery's result on `before`, with the volume of `before` if the
+    /// flow conserves it.
+    fn conserved(&self, m: SurfaceMesh, before: &SurfaceMesh) -> SurfaceMesh {
         match self.surgery.is_some_and(|s| s.conserve) {
-            true => Some(super::surgery::with_volume(m, mesh.enclosed_measure())),
-            false => Some(m),
+            true => super::surgery::with_volume(m, before.enclosed_measure()),
+            false => m,
         }
+    }
+
+    /// With surgery, the components whose volume is that of a ball of radius below
+    /// `h_min` (which the mesh no longer resolves: a shrinking sphere's curvature
+    /// reaches the pinch test's at radius `h_min / 2`) removed; `Vanished` if none
+    /// is left, `None` if none is that small.
+    fn shrunk_away(&self, mesh: &SurfaceMesh) -> Option<Managed<3>> {
+        let smallest = 4.0 / 3.0 * std::f64::consts::PI * self.params.h_min.powi(3);
+        let keep: Vec<bool> = mesh.component_measures().iter().map(|&v| v.abs() >= smallest).collect();
+        let gone = keep.iter().position(|k| !k)?;
+        let (labels, _) = mesh.component_labels();
+        let x = mesh.positions();
+        let members: Vec<usize> = (0..x.len()).filter(|&v| labels[v] == gone).collect();
+        let at = std::array::from_fn(|k| members.iter().map(|&v| x[v][k]).sum::<f64>() / members.len() as f64);
+        tracing::info!(?at, left = keep.iter().filter(|k| **k).count(), "a surface shrank away");
+        Some(match mesh.with_components(&keep) {
+            Some(m) => Managed::Surgery(m, SurgeryKind::Vanish, at),
+            None => Managed::Vanished,
+        })
     }
 
     /// A neck too thin for the mesh: cut at its sharpest edge (the level lowered by
@@ -334,15 +374,30 @@ impl SurfaceManager {
         if self.declined.is_some_and(|d| sharpness < 2.0 * d) {
             return Managed::Unchanged;
         }
+        let parts = mesh.component_labels().1;
+        // on the mesh itself: the triangles within three neck radii (the inverse
+        // of the ring's curvature) of the ring removed and both holes capped; the
+        // rest of the surface keeps its triangles
+        let radius = (3.0 / sharpness).max(2.0 * self.params.h_min);
+        if let Some(cut) = cut_neck(mesh, at, radius).filter(|c| c.component_labels().1 > parts) {
+            let cut = self.conserved(self.tidy(cut, 2), mesh);
+            if cut.component_labels().1 > parts {
+                self.declined = None;
+                let (at, components) = ([at[0], at[1], at[2]], cut.component_labels().1);
+                tracing::info!(?at, components, vertices = cut.num_vertices(), "neck cut (pinch-off surgery)");
+                return Managed::Surgery(cut, SurgeryKind::Pinch, at);
+            }
+        }
+        // else by the level set: a neck the ball does not part (a wide one)
         let spacing = self.surgery_spacing();
         let op = super::surgery::Operation::Cut { at, radius: 3.0 * spacing, depth: 2.0 * spacing };
         match self.operate(mesh, op) {
             // a cut that parts the surface: the neck was one
-            Some(cut) if cut.component_labels().1 > mesh.component_labels().1 => {
+            Some(cut) if cut.component_labels().1 > parts => {
                 self.declined = None;
                 let (at, components) = ([at[0], at[1], at[2]], cut.component_labels().1);
                 tracing::info!(?at, components, vertices = cut.num_vertices(), "neck cut (pinch-off surgery)");
-                Managed::Remeshed(cut)
+                Managed::Surgery(cut, SurgeryKind::Pinch, at)
             }
             // no neck there (a crease, such as a fresh merge's bridge, which the
             // flow opens): the management goes on as usual

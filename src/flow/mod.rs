@@ -32,7 +32,7 @@ pub(crate) use problem::curvature_and_normals;
 pub use problem::{
     shape_derivative, FlowDefaults, H1Weights, OwnField, Problem, ProblemError, ShapeGradient, SurfaceState,
 };
-pub use report::{Progress, Rejection, StepReport, StopReason};
+pub use report::{Progress, Rejection, StepReport, StopReason, SurgeryEvent, SurgeryKind, SurgeryRecord};
 pub use schur::{ConsistentSolver, LumpedSolver};
 pub use settings::FlowSettings;
 pub use step::{SemiImplicitStep, SolverKind, Velocity};

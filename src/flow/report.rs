@@ -43,6 +43,53 @@ pub struct Progress {
     pub energy: f64,
     pub vertices: usize,
     pub components: usize,
+    /// The topological surgery that made this state (a merge or a pinch-off cut in
+    /// 3D), if one did; left out of the JSON otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surgery: Option<SurgeryEvent>,
+}
+
+/// What a topological surgery of surfaces did ([`super::surgery`]), and where.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SurgeryEvent {
+    pub kind: SurgeryKind,
+    /// A point of the surgery: the contact of a merge, the neck of a pinch-off,
+    /// the centroid of a component that vanished.
+    pub at: [f64; 3],
+    /// The number of components after it.
+    pub components: usize,
+}
+
+/// The kinds of topological surgery.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SurgeryKind {
+    /// Surfaces in contact joined.
+    Merge,
+    /// A neck cut and both sides capped.
+    Pinch,
+    /// A component that shrank below the mesh's resolution removed (the rest go on).
+    Vanish,
+}
+
+impl SurgeryKind {
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            SurgeryKind::Merge => "merge",
+            SurgeryKind::Pinch => "pinch",
+            SurgeryKind::Vanish => "vanish",
+        }
+    }
+}
+
+/// A surgery as a run records it (checkpoints, shape.json): the iteration and flow
+/// time of the state it made.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SurgeryRecord {
+    pub iteration: usize,
+    pub time: f64,
+    #[serde(flatten)]
+    pub event: SurgeryEvent,
 }
 
 /// What one call of [`super::Flow::step`] did.
@@ -67,8 +114,9 @@ pub struct StepReport {
     /// re-evaluated on a fresh one ([`super::Problem::rediscretize`]; module documentation,
     /// item 5): no step was taken, the next call starts from the new energy.
     pub rediscretized: bool,
-    /// Surfaces in contact were merged ([`super::surgery`]): no step was taken, the
-    /// next call starts from the merged surface.
+    /// Surfaces in contact were merged ([`super::surgery`]): the accepted iteration
+    /// is the merge, of no flow time (`time` and `tau` stay); the next call steps
+    /// from the merged surface.
     pub merged: bool,
 }
 

@@ -76,6 +76,7 @@ impl<'p, const D: usize> Flow<'p, D> {
         );
         flow.settled_tau = checkpoint.settled_tau;
         flow.recent = checkpoint.recent_energies.clone();
+        flow.surgeries = checkpoint.surgeries.clone();
         Ok(flow)
     }
 
@@ -109,6 +110,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             settled_tau: 0.0,
             recent: Vec::new(),
             vertex_limit: vertex_limit(vertices),
+            surgeries: Vec::new(),
         }
     }
 }

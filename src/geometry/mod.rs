@@ -18,6 +18,7 @@ mod curves;
 mod intersect;
 mod measures;
 mod mesh;
+mod neck_cut;
 mod objects;
 pub mod simplex;
 mod surface_intersections;
@@ -36,6 +37,7 @@ pub use curves::{all_loops_below, circle, curves_from_loops, drop_small_loops, e
 pub use intersect::{find_periodic_intersections, find_segment_intersections, segment_pair_hit, SegmentHit};
 pub use measures::{vertex_normals, MeshQuality};
 pub use mesh::{components, segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};
+pub use neck_cut::cut_neck;
 pub use objects::Objects;
 pub use surface_intersections::{first_surface_intersection, surface_intersections};
 pub use surface_remesh::{

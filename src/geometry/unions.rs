@@ -31,6 +31,29 @@ pub fn surface_union(parts: &[SurfaceMesh]) -> Result<SurfaceMesh, MeshError> {
     Mesh::new(positions, elements)
 }
 
+impl<const D: usize> Mesh<D> {
+    /// The mesh (not periodic) of the components `c` (of [`Mesh::component_labels`])
+    /// with `keep[c]`, vertices renumbered in their order; `None` if none is kept.
+    pub fn with_components(&self, keep: &[bool]) -> Option<Mesh<D>> {
+        let (labels, _) = self.component_labels();
+        let mut index = vec![usize::MAX; self.num_vertices()];
+        let mut positions = Vec::new();
+        for (v, p) in self.positions().iter().enumerate() {
+            if keep.get(labels[v]).copied().unwrap_or(false) {
+                index[v] = positions.len();
+                positions.push(*p);
+            }
+        }
+        let elements: Vec<[usize; D]> = self
+            .elements()
+            .iter()
+            .filter(|e| index[e[0]] != usize::MAX)
+            .map(|e| std::array::from_fn(|k| index[e[k]]))
+            .collect();
+        (!elements.is_empty()).then(|| Mesh::from_trusted_parts(positions, elements))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -54,5 +77,10 @@ mod tests {
         assert_eq!(u.num_vertices(), 2 * a.num_vertices());
         assert_eq!(u.num_components(), 2);
         assert!((u.enclosed_measure() - 2.0 * a.enclosed_measure()).abs() < 1e-12);
+        let second = u.with_components(&[false, true]).unwrap();
+        assert_eq!(second.num_vertices(), a.num_vertices());
+        assert!((second.positions()[0][0] - a.positions()[0][0] - 3.0).abs() < 1e-12);
+        assert!((second.enclosed_measure() - a.enclosed_measure()).abs() < 1e-12);
+        assert!(u.with_components(&[false, false]).is_none());
     }
 }

@@ -145,6 +145,7 @@ mod tests {
             coarse: false,
             settled_tau: 0.0,
             recent_energies: vec![],
+            surgeries: vec![],
         };
         Frame { state, fields: None, fill: None }
     }

@@ -92,7 +92,8 @@ impl<'a> StateResults<'a> {
 
     /// shape.json: the shape, and for image jobs the pixel coordinates, the
     /// settings of the segmentation (`"segmentation"`, automatic or given) and the
-    /// table of objects (`"objects"`).
+    /// table of objects (`"objects"`); the run's topological surgeries
+    /// (`"surgeries"`) if it had any.
     pub fn shape_document(&self) -> Value {
         let (job, shown) = (self.job, self.shown);
         let image = job.image.as_deref();
@@ -102,6 +103,9 @@ impl<'a> StateResults<'a> {
         }
         if let Some(img) = image {
             doc["objects"] = serde_json::to_value(&self.objects(img).1).unwrap_or(Value::Null);
+        }
+        if !shown.surgeries.is_empty() {
+            doc["surgeries"] = serde_json::to_value(&shown.surgeries).unwrap_or(Value::Null);
         }
         doc
     }

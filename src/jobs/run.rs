@@ -187,6 +187,7 @@ fn run_stage<const D: usize>(
             coarse: phase.coarse,
             settled_tau: 0.0,
             recent_energies: Vec::new(),
+            surgeries: Vec::new(),
         })
     };
     let mut problem = (dim.problem)(job.stage_problem(phase.stage)).map_err(|e| fail(e, start_of(start)))?;
@@ -242,6 +243,10 @@ fn run_stage<const D: usize>(
     match result {
         Ok(stop) => {
             let note = match stop {
+                StopReason::Vanished if D == 3 => Some(
+                    "every surface shrank below the mesh's resolution (the volume of a ball of radius \
+                     mesh.h_min): nothing is left; for an image, no object was found (empty mask)",
+                ),
                 StopReason::Vanished => Some(
                     "every contour shrank below the smallest size kept (mesh.min_area): nothing is left; \
                      for an image, no object was found (empty mask)",

@@ -23,7 +23,7 @@ impl Thinning {
     pub fn keep(&mut self, p: &Progress) -> bool {
         let changed = self.components.is_some_and(|c| c != p.components);
         self.components = Some(p.components);
-        let keep = changed || p.iteration % stride(p.iteration) == 0;
+        let keep = changed || p.surgery.is_some() || p.iteration % stride(p.iteration) == 0;
         self.skipped = if keep { None } else { Some(*p) };
         keep
     }
@@ -48,7 +48,7 @@ mod tests {
     use super::*;
 
     fn row(iteration: usize, components: usize) -> Progress {
-        Progress { iteration, time: 0.0, tau: 1.0, energy: 1.0, vertices: 8, components }
+        Progress { iteration, time: 0.0, tau: 1.0, energy: 1.0, vertices: 8, components, surgery: None }
     }
 
     #[test]

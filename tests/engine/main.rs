@@ -9,6 +9,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 mod contact;
+mod dumbbell;
 mod film;
 mod gltf_results;
 mod mesh_management;

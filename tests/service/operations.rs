@@ -100,7 +100,7 @@ fn retention_deletes_ended_jobs_and_the_database_shrinks() {
         let mut conn = sqlx::SqliteConnection::connect(&format!("sqlite:{}", db.display())).await.unwrap();
         sqlx::query(
             "WITH RECURSIVE n(x) AS (SELECT 501 UNION ALL SELECT x + 1 FROM n WHERE x < 300500) \
-             INSERT INTO history SELECT ?1, x, x * 1e-4, 1e-4, 1.0, 128, 1 FROM n",
+             INSERT INTO history (job_id, iteration, time, tau, energy, vertices, components) SELECT ?1, x, x * 1e-4, 1e-4, 1.0, 128, 1 FROM n",
         )
         .bind(&id)
         .execute(&mut conn)
@@ -166,7 +166,7 @@ fn a_delete_answers_at_once_and_the_rows_go_in_the_background() {
     let rows = |sql| query(sql, false);
     query(
         "WITH RECURSIVE n(x) AS (SELECT 501 UNION ALL SELECT x + 1 FROM n WHERE x < 1000500) \
-         INSERT INTO history SELECT ?1, x, x * 1e-4, 1e-4, 1.0, 128, 1 FROM n",
+         INSERT INTO history (job_id, iteration, time, tau, energy, vertices, components) SELECT ?1, x, x * 1e-4, 1e-4, 1.0, 128, 1 FROM n",
         true,
     );
     assert!(rows("SELECT COUNT(*) FROM history WHERE job_id = ?1") > 1_000_000);

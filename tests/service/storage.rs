@@ -82,7 +82,7 @@ fn a_million_history_rows_are_served_in_little_memory() {
         sqlx::query("DELETE FROM history WHERE job_id = ?1").bind(&id).execute(&mut db).await.unwrap();
         sqlx::query(
             "WITH RECURSIVE n(x) AS (SELECT 0 UNION ALL SELECT x + 1 FROM n WHERE x < ?2 - 1) \
-             INSERT INTO history SELECT ?1, x, x * 1e-4, 1e-4, 6.0 / (1.0 + x * 1e-4), 128, 1 FROM n",
+             INSERT INTO history (job_id, iteration, time, tau, energy, vertices, components) SELECT ?1, x, x * 1e-4, 1e-4, 6.0 / (1.0 + x * 1e-4), 128, 1 FROM n",
         )
         .bind(&id)
         .bind(ROWS)

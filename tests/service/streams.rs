@@ -149,3 +149,49 @@ fn multipart_segmentation_and_bad_uploads() {
     assert_eq!(list["jobs"].as_array().unwrap().len(), 1);
     srv.stop();
 }
+
+/// Two spheres under mean curvature flow with surgery (`mesh.pinch_off: false`):
+/// the small one shrinks away while the large one goes on.
+const SHRINKING_SPHERES: &str = r#"{"problem": {"type": "curvature_flow", "gamma": 1.0},
+    "initial": {"shape": "union", "parts": [
+        {"shape": "sphere", "center": [-0.5, 0.0, 0.0], "radius": 0.1, "resolution": 3},
+        {"shape": "sphere", "center": [0.5, 0.0, 0.0], "radius": 0.3, "resolution": 3}]},
+    "flow": {"tau": 1e-4, "end_time": 0.004, "tolerance": 0},
+    "mesh": {"pinch_off": false}}"#;
+
+/// A topological surgery is in the progress event of the iteration it made, in
+/// that iteration's history row and in shape.json, with its kind and place.
+#[test]
+fn a_surgery_is_in_the_events_the_history_and_shape_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let srv = Server::start(&dir.path().join("jobs.db"), 1);
+    let (_, job) = srv.json("POST", "/v1/jobs", Some(SHRINKING_SPHERES));
+    let id = job["id"].as_str().unwrap().to_string();
+    let (status, _, body) = srv.request("GET", &format!("/v1/jobs/{id}/events"), None);
+    assert_eq!(status, 200);
+    let events: Vec<Value> = sse_events(&body)
+        .iter()
+        .filter(|e| e.0 == "progress")
+        .map(|e| serde_json::from_str(&e.2).unwrap())
+        .filter(|p: &Value| p.get("surgery").is_some())
+        .collect();
+    assert_eq!(events.len(), 1, "{events:?}");
+    let (iteration, surgery) = (events[0]["iteration"].clone(), events[0]["surgery"].clone());
+    assert_eq!(surgery["kind"], "vanish");
+    assert_eq!(surgery["components"], 1);
+    assert!((surgery["at"][0].as_f64().unwrap() + 0.5).abs() < 0.01, "{surgery}");
+    assert_eq!(events[0]["components"], 1);
+    let (_, history) = srv.json("GET", &format!("/v1/jobs/{id}/energy"), None);
+    let rows: Vec<&Value> =
+        history["history"].as_array().unwrap().iter().filter(|r| r.get("surgery").is_some()).collect();
+    assert_eq!(rows.len(), 1);
+    assert_eq!((&rows[0]["iteration"], &rows[0]["surgery"]), (&iteration, &surgery));
+    let (_, shape) = srv.json("GET", &format!("/v1/jobs/{id}/results/shape.json"), None);
+    let recorded = &shape["surgeries"][0];
+    assert_eq!(
+        (&recorded["iteration"], &recorded["kind"], &recorded["at"]),
+        (&iteration, &surgery["kind"], &surgery["at"])
+    );
+    assert!(recorded["time"].as_f64().unwrap() > 0.0);
+    srv.stop();
+}

@@ -123,7 +123,8 @@ mod tests {
     #[test]
     fn messages_round_trip_and_end_cleanly() {
         let mut buf = Vec::new();
-        let p = Progress { iteration: 3, time: 0.5, tau: 1e-3, energy: 2.0, vertices: 10, components: 1 };
+        let p =
+            Progress { iteration: 3, time: 0.5, tau: 1e-3, energy: 2.0, vertices: 10, components: 1, surgery: None };
         write_message(&mut buf, &Report::Progress(p), &[]).unwrap();
         write_message(&mut buf, &Report::File { name: "shape.glb".into(), media_type: "m".into() }, b"glb").unwrap();
         let mut r = buf.as_slice();

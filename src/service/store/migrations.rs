@@ -21,6 +21,7 @@ pub const SQLITE: &[File] = &[
     ("0005_blobs.sql", include_str!("../../../migrations/sqlite/0005_blobs.sql")),
     ("0006_keys.sql", include_str!("../../../migrations/sqlite/0006_keys.sql")),
     ("0007_deletes_storage.sql", include_str!("../../../migrations/sqlite/0007_deletes_storage.sql")),
+    ("0008_surgeries.sql", include_str!("../../../migrations/sqlite/0008_surgeries.sql")),
 ];
 
 pub const POSTGRES: &[File] = &[
@@ -29,6 +30,7 @@ pub const POSTGRES: &[File] = &[
     ("0003_blobs.sql", include_str!("../../../migrations/postgres/0003_blobs.sql")),
     ("0004_keys.sql", include_str!("../../../migrations/postgres/0004_keys.sql")),
     ("0005_deletes_storage.sql", include_str!("../../../migrations/postgres/0005_deletes_storage.sql")),
+    ("0006_surgeries.sql", include_str!("../../../migrations/postgres/0006_surgeries.sql")),
 ];
 
 /// The migrator of a backend's files, with the versions, descriptions and

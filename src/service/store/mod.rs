@@ -394,6 +394,11 @@ pub async fn open(database: &str, blobs: Blobs) -> StoreResult<Store> {
 }
 
 /// The stored result index of a row's `results` column.
+/// A history row's surgery as stored (JSON), `None` for a row without one.
+pub(crate) fn surgery_json(p: &Progress) -> Option<String> {
+    p.surgery.map(|s| serde_json::to_string(&s).expect("a surgery serializes"))
+}
+
 pub(crate) fn results_of(text: Option<String>) -> Option<ResultIndex> {
     text.and_then(|t| serde_json::from_str(&t).ok())
 }

@@ -43,6 +43,7 @@ macro_rules! job_store {
                     energy: r.get("energy"),
                     vertices: r.get::<i64, _>("vertices") as usize,
                     components: r.get::<i64, _>("components") as usize,
+                    surgery: None,
                 }),
                 results: results_of(r.get("results")),
                 owner: r.get("owner"),
@@ -69,6 +70,9 @@ macro_rules! job_store {
                 energy: r.get("energy"),
                 vertices: r.get::<i64, _>("vertices") as usize,
                 components: r.get::<i64, _>("components") as usize,
+                surgery: r
+                    .get::<Option<String>, _>("surgery")
+                    .and_then(|s| serde_json::from_str(&s).ok()),
             }
         }
 

@@ -7,8 +7,8 @@
 mod listen;
 
 use super::{
-    migrations, now, results_of, status_of, Admission, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed,
-    InputRow, JobRow, JobStatus, JobStore, KeyRow, Lease, StoreError, StoreResult, Which,
+    migrations, now, results_of, status_of, surgery_json, Admission, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy,
+    Claimed, InputRow, JobRow, JobStatus, JobStore, KeyRow, Lease, StoreError, StoreResult, Which,
 };
 use crate::flow::Progress;
 use sqlx::postgres::{PgConnectOptions, PgPool, PgPoolOptions, PgRow};
@@ -127,11 +127,12 @@ job_store!(PgStore, PgRow, read: pool, write: pool, {
                  components = COALESCE($8, components) \
                  WHERE id = $1 AND lease_epoch = $2 AND status = 'running' RETURNING cancel_requested), \
              rows AS ( \
-                 INSERT INTO history (job_id, iteration, time, tau, energy, vertices, components) \
+                 INSERT INTO history (job_id, iteration, time, tau, energy, vertices, components, surgery) \
                  SELECT $1, u.* FROM UNNEST($9::bigint[], $10::float8[], $11::float8[], $12::float8[], \
-                 $13::bigint[], $14::bigint[]) AS u WHERE EXISTS (SELECT 1 FROM fence) \
+                 $13::bigint[], $14::bigint[], $19::text[]) AS u WHERE EXISTS (SELECT 1 FROM fence) \
                  ON CONFLICT (job_id, iteration) DO UPDATE SET time = EXCLUDED.time, tau = EXCLUDED.tau, \
-                 energy = EXCLUDED.energy, vertices = EXCLUDED.vertices, components = EXCLUDED.components), \
+                 energy = EXCLUDED.energy, vertices = EXCLUDED.vertices, components = EXCLUDED.components, \
+                 surgery = EXCLUDED.surgery), \
              frames AS ( \
                  INSERT INTO checkpoints (job_id, iteration, time, data, blob) \
                  SELECT $1, c.iteration, c.time, '', c.blob FROM UNNEST($15::bigint[], $16::float8[], $17::text[]) \
@@ -157,6 +158,7 @@ job_store!(PgStore, PgRow, read: pool, write: pool, {
         .bind(checkpoints.iter().map(|c| c.time).collect::<Vec<f64>>())
         .bind(checkpoints.iter().map(|c| c.key.as_str()).collect::<Vec<&str>>())
         .bind(CHANNEL)
+        .bind(rows.iter().map(surgery_json).collect::<Vec<Option<String>>>())
         .fetch_optional(&self.pool)
         .await?;
         held.map(|r| r.get::<bool, _>(0)).ok_or_else(|| StoreError::LeaseLost(id.to_string()))

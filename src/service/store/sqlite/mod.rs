@@ -5,8 +5,8 @@
 //! queue.
 
 use super::{
-    migrations, now, results_of, status_of, Admission, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy, Claimed,
-    InputRow, JobRow, JobStatus, JobStore, KeyRow, Lease, StoreError, StoreResult, Which,
+    migrations, now, results_of, status_of, surgery_json, Admission, Blobs, CheckpointKey, CheckpointRow, ClaimPolicy,
+    Claimed, InputRow, JobRow, JobStatus, JobStore, KeyRow, Lease, StoreError, StoreResult, Which,
 };
 use crate::flow::Progress;
 use sqlx::sqlite::{
@@ -131,7 +131,7 @@ job_store!(SqliteStore, sqlx::sqlite::SqliteRow, read: reader, write: pool, {
             None => fence(&mut tx, id, lease).await?,
         };
         for chunk in rows.chunks(HISTORY_ROWS_PER_STATEMENT) {
-            sqlx::QueryBuilder::<Sqlite>::new("INSERT OR REPLACE INTO history ")
+            sqlx::QueryBuilder::<Sqlite>::new("INSERT OR REPLACE INTO history (job_id, iteration, time, tau, energy, vertices, components, surgery) ")
                 .push_values(chunk, |mut row, p| {
                     row.push_bind(id)
                         .push_bind(p.iteration as i64)
@@ -139,7 +139,8 @@ job_store!(SqliteStore, sqlx::sqlite::SqliteRow, read: reader, write: pool, {
                         .push_bind(p.tau)
                         .push_bind(p.energy)
                         .push_bind(p.vertices as i64)
-                        .push_bind(p.components as i64);
+                        .push_bind(p.components as i64)
+                        .push_bind(surgery_json(p));
                 })
                 .build()
                 .execute(&mut *tx)
@@ -213,7 +214,15 @@ mod tests {
         store.insert_rows("j1", "{}", &[], &Default::default()).await.unwrap();
         let claimed = store.claim_next("node", &ClaimPolicy::default()).await.unwrap().unwrap();
         let lease = claimed.lease;
-        let row = |iteration| Progress { iteration, time: 0.1, tau: 0.1, energy: 2.0, vertices: 8, components: 1 };
+        let row = |iteration| Progress {
+            iteration,
+            time: 0.1,
+            tau: 0.1,
+            energy: 2.0,
+            vertices: 8,
+            components: 1,
+            surgery: None,
+        };
         let rows: Vec<Progress> = (0..3).map(row).collect();
         assert!(!store.record_rows("j1", &lease, &rows, &[]).await.unwrap());
         assert_eq!(store.job("j1").await.unwrap().unwrap().progress.unwrap().iteration, 2);
