@@ -364,8 +364,9 @@ impl SurfaceManager {
         })
     }
 
-    /// A neck too thin for the mesh: cut at its sharpest edge (the level lowered by
-    /// two grid spacings within three of it) with surgery, else the run's
+    /// A neck too thin for the mesh, with surgery: cut at its sharpest edge on the
+    /// mesh ([`cut_neck`]), or where that does not part it by the level set (lowered
+    /// by two grid spacings within three of it); without surgery the run's
     /// `pinch_off` stop.
     fn pinch(&mut self, mesh: &SurfaceMesh, sharpness: f64) -> Managed<3> {
         let (Some(_), Some(at)) = (self.surgery, super::surgery::sharpest_edge(mesh)) else {
