@@ -202,7 +202,7 @@ impl<'p, const D: usize> Flow<'p, D> {
         let (ax, grad, product) = (&lin.ax, &lin.grad, &lin.product);
         // an `H⁻¹` flow conserves each component's measure: the step's `O(τ²)`
         // change of it is removed whether or not `conservation` also bounds it
-        let conserving = s.conservation.is_some() || s.scalar_product == super::ScalarProduct::HMinus1;
+        let conserving = s.conserves_measure();
         let (a0, components) = match conserving {
             true => (self.mesh.enclosed_measure(), self.mesh.component_measures()),
             false => (0.0, Vec::new()),

@@ -19,9 +19,7 @@ impl<const D: usize> Flow<'_, D> {
         // what the management changes of a conserving flow's measures (the
         // volume a collapse, a flip or the regularization's tangential moves
         // take off a curved surface) is given back, component by component
-        let conserving =
-            self.settings.conservation.is_some() || self.settings.scalar_product == super::ScalarProduct::HMinus1;
-        let measures = conserving.then(|| self.mesh.component_measures());
+        let measures = self.settings.conserves_measure().then(|| self.mesh.component_measures());
         let (mesh, remeshed, cut) = match manager.manage(&self.mesh)? {
             Managed::Unchanged => return Ok(None),
             Managed::PinchOff => return Ok(Some(StopReason::PinchOff)),

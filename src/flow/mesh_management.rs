@@ -1,12 +1,12 @@
 //! Mesh management between steps (paper §4.1), behind one trait so that the driver
 //! stays dimension-independent: regularization, refinement/coarsening and
-//! topological changes. Curves: [`CurveManager`].
+//! topological changes. Curves: [`CurveManager`]; surfaces:
+//! [`SurfaceManager`](super::SurfaceManager).
 
 use super::report::SurgeryKind;
 use super::FlowError;
 use crate::geometry::{
-    adapt_surface, cut_neck, edge_statistics, manage_curve, manage_curve_holding, regularize_surface,
-    resolve_crossings, CrossingWatch, CurveMesh, CurveRemeshSettings, Hold, Mesh, SurfaceMesh, SurfaceRemeshSettings,
+    manage_curve, manage_curve_holding, resolve_crossings, CrossingWatch, CurveMesh, CurveRemeshSettings, Hold, Mesh,
 };
 
 /// What mesh management did to the mesh after a step.
@@ -47,7 +47,7 @@ pub struct Surgery {
 }
 
 /// What a pass did: a new connectivity wins over moved vertices.
-fn outcome<const D: usize>(remeshed: Option<Mesh<D>>, moved: Option<Mesh<D>>) -> Managed<D> {
+pub(super) fn outcome<const D: usize>(remeshed: Option<Mesh<D>>, moved: Option<Mesh<D>>) -> Managed<D> {
     match (remeshed, moved) {
         (Some(_), Some(m)) | (Some(m), None) => Managed::Remeshed(m),
         (None, Some(m)) => Managed::Moved(m),
@@ -207,207 +207,4 @@ fn manage_curves(
         }
     }
     Ok(outcome(remeshed, moved))
-}
-
-/// Switches and resolved parameters of surface mesh management.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SurfaceManager {
-    pub regularize: bool,
-    pub sweeps: usize,
-    pub adapt: bool,
-    pub params: SurfaceRemeshSettings,
-    /// Pinch-off is declared when some edge has `β/h` (angle between the normals of
-    /// its two triangles over its length: a principal curvature) above this, i.e. a
-    /// neck radius below its inverse, which the mesh (`h ≥ h_min`) cannot resolve.
-    pub pinch_curvature: Option<f64>,
-    /// With surgery, a pinch-off cuts the neck and the flow goes on.
-    pub surgery: Option<Surgery>,
-    /// Run state (`None` at the start): the sharpest ring's `β/h` at which a cut
-    /// last did not part the surface (a crease, not a neck); no cut is tried
-    /// again until a ring is twice as sharp.
-    pub declined: Option<f64>,
-}
-
-impl SurfaceManager {
-    /// Defaults derived from an initial surface: `h_min`, `h_max` = ¼ and 3× its mean
-    /// edge, `ε` = 1.5× its largest edge `h β`, 120° angle limit, pinch-off at a
-    /// curvature of `2/h_min` (neck radius `h_min/2`).
-    pub fn defaults_for(initial: &SurfaceMesh) -> (SurfaceRemeshSettings, f64) {
-        let (mean, worst) = edge_stats(initial);
-        let h_min = 0.25 * mean;
-        (
-            SurfaceRemeshSettings {
-                epsilon: (1.5 * worst.0).max(1e-12),
-                h_min,
-                h_max: 3.0 * mean,
-                max_angle_deg: 120.0,
-            },
-            2.0 / h_min,
-        )
-    }
-}
-
-fn edge_stats(m: &SurfaceMesh) -> (f64, (f64, f64)) {
-    let (mean, hb, bh) = edge_statistics(m);
-    (mean, (hb, bh))
-}
-
-/// Smallest angle the surface management keeps while a neck collapses: below it,
-/// once the neck is thinner than `4 h_min`, the neck counts as pinched.
-pub const PINCH_MIN_ANGLE_DEG: f64 = 10.0;
-
-impl MeshManager<3> for SurfaceManager {
-    /// Pinch-off is declared when a neck is thinner than `h_min / 2` (curvature above
-    /// `pinch_curvature`), or thinner than `4 h_min` while the managed mesh can no
-    /// longer keep its angles above `PINCH_MIN_ANGLE_DEG` (elements of at least
-    /// `h_min` around a ring that small).
-    fn manage(&mut self, mesh: &SurfaceMesh) -> Result<Managed<3>, FlowError> {
-        if let Some(done) = self.surgery.and_then(|_| self.shrunk_away(mesh)) {
-            return Ok(done);
-        }
-        let curvature = self.pinch_curvature.map(|k| (k, edge_stats(mesh).1 .1));
-        if let Some((_, c)) = curvature.filter(|&(k, c)| c > k) {
-            match self.pinch(mesh, c) {
-                Managed::Unchanged => {}
-                done => return Ok(done),
-            }
-        }
-        let remeshed = if self.adapt { adapt_surface(mesh, &self.params) } else { None };
-        let moved = if self.regularize {
-            Some(regularize_surface(remeshed.as_ref().unwrap_or(mesh), self.sweeps))
-        } else {
-            None
-        };
-        if let Some((_, c)) = curvature.filter(|&(k, c)| c > 0.125 * k) {
-            let result = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
-            if result.quality().min_angle_deg < PINCH_MIN_ANGLE_DEG {
-                match self.pinch(mesh, c) {
-                    Managed::Unchanged => {}
-                    done => return Ok(done),
-                }
-            }
-        }
-        Ok(outcome(remeshed, moved))
-    }
-
-    /// Two sheets in contact become one (a merge on a grid of the initial mean
-    /// edge, bridged over twice that), if the surgery merges.
-    fn merge(&mut self, mesh: &SurfaceMesh) -> Option<SurfaceMesh> {
-        self.surgery.filter(|s| s.merge)?;
-        let spacing = self.surgery_spacing();
-        let merged = self.operate(mesh, super::surgery::Operation::Merge { blend: 2.0 * spacing })?;
-        // a new surface: a ring that a cut did not part before is gone
-        self.declined = None;
-        tracing::info!(components = merged.component_labels().1, vertices = merged.num_vertices(), "surfaces merged");
-        Some(merged)
-    }
-}
-
-impl SurfaceManager {
-    /// The grid of a surgery: the mean edge the management's sizes aim at (4
-    /// `h_min`: the initial mean edge by default).
-    fn surgery_spacing(&self) -> f64 {
-        (4.0 * self.params.h_min).min(self.params.h_max)
-    }
-
-    /// `mesh` rebuilt by `op`, tidied (four rounds of the management's adaptation
-    /// and regularization: the slivers of marching tetrahedra made sound) and,
-    /// for a conserving flow, given back its volume; `None` if the rebuild fails.
-    fn operate(&self, mesh: &SurfaceMesh, op: super::surgery::Operation) -> Option<SurfaceMesh> {
-        let mut m = match super::surgery::rebuild(mesh, self.surgery_spacing(), op) {
-            Ok(m) => m?,
-            Err(e) => {
-                tracing::warn!("the surface a surgery rebuilt is invalid: {e}");
-                return None;
-            }
-        };
-        m = self.tidy(m, 4);
-        Some(self.conserved(m, mesh))
-    }
-
-    /// `rounds` of the management's adaptation and regularization.
-    fn tidy(&self, mut m: SurfaceMesh, rounds: usize) -> SurfaceMesh {
-        for _ in 0..rounds {
-            if let Some(a) = adapt_surface(&m, &self.params) {
-                m = a;
-            }
-            m = regularize_surface(&m, self.sweeps.max(3));
-        }
-        m
-    }
-
-    /// `m`, a surgery's result on `before`, with the volume of `before` if the
-    /// flow conserves it.
-    fn conserved(&self, m: SurfaceMesh, before: &SurfaceMesh) -> SurfaceMesh {
-        match self.surgery.is_some_and(|s| s.conserve) {
-            true => super::surgery::with_volume(m, before.enclosed_measure()),
-            false => m,
-        }
-    }
-
-    /// With surgery, the components whose volume is that of a ball of radius below
-    /// `h_min` (which the mesh no longer resolves: a shrinking sphere's curvature
-    /// reaches the pinch test's at radius `h_min / 2`) removed; `Vanished` if none
-    /// is left, `None` if none is that small.
-    fn shrunk_away(&self, mesh: &SurfaceMesh) -> Option<Managed<3>> {
-        let smallest = 4.0 / 3.0 * std::f64::consts::PI * self.params.h_min.powi(3);
-        let keep: Vec<bool> = mesh.component_measures().iter().map(|&v| v.abs() >= smallest).collect();
-        let gone = keep.iter().position(|k| !k)?;
-        let (labels, _) = mesh.component_labels();
-        let x = mesh.positions();
-        let members: Vec<usize> = (0..x.len()).filter(|&v| labels[v] == gone).collect();
-        let at = std::array::from_fn(|k| members.iter().map(|&v| x[v][k]).sum::<f64>() / members.len() as f64);
-        tracing::info!(?at, left = keep.iter().filter(|k| **k).count(), "a surface shrank away");
-        Some(match mesh.with_components(&keep) {
-            Some(m) => Managed::Surgery(m, SurgeryKind::Vanish, at),
-            None => Managed::Vanished,
-        })
-    }
-
-    /// A neck too thin for the mesh, with surgery: cut at its sharpest edge on the
-    /// mesh ([`cut_neck`]), or where that does not part it by the level set (lowered
-    /// by two grid spacings within three of it); without surgery the run's
-    /// `pinch_off` stop.
-    fn pinch(&mut self, mesh: &SurfaceMesh, sharpness: f64) -> Managed<3> {
-        let (Some(_), Some(at)) = (self.surgery, super::surgery::sharpest_edge(mesh)) else {
-            return Managed::PinchOff;
-        };
-        if self.declined.is_some_and(|d| sharpness < 2.0 * d) {
-            return Managed::Unchanged;
-        }
-        let parts = mesh.component_labels().1;
-        // on the mesh itself: the triangles within three neck radii (the inverse
-        // of the ring's curvature) of the ring removed and both holes capped; the
-        // rest of the surface keeps its triangles
-        let radius = (3.0 / sharpness).max(2.0 * self.params.h_min);
-        if let Some(cut) = cut_neck(mesh, at, radius).filter(|c| c.component_labels().1 > parts) {
-            let cut = self.conserved(self.tidy(cut, 2), mesh);
-            if cut.component_labels().1 > parts {
-                self.declined = None;
-                let (at, components) = ([at[0], at[1], at[2]], cut.component_labels().1);
-                tracing::info!(?at, components, vertices = cut.num_vertices(), "neck cut (pinch-off surgery)");
-                return Managed::Surgery(cut, SurgeryKind::Pinch, at);
-            }
-        }
-        // else by the level set: a neck the ball does not part (a wide one)
-        let spacing = self.surgery_spacing();
-        let op = super::surgery::Operation::Cut { at, radius: 3.0 * spacing, depth: 2.0 * spacing };
-        match self.operate(mesh, op) {
-            // a cut that parts the surface: the neck was one
-            Some(cut) if cut.component_labels().1 > parts => {
-                self.declined = None;
-                let (at, components) = ([at[0], at[1], at[2]], cut.component_labels().1);
-                tracing::info!(?at, components, vertices = cut.num_vertices(), "neck cut (pinch-off surgery)");
-                Managed::Surgery(cut, SurgeryKind::Pinch, at)
-            }
-            // no neck there (a crease, such as a fresh merge's bridge, which the
-            // flow opens): the management goes on as usual
-            Some(_) => {
-                self.declined = Some(sharpness);
-                tracing::debug!(at = ?[at[0], at[1], at[2]], "a sharp ring that a cut does not part: no pinch");
-                Managed::Unchanged
-            }
-            None => Managed::PinchOff,
-        }
-    }
 }

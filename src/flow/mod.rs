@@ -19,6 +19,7 @@ mod schur;
 mod settings;
 mod start;
 mod step;
+mod surface_manager;
 pub mod surgery;
 mod system;
 
@@ -27,7 +28,7 @@ pub use driver::{Checkpoint, Flow, MeshData};
 pub use error::FlowError;
 pub use limits::{Confinement, StepLimits};
 pub use linearize::VertexFields;
-pub use mesh_management::{CurveManager, Managed, MeshManager, SurfaceManager, Surgery, WatchedCurveManager};
+pub use mesh_management::{CurveManager, Managed, MeshManager, Surgery, WatchedCurveManager};
 pub(crate) use problem::curvature_and_normals;
 pub use problem::{
     shape_derivative, FlowDefaults, H1Weights, OwnField, Problem, ProblemError, ShapeGradient, SurfaceState,
@@ -36,4 +37,5 @@ pub use report::{Progress, Rejection, StepReport, StopReason, SurgeryEvent, Surg
 pub use schur::{ConsistentSolver, LumpedSolver};
 pub use settings::FlowSettings;
 pub use step::{SemiImplicitStep, SolverKind, Velocity};
+pub use surface_manager::SurfaceManager;
 pub use system::{LinearSystem, ProductWeights, ScalarProduct};

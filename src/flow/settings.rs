@@ -42,6 +42,14 @@ pub struct FlowSettings {
     pub tolerance_per_time: bool,
 }
 
+impl FlowSettings {
+    /// Whether the flow keeps each component's enclosed measure: an `H⁻¹` flow, or
+    /// one with `conservation`; its steps and mesh management give it back.
+    pub fn conserves_measure(&self) -> bool {
+        self.conservation.is_some() || self.scalar_product == ScalarProduct::HMinus1
+    }
+}
+
 impl Default for FlowSettings {
     fn default() -> Self {
         FlowSettings {

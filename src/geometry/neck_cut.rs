@@ -4,7 +4,7 @@
 //! from the centroid of its rim. The rest of the mesh is left as it is.
 
 use super::{Mesh, MeshError, Point, SurfaceMesh};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// `mesh` with the triangles that have a corner within `radius` of `at` removed
 /// and every hole capped; `None` if nothing is removed, or the holes' rims are not
@@ -18,33 +18,33 @@ pub fn cut_neck(mesh: &SurfaceMesh, at: Point<3>, radius: f64) -> Option<Surface
         return None;
     }
     // the rims: directed edges of the kept triangles whose reverse is not one
-    let mut directed: HashMap<(usize, usize), ()> = HashMap::with_capacity(3 * kept.len());
+    let mut directed: HashSet<(usize, usize)> = HashSet::with_capacity(3 * kept.len());
     for t in &kept {
         for k in 0..3 {
-            directed.insert((t[k], t[(k + 1) % 3]), ());
+            directed.insert((t[k], t[(k + 1) % 3]));
         }
     }
     let mut next: HashMap<usize, usize> = HashMap::new();
-    for &(a, b) in directed.keys() {
-        if !directed.contains_key(&(b, a)) && next.insert(a, b).is_some() {
+    for &(a, b) in &directed {
+        if !directed.contains(&(b, a)) && next.insert(a, b).is_some() {
             // two rims through one vertex
             return None;
         }
     }
     let mut positions: Vec<Point<3>> = x.to_vec();
     let mut triangles = kept;
-    let mut seen: HashMap<usize, ()> = HashMap::new();
+    let mut seen: HashSet<usize> = HashSet::new();
     let mut starts: Vec<usize> = next.keys().copied().collect();
     starts.sort_unstable();
     for start in starts {
-        if seen.contains_key(&start) {
+        if seen.contains(&start) {
             continue;
         }
         let mut rim = vec![start];
-        seen.insert(start, ());
+        seen.insert(start);
         let mut v = next[&start];
         while v != start {
-            if seen.insert(v, ()).is_some() || rim.len() > next.len() {
+            if !seen.insert(v) || rim.len() > next.len() {
                 return None;
             }
             rim.push(v);
@@ -61,23 +61,8 @@ pub fn cut_neck(mesh: &SurfaceMesh, at: Point<3>, radius: f64) -> Option<Surface
             triangles.push([rim[(k + 1) % rim.len()], rim[k], c]);
         }
     }
-    // the vertices of removed triangles only
-    let mut index = vec![usize::MAX; positions.len()];
-    let mut used = Vec::new();
-    for t in &triangles {
-        for &v in t {
-            if index[v] == usize::MAX {
-                index[v] = 0;
-            }
-        }
-    }
-    for (v, i) in index.iter_mut().enumerate() {
-        if *i == 0 {
-            *i = used.len();
-            used.push(positions[v]);
-        }
-    }
-    let triangles = triangles.iter().map(|t| t.map(|v| index[v])).collect();
+    // without the vertices of removed triangles only
+    let (used, triangles) = super::unions::used_vertices(&positions, &triangles);
     match Mesh::new(used, triangles) {
         Ok(m) => Some(m),
         Err(MeshError::Empty) => None,

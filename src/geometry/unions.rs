@@ -4,7 +4,7 @@
 //! build their meshes here.
 
 use super::curves::from_polylines;
-use super::{CurveMesh, Mesh, MeshError, SurfaceMesh};
+use super::{CurveMesh, Mesh, MeshError, Point, SurfaceMesh};
 
 /// Several curves as one mesh (the components keep their own orientation). The
 /// parts must not intersect each other (checked by the mesh constructor).
@@ -36,22 +36,28 @@ impl<const D: usize> Mesh<D> {
     /// with `keep[c]`, vertices renumbered in their order; `None` if none is kept.
     pub fn with_components(&self, keep: &[bool]) -> Option<Mesh<D>> {
         let (labels, _) = self.component_labels();
-        let mut index = vec![usize::MAX; self.num_vertices()];
-        let mut positions = Vec::new();
-        for (v, p) in self.positions().iter().enumerate() {
-            if keep.get(labels[v]).copied().unwrap_or(false) {
-                index[v] = positions.len();
-                positions.push(*p);
-            }
-        }
-        let elements: Vec<[usize; D]> = self
-            .elements()
-            .iter()
-            .filter(|e| index[e[0]] != usize::MAX)
-            .map(|e| std::array::from_fn(|k| index[e[k]]))
-            .collect();
+        let kept: Vec<[usize; D]> =
+            self.elements().iter().filter(|e| keep.get(labels[e[0]]).copied().unwrap_or(false)).copied().collect();
+        let (positions, elements) = used_vertices(self.positions(), &kept);
         (!elements.is_empty()).then(|| Mesh::from_trusted_parts(positions, elements))
     }
+}
+
+/// The vertices that `elements` use, in their order, and `elements` renumbered to
+/// them.
+pub(crate) fn used_vertices<const D: usize, const K: usize>(
+    positions: &[Point<D>],
+    elements: &[[usize; K]],
+) -> (Vec<Point<D>>, Vec<[usize; K]>) {
+    let mut in_use = vec![false; positions.len()];
+    elements.iter().flatten().for_each(|&v| in_use[v] = true);
+    let mut index = vec![usize::MAX; positions.len()];
+    let mut used = Vec::new();
+    for v in (0..positions.len()).filter(|&v| in_use[v]) {
+        index[v] = used.len();
+        used.push(positions[v]);
+    }
+    (used, elements.iter().map(|e| e.map(|v| index[v])).collect())
 }
 
 #[cfg(test)]
