@@ -5,7 +5,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use shapeflow::export::{energy_csv, energy_svg};
 use shapeflow::flow::{Checkpoint, Progress};
-use shapeflow::jobs::{parse_spec, prepare, result_files, run_with_frames, RunEvents};
+use shapeflow::jobs::{parse_spec, prepare, result_files, run_with_frames, vtk_series, RunEvents};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -595,6 +595,13 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
         write(&file.name, &file.bytes)?;
         written.push(file.name);
     }
+    // the VTK time series unpacked beside its zip, for ParaView to open as it is
+    std::fs::create_dir_all(out.join("evolution"))
+        .with_context(|| format!("cannot create {}", out.join("evolution").display()))?;
+    for (name, bytes) in vtk_series(&job, &frames) {
+        write(&name, &bytes)?;
+    }
+    written.push("evolution.pvd (evolution/*.vtp)".into());
     write("energy.csv", energy_csv(&rep.history).as_bytes())?;
     write("energy.svg", energy_svg(&rep.history, &spec_path.display().to_string()).as_bytes())?;
     write("checkpoint.json", serde_json::to_string(&last)?.as_bytes())?;

@@ -61,3 +61,36 @@ pub fn to_pixel(image: &Grid, x: &[f64]) -> Vec<f64> {
         x.iter().map(|v| v * l - 0.5).collect()
     }
 }
+
+/// Unit-box coordinates to the image's physical space, as VTK readers (ParaView's
+/// NRRD, NIfTI and PNG readers) place the image: sample `(i, j, k)` of the grid
+/// (2D rows counted from the bottom, so that the picture is upright) at
+/// `origin + i axes[0] + j axes[1] + k axes[2]` of its [`Placement`](crate::imaging::Placement)
+/// (a 2D image: unit spacing, origin 0; `z` = 0).
+pub fn to_world(image: &Grid, x: &[f64]) -> [f64; 3] {
+    let l = image.scale();
+    let p = &image.placement;
+    let mut w = p.origin;
+    for (a, axis) in p.axes.iter().enumerate().take(image.dimension.min(x.len())) {
+        let g = x[a] * l - 0.5;
+        for c in 0..3 {
+            w[c] += g * axis[c];
+        }
+    }
+    if image.dimension == 2 {
+        w[2] = 0.0;
+    }
+    w
+}
+
+/// Unit-box coordinates to the axis order and units of the image as an array
+/// (numpy, scikit-image, napari): 2D `(row, column)`, rows from the top as in
+/// the file, in pixels; 3D the physical coordinates ([`to_world`]) reversed,
+/// `(z, y, x)`.
+pub fn to_array_coordinates(image: &Grid, x: &[f64]) -> Vec<f64> {
+    if image.dimension == 2 {
+        to_pixel(image, x).into_iter().rev().collect()
+    } else {
+        to_world(image, x).into_iter().rev().collect()
+    }
+}

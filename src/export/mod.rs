@@ -1,5 +1,6 @@
 //! Result formats (pure functions to strings/bytes): shape.json (docs/user-guide.md), the
-//! energy history as CSV and as an SVG plot; masks and overlays of image jobs; glTF (.glb) shapes and evolutions.
+//! energy history as CSV and as an SVG plot; masks and overlays of image jobs; glTF (.glb) shapes and evolutions;
+//! VTK PolyData (.vtp) and time series (.pvd).
 
 mod colors;
 mod domain_node;
@@ -8,17 +9,21 @@ mod energy_svg;
 mod fill;
 mod gltf;
 mod image_results;
+mod label_files;
 mod objects;
 mod shape_json;
+mod vtk;
 
 pub use domain_node::{DomainOutline, DOMAIN_NODE};
 pub use energy_csv::energy_csv;
 pub use energy_svg::energy_svg;
 pub use fill::{region_triangles, ribbon, Filled};
 pub use gltf::{evolution_glb, shape_glb, ColorField, GltfFrame, FRAME_SECONDS};
-pub use image_results::{mask, mask_png, overlay_png, to_pixel};
-pub use objects::{labels_png, objects, objects_csv, ObjectRow};
+pub use image_results::{mask, mask_png, overlay_png, to_array_coordinates, to_pixel, to_world};
+pub use label_files::{labels_tiff, rois_zip};
+pub use objects::{array_shape, labels_array, labels_png, object_elements, objects, objects_csv, ObjectRow};
 pub use shape_json::shape_json;
+pub use vtk::{pvd, vtp, VtkCells, VtkPiece};
 
 use crate::flow::MeshData;
 

@@ -33,19 +33,30 @@ pub struct ObjectRow {
     pub mean_intensity: f64,
     /// Number of the object's pixels (voxels).
     pub pixels: usize,
+    /// (Addition) scikit-image's `regionprops` of the label in the label image
+    /// as an array ([`labels_array`]): its number of pixels (`area`, `num_pixels`)…
+    pub num_pixels: usize,
+    /// … the mean of their array indices (`centroid-0`, `-1`(, `-2`): 2D
+    /// `(row, column)`, 3D `(plane, row, column)`)…
+    pub array_centroid: Vec<f64>,
+    /// … and their half-open box (`bbox-0` … : the smallest indices, then the
+    /// largest plus one).
+    pub array_bbox: Vec<usize>,
 }
 
-/// The label image (grid order, 2D rows from the bottom) and the table.
-pub fn objects(image: &Grid, mesh: &MeshData) -> (Vec<u16>, Vec<ObjectRow>) {
+/// An object's area (volume), perimeter (surface area) and centroid in unit-box
+/// units, and its elements.
+type Measured = (f64, f64, Vec<f64>, Vec<usize>);
+
+/// The objects of `mesh` in the order of their labels (reading order of their centroids).
+fn measured_objects(image: &Grid, mesh: &MeshData) -> Vec<Measured> {
     let groups = match mesh.dimension {
         2 => mesh.to_mesh_unvalidated::<2>().map(|m| group(&m)),
         _ => mesh.to_mesh_unvalidated::<3>().map(|m| group(&m)),
     }
     .unwrap_or_default();
-    let l = image.scale();
-    let d = image.dims;
     // measures from the shape: Σ over elements of the divergence-theorem integrands
-    let mut shapes: Vec<(f64, f64, Vec<f64>, Vec<usize>)> = Vec::new();
+    let mut shapes: Vec<Measured> = Vec::new();
     for elements in &groups {
         let (mut size, mut boundary, mut moment) = (0.0, 0.0, vec![0.0; mesh.dimension]);
         for &e in elements {
@@ -78,6 +89,19 @@ pub fn objects(image: &Grid, mesh: &MeshData) -> (Vec<u16>, Vec<ObjectRow>) {
         let (ka, kb) = (key(&a.2), key(&b.2));
         ka.iter().zip(&kb).map(|(x, y)| x.total_cmp(y)).find(|o| o.is_ne()).unwrap_or(std::cmp::Ordering::Equal)
     });
+    shapes
+}
+
+/// The elements of each object, in the order of their labels (label `k + 1` at `k`).
+pub fn object_elements(image: &Grid, mesh: &MeshData) -> Vec<Vec<usize>> {
+    measured_objects(image, mesh).into_iter().map(|o| o.3).collect()
+}
+
+/// The label image (grid order, 2D rows from the bottom) and the table.
+pub fn objects(image: &Grid, mesh: &MeshData) -> (Vec<u16>, Vec<ObjectRow>) {
+    let shapes = measured_objects(image, mesh);
+    let l = image.scale();
+    let d = image.dims;
     // every object's pixels are found on the positions of the whole mesh, made once
     let (pos2, pos3): (Vec<Point<2>>, Vec<Point<3>>) = if mesh.dimension == 2 {
         (mesh.positions.iter().map(|p| Point::<2>::new(p[0], p[1])).collect(), Vec::new())
@@ -148,9 +172,81 @@ pub fn objects(image: &Grid, mesh: &MeshData) -> (Vec<u16>, Vec<ObjectRow>) {
             bbox_max,
             mean_intensity: if count > 0 { sum / count as f64 } else { f64::NAN },
             pixels: count,
+            num_pixels: 0,
+            array_centroid: vec![f64::NAN; mesh.dimension],
+            array_bbox: vec![0; 2 * mesh.dimension],
         });
     }
+    let shape = array_shape(image);
+    let measures = label_measures(&labels_array(image, &labels), &shape, rows.len());
+    for (row, m) in rows.iter_mut().zip(measures) {
+        (row.num_pixels, row.array_centroid, row.array_bbox) = m;
+    }
     (labels, rows)
+}
+
+/// The shape of the image as an array: 2D `(rows, columns)`, 3D `(planes, rows, columns)`.
+pub fn array_shape(image: &Grid) -> Vec<usize> {
+    let d = image.dims;
+    if image.dimension == 2 {
+        vec![d[1], d[0]]
+    } else {
+        vec![d[2], d[1], d[0]]
+    }
+}
+
+/// Grid-order labels in the order of the image as an array (C order of
+/// [`array_shape`]): 2D rows from the top as in the file, 3D the grid's own order.
+pub fn labels_array(image: &Grid, labels: &[u16]) -> Vec<u16> {
+    let [w, h, _] = image.dims;
+    if image.dimension != 2 {
+        return labels.to_vec();
+    }
+    let mut out = vec![0u16; w * h];
+    for j in 0..h {
+        out[(h - 1 - j) * w..(h - j) * w].copy_from_slice(&labels[j * w..(j + 1) * w]);
+    }
+    out
+}
+
+/// For labels `1..=count` of a C-order label array of `shape`: the number of
+/// its samples, the mean of their indices and their half-open bounding box (as
+/// scikit-image's `regionprops`; NaN centroid and an empty box for an absent label).
+fn label_measures(labels: &[u16], shape: &[usize], count: usize) -> Vec<(usize, Vec<f64>, Vec<usize>)> {
+    let d = shape.len();
+    let mut n = vec![0usize; count];
+    let mut sums = vec![vec![0.0f64; d]; count];
+    let mut lo = vec![vec![usize::MAX; d]; count];
+    let mut hi = vec![vec![0usize; d]; count];
+    let mut index = vec![0usize; d];
+    for &l in labels {
+        if l > 0 && (l as usize) <= count {
+            let o = l as usize - 1;
+            n[o] += 1;
+            for a in 0..d {
+                sums[o][a] += index[a] as f64;
+                lo[o][a] = lo[o][a].min(index[a]);
+                hi[o][a] = hi[o][a].max(index[a] + 1);
+            }
+        }
+        // the next index in C order
+        for a in (0..d).rev() {
+            index[a] += 1;
+            if index[a] < shape[a] {
+                break;
+            }
+            index[a] = 0;
+        }
+    }
+    (0..count)
+        .map(|o| {
+            if n[o] == 0 {
+                return (0, vec![f64::NAN; d], vec![0; 2 * d]);
+            }
+            let centroid = sums[o].iter().map(|s| s / n[o] as f64).collect();
+            (n[o], centroid, lo[o].iter().chain(&hi[o]).copied().collect())
+        })
+        .collect()
 }
 
 /// The elements of each object ([`Mesh::objects`]), objects in the order of their
@@ -177,13 +273,7 @@ fn group<const D: usize>(mesh: &Mesh<D>) -> Vec<Vec<usize>> {
 /// encoder takes native-endian samples).
 pub fn labels_png(image: &Grid, labels: &[u16]) -> Vec<u8> {
     let [w, h, _] = image.dims;
-    let mut bytes = vec![0u8; 2 * w * h];
-    for j in 0..h {
-        for i in 0..w {
-            let o = 2 * (i + w * (h - 1 - j));
-            bytes[o..o + 2].copy_from_slice(&labels[i + w * j].to_ne_bytes());
-        }
-    }
+    let bytes: Vec<u8> = labels_array(image, labels).iter().flat_map(|l| l.to_ne_bytes()).collect();
     let mut out = Vec::new();
     PngEncoder::new(&mut out)
         .write_image(&bytes, w as u32, h as u32, ExtendedColorType::L16)
@@ -192,20 +282,33 @@ pub fn labels_png(image: &Grid, labels: &[u16]) -> Vec<u8> {
 }
 
 /// objects.csv: one line per object (the columns of [`ObjectRow`]; 2D: `area`,
-/// `perimeter`, `x`, `y`; 3D: `volume`, `surface_area`, `x`, `y`, `z`).
+/// `perimeter`, `x`, `y`; 3D: `volume`, `surface_area`, `x`, `y`, `z`), then
+/// scikit-image's columns of the label image (`num_pixels`, `centroid-0` …,
+/// `bbox-0` …: see [`ObjectRow::array_bbox`]).
 pub fn objects_csv(dimension: usize, rows: &[ObjectRow]) -> String {
     let mut out = String::new();
     if dimension == 2 {
-        out.push_str("label,area,perimeter,centroid_x,centroid_y,bbox_min_x,bbox_min_y,bbox_max_x,bbox_max_y,mean_intensity,pixels\n");
+        out.push_str("label,area,perimeter,centroid_x,centroid_y,bbox_min_x,bbox_min_y,bbox_max_x,bbox_max_y,mean_intensity,pixels");
     } else {
-        out.push_str("label,volume,surface_area,centroid_x,centroid_y,centroid_z,bbox_min_x,bbox_min_y,bbox_min_z,bbox_max_x,bbox_max_y,bbox_max_z,mean_intensity,pixels\n");
+        out.push_str("label,volume,surface_area,centroid_x,centroid_y,centroid_z,bbox_min_x,bbox_min_y,bbox_min_z,bbox_max_x,bbox_max_y,bbox_max_z,mean_intensity,pixels");
     }
+    out.push_str(",num_pixels");
+    for a in 0..dimension {
+        out.push_str(&format!(",centroid-{a}"));
+    }
+    for a in 0..2 * dimension {
+        out.push_str(&format!(",bbox-{a}"));
+    }
+    out.push('\n');
     for r in rows {
         let mut cols = vec![r.label.to_string(), format!("{:.4}", r.size), format!("{:.4}", r.boundary)];
         cols.extend(r.centroid.iter().map(|c| format!("{c:.4}")));
         cols.extend(r.bbox_min.iter().chain(&r.bbox_max).map(|v| v.to_string()));
         cols.push(format!("{:.6}", r.mean_intensity));
         cols.push(r.pixels.to_string());
+        cols.push(r.num_pixels.to_string());
+        cols.extend(r.array_centroid.iter().map(|c| format!("{c:.4}")));
+        cols.extend(r.array_bbox.iter().map(|v| v.to_string()));
         out.push_str(&cols.join(","));
         out.push('\n');
     }
@@ -237,9 +340,17 @@ mod tests {
         assert!((rows[0].centroid[0] - 29.5).abs() < 1e-6 && (rows[0].centroid[1] - 29.5).abs() < 1e-6);
         assert!((rows[0].mean_intensity - 29.5).abs() < 0.5);
         assert_eq!(labels.iter().filter(|&&l| l == 2).count(), rows[1].pixels);
+        // scikit-image's measures of the label image: (row, column), half-open box
+        assert_eq!(rows[1].num_pixels, rows[1].pixels);
+        let c = &rows[0].array_centroid;
+        assert!((c[0] - 29.5).abs() < 0.2 && (c[1] - 29.5).abs() < 0.2, "{c:?}");
+        let b = &rows[0].array_bbox;
+        assert!(b[0] >= 19 && b[0] <= 20 && b[2] >= 39 && b[2] <= 40 && b[2] - b[0] == b[3] - b[1], "{b:?}");
         assert!((rows[1].pixels as f64 - pi * 200.0).abs() < 15.0);
         let csv = objects_csv(2, &rows);
         assert_eq!(csv.lines().count(), 3);
+        assert!(csv.lines().next().unwrap().ends_with(",num_pixels,centroid-0,centroid-1,bbox-0,bbox-1,bbox-2,bbox-3"));
+        assert_eq!(csv.lines().nth(1).unwrap().split(',').count(), 18);
         assert!(labels_png(&image, &labels).starts_with(b"\x89PNG"));
     }
 }

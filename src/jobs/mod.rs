@@ -2,7 +2,7 @@
 //! the JSON Schema and its Markdown reference), its translation into a mesh, a
 //! problem and flow settings (`prepare`), the run of a prepared job with progress
 //! and checkpoint callbacks (`run`), the stored states with their fields
-//! (`frames`) and the result files of a run (`results`).
+//! (`frames`) and the result files of a run (`results`, `vtk_files`).
 //! No I/O: input files arrive as bytes.
 
 mod estimate;
@@ -15,6 +15,7 @@ mod run;
 mod schema;
 mod schema_doc;
 mod spec;
+mod vtk_files;
 
 pub use crate::formats::{read_mesh_file, MeshFileError};
 pub use crate::geometry::AnyMesh;
@@ -34,3 +35,4 @@ pub use spec::{
     LimitsSpec, MeansKind, MeshSpec, OutputSpec, Polarity, ProblemSpec, SegmentationModel, SegmentationSpec,
     ShapeDesignSpec, Size, SpecError, StressedFilmSpec, TargetSpec,
 };
+pub use vtk_files::{frame_vtp, vtk_series, zip_files, EVOLUTION_VTK_ZIP};

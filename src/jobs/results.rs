@@ -2,8 +2,11 @@
 //! service) and what its latest state shows ([`result_state`]).
 
 use super::frames::{Frame, GlbContext};
+use super::vtk_files::{frame_vtp, vtk_series, zip_files, EVOLUTION_VTK_ZIP};
 use super::PreparedJob;
-use crate::export::{labels_png, mask, mask_png, objects, objects_csv, overlay_png, shape_json, ObjectRow};
+use crate::export::{
+    labels_png, labels_tiff, mask, mask_png, objects, objects_csv, overlay_png, rois_zip, shape_json, ObjectRow,
+};
 use crate::flow::{Checkpoint, MeshData};
 use crate::geometry::{loop_area, Point};
 use crate::imaging::{encode_nifti_labels, encode_nifti_mask, encode_nrrd_labels, encode_nrrd_mask, Grid};
@@ -124,6 +127,8 @@ impl<'a> StateResults<'a> {
             "mask.nii.gz" => encode_nifti_mask(img, self.mask(img)),
             "labels.nii.gz" => encode_nifti_labels(img, &self.objects(img).0),
             "objects.csv" => objects_csv(img.dimension, &self.objects(img).1).into_bytes(),
+            "labels.tif" | "labels.ome.tif" => labels_tiff(img, &self.objects(img).0),
+            "rois.zip" => rois_zip(img, self.found()),
             _ => return None,
         };
         Some((media, bytes))
@@ -132,7 +137,8 @@ impl<'a> StateResults<'a> {
 
 /// Names and media types of the image results of a 2D image or a volume: the
 /// mask, the overlay (2D), the label image (volumes: both as NRRD and as NIfTI-1)
-/// and the table of objects.
+/// and the table of objects; then (additions) the label image as TIFF (2D) or
+/// OME-TIFF (volumes) and the contours as an ImageJ ROI set (2D).
 pub fn image_result_names(dimension: usize) -> &'static [(&'static str, &'static str)] {
     if dimension == 2 {
         &[
@@ -140,6 +146,8 @@ pub fn image_result_names(dimension: usize) -> &'static [(&'static str, &'static
             ("overlay.png", "image/png"),
             ("labels.png", "image/png"),
             ("objects.csv", "text/csv"),
+            ("labels.tif", "image/tiff"),
+            ("rois.zip", "application/zip"),
         ]
     } else {
         &[
@@ -148,6 +156,7 @@ pub fn image_result_names(dimension: usize) -> &'static [(&'static str, &'static
             ("mask.nii.gz", "application/gzip"),
             ("labels.nii.gz", "application/gzip"),
             ("objects.csv", "text/csv"),
+            ("labels.ome.tif", "image/tiff"),
         ]
     }
 }
@@ -161,8 +170,9 @@ pub struct ResultFile {
 }
 
 /// The result files of a run whose frames (checkpoints with their fields, the
-/// last one its final state) are `frames`: shape.json and shape.glb of what the
-/// final state shows ([`result_state`]), evolution.glb of every frame, and for an
+/// last one its final state) are `frames`: shape.json, shape.glb and shape.vtp of what the
+/// final state shows ([`result_state`]), evolution.glb and the VTK time series
+/// (evolution_vtk.zip: evolution.pvd and its frames) of every frame, and for an
 /// image job its mask, overlay, label image and table of objects
 /// ([`image_result_names`]). Empty if there is no frame. The CLI writes these to
 /// its output directory; the service stores them when a job ends.
@@ -178,6 +188,11 @@ pub fn result_files(job: &PreparedJob, frames: &[Frame]) -> Vec<ResultFile> {
         (evolution.join().expect("evolution.glb panicked"), state)
     });
     files.extend(evolution.map(|bytes| ResultFile { name: "evolution.glb".into(), media_type: GLB.into(), bytes }));
+    files.push(ResultFile {
+        name: EVOLUTION_VTK_ZIP.into(),
+        media_type: "application/zip".into(),
+        bytes: zip_files(&vtk_series(job, frames)),
+    });
     files.extend(image_files);
     files
 }
@@ -194,6 +209,7 @@ fn state_files(job: &PreparedJob, context: &GlbContext, frames: &[Frame]) -> (Ve
     let shape = vec![
         ResultFile { name: "shape.json".into(), media_type: "application/json".into(), bytes: json },
         ResultFile { name: "shape.glb".into(), media_type: GLB.into(), bytes: context.frame_glb(&shown_frame) },
+        ResultFile { name: "shape.vtp".into(), media_type: VTP.into(), bytes: frame_vtp(job, &shown_frame) },
     ];
     let names = job.image.as_deref().map_or(&[][..], |img| image_result_names(img.dimension));
     let images = names
@@ -211,3 +227,6 @@ fn state_files(job: &PreparedJob, context: &GlbContext, frames: &[Frame]) -> (Ve
 
 /// The media type of glTF binary files.
 pub const GLB: &str = "model/gltf-binary";
+
+/// The media type of VTK PolyData files (XML).
+pub const VTP: &str = "application/xml";

@@ -59,6 +59,11 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("GET", "/v1/jobs/{id}/results/mask.nii.gz"),
     ("GET", "/v1/jobs/{id}/results/labels.nii.gz"),
     ("GET", "/v1/jobs/{id}/results/objects.csv"),
+    ("GET", "/v1/jobs/{id}/results/labels.tif"),
+    ("GET", "/v1/jobs/{id}/results/labels.ome.tif"),
+    ("GET", "/v1/jobs/{id}/results/rois.zip"),
+    ("GET", "/v1/jobs/{id}/results/shape.vtp"),
+    ("GET", "/v1/jobs/{id}/results/evolution_vtk.zip"),
     ("GET", "/v1/jobs/{id}/checkpoints"),
     ("GET", "/v1/jobs/{id}/checkpoints/{n}.glb"),
 ];

@@ -12,7 +12,8 @@ use super::thinned::Thinned;
 use super::{blocking, find};
 use crate::export::shape_json;
 use crate::jobs::{
-    evolution_frames_of, image_result_names, parse_spec, prepare, result_files, Frame, GlbContext, PreparedJob, GLB,
+    evolution_frames_of, image_result_names, parse_spec, prepare, result_files, Frame, GlbContext, PreparedJob,
+    EVOLUTION_VTK_ZIP, GLB,
 };
 use crate::service::store::{JobRow, ResultIndex, Which};
 use crate::service::wire::{Manifest, ResultFile};
@@ -156,8 +157,18 @@ pub(super) async fn image_result(
     State(state): State<AppState>,
     Path((id, file)): Path<(String, String)>,
 ) -> Result<Response, ApiError> {
-    let known = [2, 3].iter().any(|&d| image_result_names(d).iter().any(|(n, _)| *n == file));
     let row = find(&state, &id).await?;
+    // the VTK files of every job, written when it ends
+    if ["shape.vtp", EVOLUTION_VTK_ZIP].contains(&file.as_str()) {
+        return match stored(&state, &id, &file).await? {
+            Some(r) => Ok(r),
+            None => Err(ApiError::NotFound(format!(
+                "job {id} is {}: its VTK files are written when it ends",
+                row.status.as_str()
+            ))),
+        };
+    }
+    let known = [2, 3].iter().any(|&d| image_result_names(d).iter().any(|(n, _)| *n == file));
     if !known {
         return Err(ApiError::NotFound(format!(
             "no result {file:?}; GET /v1/jobs/{id}/results lists this job's files"
