@@ -3,9 +3,8 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use shapeflow::export::{energy_csv, energy_svg};
 use shapeflow::flow::{Checkpoint, Progress};
-use shapeflow::jobs::{parse_spec, prepare, result_files, run_with_frames, vtk_series, RunEvents};
+use shapeflow::jobs::{output_files, parse_spec, prepare, run_with_frames, RunEvents};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -584,28 +583,20 @@ fn run(spec_path: &Path, out: &Path, inputs: &[String], resume: Option<&Path>) -
         }
     };
     let writing = std::time::Instant::now();
-    let write = |name: &str, data: &[u8]| -> Result<()> {
-        let p = out.join(name);
-        std::fs::write(&p, data).with_context(|| format!("cannot write {}", p.display()))
-    };
-    // the result files of the run's frames (the last one its final state);
-    // checkpoint.json keeps the flow's state for --resume
+    // the result files of the run's frames (the last one its final state), the VTK
+    // time series unpacked beside its zip, the history, and checkpoint.json with
+    // the flow's state for --resume
     let mut written = Vec::new();
-    for file in result_files(&job, &frames) {
-        write(&file.name, &file.bytes)?;
-        written.push(file.name);
+    for (name, bytes) in output_files(&job, &frames, &rep.history, &last, &spec_path.display().to_string()) {
+        let p = out.join(&name);
+        if let Some(dir) = p.parent() {
+            std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        }
+        std::fs::write(&p, bytes).with_context(|| format!("cannot write {}", p.display()))?;
+        if !name.starts_with("evolution/") {
+            written.push(name);
+        }
     }
-    // the VTK time series unpacked beside its zip, for ParaView to open as it is
-    std::fs::create_dir_all(out.join("evolution"))
-        .with_context(|| format!("cannot create {}", out.join("evolution").display()))?;
-    for (name, bytes) in vtk_series(&job, &frames) {
-        write(&name, &bytes)?;
-    }
-    written.push("evolution.pvd (evolution/*.vtp)".into());
-    write("energy.csv", energy_csv(&rep.history).as_bytes())?;
-    write("energy.svg", energy_svg(&rep.history, &spec_path.display().to_string()).as_bytes())?;
-    write("checkpoint.json", serde_json::to_string(&last)?.as_bytes())?;
-    written.extend(["energy.csv", "energy.svg", "checkpoint.json"].map(std::borrow::Cow::from));
     say(format_args!("wrote {} in {}", written.join(", "), out.display()));
     say(format_args!(
         "took {:.3} s to prepare (inputs decoded, preprocessed, initial shape), {:.3} s to run, {:.3} s to write the results",

@@ -198,13 +198,19 @@ pub fn array_shape(image: &Grid) -> Vec<usize> {
 /// Grid-order labels in the order of the image as an array (C order of
 /// [`array_shape`]): 2D rows from the top as in the file, 3D the grid's own order.
 pub fn labels_array(image: &Grid, labels: &[u16]) -> Vec<u16> {
+    array_order(image, labels)
+}
+
+/// Grid-order samples (labels, a mask) in the order of the image as an array,
+/// as [`labels_array`].
+pub fn array_order<T: Copy>(image: &Grid, values: &[T]) -> Vec<T> {
     let [w, h, _] = image.dims;
     if image.dimension != 2 {
-        return labels.to_vec();
+        return values.to_vec();
     }
-    let mut out = vec![0u16; w * h];
-    for j in 0..h {
-        out[(h - 1 - j) * w..(h - j) * w].copy_from_slice(&labels[j * w..(j + 1) * w]);
+    let mut out = Vec::with_capacity(w * h);
+    for j in (0..h).rev() {
+        out.extend_from_slice(&values[j * w..(j + 1) * w]);
     }
     out
 }

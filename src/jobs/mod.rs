@@ -9,6 +9,7 @@ mod estimate;
 mod frames;
 mod kept;
 mod necks;
+mod outputs;
 mod prepare;
 mod results;
 mod run;
@@ -25,8 +26,9 @@ pub use frames::{
 };
 pub use kept::{run_with_frames, KeptFrames, FRAMES_AHEAD};
 pub use necks::NeckSplit;
+pub use outputs::output_files;
 pub use prepare::{default_min_size, default_mu, default_mu_in, prepare, PreparedJob, ProblemKind, SegmentationSetup};
-pub use results::{image_result_names, result_files, result_state, ResultFile, StateResults, GLB};
+pub use results::{image_result_names, result_files, result_state, ImageArrays, ResultFile, StateResults, GLB};
 pub use run::{run_prepared, run_vertex_fields, vertex_fields, JobFailure, JobOutcome, RunEvents};
 pub use schema::{job_spec_schema, openapi_schemas};
 pub use schema_doc::job_spec_reference;

@@ -5,7 +5,8 @@ use super::frames::{Frame, GlbContext};
 use super::vtk_files::{frame_vtp, vtk_series, zip_files, EVOLUTION_VTK_ZIP};
 use super::PreparedJob;
 use crate::export::{
-    labels_png, labels_tiff, mask, mask_png, objects, objects_csv, overlay_png, rois_zip, shape_json, ObjectRow,
+    array_order, array_shape, labels_png, labels_tiff, mask, mask_png, objects, objects_csv, overlay_png, rois_zip,
+    shape_json, ObjectRow,
 };
 use crate::flow::{Checkpoint, MeshData};
 use crate::geometry::{loop_area, Point};
@@ -132,6 +133,31 @@ impl<'a> StateResults<'a> {
             _ => return None,
         };
         Some((media, bytes))
+    }
+}
+
+/// An image job's results as arrays in the order of the image as an array
+/// (2D `(row, column)` rows from the top, 3D `(plane, row, column)`; C order of `shape`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImageArrays {
+    pub shape: Vec<usize>,
+    pub mask: Vec<bool>,
+    pub labels: Vec<u16>,
+    pub objects: Vec<ObjectRow>,
+}
+
+impl StateResults<'_> {
+    /// The mask, the label image and the table of objects of an image job as
+    /// arrays ([`ImageArrays`]); `None` for a job without an image.
+    pub fn image_arrays(&self) -> Option<ImageArrays> {
+        let img = self.job.image.as_deref()?;
+        let (labels, objects) = self.objects(img);
+        Some(ImageArrays {
+            shape: array_shape(img),
+            mask: array_order(img, self.mask(img)),
+            labels: array_order(img, labels),
+            objects: objects.clone(),
+        })
     }
 }
 
