@@ -44,7 +44,7 @@ fn array_file<'py>(
 ) -> PyResult<Bound<'py, PyBytes>> {
     let bytes = data.as_slice().map_err(|e| PyValueError::new_err(format!("input {name:?}: {e}")))?;
     let file = arrays::array_file(dtype, &shape, bytes, spacing).map_err(|m| {
-        spec_error(py, shapeflow::jobs::SpecError::new(format!("inputs[{name:?}]"), format!("the array {m}")))
+        spec_error(py, shapeflow::jobs::SpecError::new(format!("inputs['{name}']"), format!("the array {m}")))
     })?;
     Ok(PyBytes::new(py, &file))
 }

@@ -166,8 +166,9 @@ pub fn decode_tiff_stack_plane(
         let (c, t) = (channel.unwrap_or(0), plane.time_point.unwrap_or(0));
         return Err(fail(format!("holds no page of channel {c} at time point {t}")));
     };
-    if slices == 1 && planes_of {
-        // one page of the channel and time point chosen: a 2D image
+    if slices == 1 && (planes_of || page == 1) {
+        // one page of the channel and time point chosen, or a file of one page
+        // (a float TIFF, which the 2D image reader does not take): a 2D image
         return Ok(Grid::new(2, [dims[0], dims[1], 1], values, kind));
     }
     limits.check(input, &[dims[0], dims[1], slices]).map_err(|e| match &meta {

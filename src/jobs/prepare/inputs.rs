@@ -65,7 +65,11 @@ pub(super) fn load_image(
             } else if is_tiff(bytes) && tiff_pages(bytes, 2) > 1 {
                 decode_tiff_stack_plane(key, bytes, &limits, plane)
             } else {
-                let image = decode_image_channel(key, bytes, &limits, plane.channel);
+                let mut image = decode_image_channel(key, bytes, &limits, plane.channel);
+                if let (Err(first), true) = (&image, is_tiff(bytes)) {
+                    // a TIFF of one page the 2D reader does not take (float samples)
+                    image = decode_tiff_stack_plane(key, bytes, &limits, plane).map_err(|_| first.clone());
+                }
                 one_time_point(key, image, "is an image of one time point")
             };
             grid.map_err(field)
