@@ -67,7 +67,19 @@ fn an_ended_jobs_files_are_stored_blobs_served_as_stored() {
     assert_eq!(sets.len(), 1, "{sets:?}");
     let (_, manifest) = srv.json("GET", &format!("/v1/jobs/{id}/results"), None);
     let names: Vec<&str> = manifest["files"].as_array().unwrap().iter().map(|f| f["name"].as_str().unwrap()).collect();
-    assert_eq!(names, ["energy", "energy.csv", "energy.svg", "shape.json", "shape.glb", "evolution.glb"]);
+    assert_eq!(
+        names,
+        [
+            "energy",
+            "energy.csv",
+            "energy.svg",
+            "shape.json",
+            "shape.glb",
+            "shape.vtp",
+            "evolution.glb",
+            "evolution_vtk.zip"
+        ]
+    );
     for name in &names[3..] {
         let stored = std::fs::read(sets[0].join(name)).unwrap();
         let (s, head, served) = download(srv.addr, &format!("/v1/jobs/{id}/results/{name}"));
@@ -164,7 +176,7 @@ fn an_ended_job_without_stored_files_gets_them_on_first_request() {
     std::fs::remove_file(frames.join("50.e1.json")).unwrap();
     // the first request computes and stores them; they match what the worker made
     let (_, manifest) = srv.json("GET", &format!("/v1/jobs/{id}/results"), None);
-    assert_eq!(manifest["files"].as_array().unwrap().len(), 6, "{manifest}");
+    assert_eq!(manifest["files"].as_array().unwrap().len(), 8, "{manifest}");
     assert_eq!(result_sets(dir.path(), &id).len(), 1);
     assert_eq!(download(srv.addr, &format!("/v1/jobs/{id}/results/shape.json")).2, shape_before);
     let (s, _, bytes) = download(srv.addr, &format!("/v1/jobs/{id}/checkpoints/50.glb"));
