@@ -5,10 +5,11 @@
 
 use super::image_results::to_pixel;
 use super::objects::{labels_array, object_elements};
+use super::zip_files::zip_files;
 use crate::flow::MeshData;
 use crate::geometry::segment_cycles;
 use crate::imaging::Grid;
-use std::io::{Cursor, Write};
+use std::io::Cursor;
 use tiff::encoder::{colortype::Gray16, TiffEncoder};
 use tiff::tags::Tag;
 
@@ -56,8 +57,7 @@ fn ome_xml(image: &Grid) -> String {
 /// from the top). A contour of more than 65535 vertices is thinned to that
 /// many (the format's limit).
 pub fn rois_zip(image: &Grid, mesh: &MeshData) -> Vec<u8> {
-    let mut zip = zip::ZipWriter::new(Cursor::new(Vec::new()));
-    let options = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+    let mut files = Vec::new();
     for (k, elements) in object_elements(image, mesh).iter().enumerate() {
         let n = mesh.positions.len();
         let cycles = segment_cycles(n, elements.iter().map(|&e| (mesh.elements[e][0], mesh.elements[e][1])));
@@ -72,11 +72,10 @@ pub fn rois_zip(image: &Grid, mesh: &MeshData) -> Vec<u8> {
                 })
                 .collect();
             let name = format!("{:04}-{}", k + 1, c + 1);
-            zip.start_file(format!("{name}.roi"), options).expect("a zip entry in memory");
-            zip.write_all(&polygon_roi(&points, &name)).expect("writing to memory");
+            files.push((format!("{name}.roi"), polygon_roi(&points, &name)));
         }
     }
-    zip.finish().expect("a zip in memory").into_inner()
+    zip_files(&files)
 }
 
 /// One ImageJ ROI file (`Iout`, version 228, big-endian): a polygon with its

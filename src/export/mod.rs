@@ -13,6 +13,7 @@ mod label_files;
 mod objects;
 mod shape_json;
 mod vtk;
+mod zip_files;
 
 pub use domain_node::{DomainOutline, DOMAIN_NODE};
 pub use energy_csv::energy_csv;
@@ -26,6 +27,7 @@ pub use objects::{
 };
 pub use shape_json::shape_json;
 pub use vtk::{pvd, vtp, VtkCells, VtkPiece};
+pub use zip_files::zip_files;
 
 use crate::flow::MeshData;
 

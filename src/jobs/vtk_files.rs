@@ -6,9 +6,9 @@
 
 use super::frames::Frame;
 use super::PreparedJob;
+pub use crate::export::zip_files;
 use crate::export::{pvd, to_world, vtp, VtkCells, VtkPiece};
 use crate::geometry::components;
-use std::io::Write;
 
 /// The name of the zip of the time series among the result files.
 pub const EVOLUTION_VTK_ZIP: &str = "evolution_vtk.zip";
@@ -73,16 +73,4 @@ pub fn vtk_series(job: &PreparedJob, frames: &[Frame]) -> Vec<(String, Vec<u8>)>
     let mut files = vec![("evolution.pvd".to_string(), pvd(&steps))];
     files.extend(names.into_iter().zip(frames).map(|(name, f)| (name, frame_vtp(job, f))));
     files
-}
-
-/// `files` as one zip (deflated), in their order.
-pub fn zip_files(files: &[(String, Vec<u8>)]) -> Vec<u8> {
-    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
-    let options = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
-    for (name, bytes) in files {
-        // writing to memory fails only on a name the format cannot hold, which ours are not
-        zip.start_file(name.as_str(), options).expect("a zip entry in memory");
-        zip.write_all(bytes).expect("writing to memory");
-    }
-    zip.finish().expect("a zip in memory").into_inner()
 }
