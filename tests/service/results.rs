@@ -85,7 +85,12 @@ fn an_ended_jobs_files_are_stored_blobs_served_as_stored() {
         let (s, head, served) = download(srv.addr, &format!("/v1/jobs/{id}/results/{name}"));
         assert_eq!(s, 200);
         assert_eq!(served, stored, "{name} is served as stored");
-        let media = if name.ends_with(".glb") { "model/gltf-binary" } else { "application/json" };
+        let media = match name.rsplit('.').next() {
+            Some("glb") => "model/gltf-binary",
+            Some("vtp") => "application/xml",
+            Some("zip") => "application/zip",
+            _ => "application/json",
+        };
         assert!(head.to_ascii_lowercase().contains(media), "{head}");
     }
     // served, not rebuilt: a changed blob is what the next GET returns

@@ -28,8 +28,12 @@ pub(super) async fn events(
 ) -> Result<Response, ApiError> {
     use axum::response::sse::{Event, KeepAlive, Sse};
     find(&state, &id).await?;
-    let after: Option<usize> =
-        headers.get("last-event-id").and_then(|v| v.to_str().ok()).and_then(|v| v.trim().parse().ok());
+    let after: Option<usize> = match headers.get("last-event-id") {
+        None => None,
+        Some(v) => Some(v.to_str().ok().and_then(|v| v.trim().parse().ok()).ok_or_else(|| {
+            ApiError::BadRequest("Last-Event-ID: must be the id of an event of this stream (an iteration number)".into())
+        })?),
+    };
     struct Cursor {
         state: AppState,
         id: String,

@@ -65,9 +65,10 @@ pub(super) async fn index() -> Response {
     ([(header::CONTENT_TYPE, "text/html; charset=utf-8"), (header::CACHE_CONTROL, "no-cache")], INDEX).into_response()
 }
 
-/// `GET /jobs/{id}`: the page, opened on one job.
-pub(super) async fn job_page(Path(_id): Path<String>) -> Response {
-    index().await
+/// `GET /jobs/{id}`: the page, opened on one job; 404 for what cannot be a job's id.
+pub(super) async fn job_page(Path(id): Path<String>) -> Result<Response, ApiError> {
+    uuid::Uuid::parse_str(&id).map_err(|_| ApiError::NotFound(format!("no job {id}: a job's id is a UUID")))?;
+    Ok(index().await)
 }
 
 /// `GET /ui/{path}`: one of the page's files.
