@@ -6,9 +6,9 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 venv=../target/python-venv
-if [ ! -x "$venv/bin/pytest" ]; then
+if [ ! -x "$venv/bin/schemathesis" ]; then
     python3 -m venv "$venv"
-    "$venv/bin/pip" install --quiet --disable-pip-version-check maturin pytest numpy scikit-image tifffile roifile pyvista
+    "$venv/bin/pip" install --quiet --disable-pip-version-check maturin pytest numpy scikit-image tifffile roifile pyvista schemathesis
 fi
 [ -x ../target/debug/shapeflow ] || cargo build --quiet --bin shapeflow
 rm -rf ../target/wheels

@@ -1,6 +1,7 @@
 """Shared pieces of the Python package's tests: synthetic images (made here, with
 a seed, not read from the repository), the CLI binary and a live service."""
 
+import contextlib
 import os
 import shutil
 import socket
@@ -48,8 +49,8 @@ def workdir():
     shutil.rmtree(d, ignore_errors=True)
 
 
-@pytest.fixture(scope="session")
-def service(cli):
+@contextlib.contextmanager
+def serving(cli):
     """A real `shapeflow serve` on a free loopback port with its own data directory; its URL."""
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -75,3 +76,10 @@ def service(cli):
         proc.terminate()
         proc.wait(timeout=20)
         shutil.rmtree(data, ignore_errors=True)
+
+
+@pytest.fixture(scope="session")
+def service(cli):
+    """A service shared by the client's tests."""
+    with serving(cli) as url:
+        yield url
