@@ -10,8 +10,8 @@ if [ ! -x "$venv/bin/schemathesis" ]; then
     python3 -m venv "$venv"
     "$venv/bin/pip" install --quiet --disable-pip-version-check maturin pytest numpy scikit-image tifffile roifile pyvista schemathesis
 fi
-[ -x ../target/debug/shapeflow ] || cargo build --quiet --bin shapeflow
+[ -x ../target/debug/shapeflow ] || (cd .. && cargo build --quiet --bin shapeflow)
 rm -rf ../target/wheels
 VIRTUAL_ENV="$PWD/$venv" "$venv/bin/maturin" build --quiet --profile dev --out ../target/wheels
 "$venv/bin/pip" install --quiet --disable-pip-version-check --force-reinstall --no-deps ../target/wheels/shapeflow-*.whl
-cd tests && "../$venv/bin/python" -m pytest -q -rs .
+cd tests && "../$venv/bin/python" -m pytest -q -rs . "$@"

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import pyvista as pv
 import roifile
+import skimage.measure
 import tifffile
 from skimage.draw import polygon2mask
 
@@ -69,11 +70,51 @@ def test_anisotropic_volume_lies_in_its_physical_extent(workdir):
     r.save(workdir)
     mesh = pv.read(str(workdir / "shape.vtp"))
     assert np.allclose(mesh.points, v[:, ::-1])  # VTK's (x, y, z)
+    # the labels on the input's own voxels, where the ball is
+    assert r.labels.shape == vol.shape and r.mask.shape == vol.shape
+    assert dice(r.labels > 0, vol > 100) > 0.9
+    assert np.array_equal(r.mask, r.labels > 0)
     ome = tifffile.TiffFile(workdir / "labels.ome.tif")
     assert ome.is_ome and ome.series[0].axes == "ZYX"
-    labels = ome.asarray()
-    assert labels.dtype == np.uint16 and labels.max() == 1
-    assert 'PhysicalSizeX="' in ome.ome_metadata
+    assert np.array_equal(ome.asarray(), r.labels)
+    pixels = ome_pixels(ome)
+    assert [float(pixels.get(f"PhysicalSize{a}")) for a in "ZYX"] == list(spacing)
+    props = skimage.measure.regionprops_table(r.labels, properties=("label", "area", "centroid", "bbox"))
+    for name, column in props.items():
+        assert np.allclose(r.objects[name], column), name
+
+
+def test_tiff_stack_labels_are_in_the_files_order(workdir):
+    # a ball near the first rows and planes of an anisotropic ImageJ stack: any
+    # flip or resampling left in the labels moves it
+    n, spacing = (20, 44, 36), (1.5, 0.75, 0.75)  # (z, y, x)
+    z, y, x = np.meshgrid(*[np.arange(k) * s for k, s in zip(n, spacing)], indexing="ij")
+    centre, radius = (11.0, 10.0, 15.0), 6.0
+    vol = np.where((z - centre[0]) ** 2 + (y - centre[1]) ** 2 + (x - centre[2]) ** 2 <= radius**2, 220, 25)
+    path = workdir / "stack.tif"
+    tifffile.imwrite(path, vol.astype(np.uint8), imagej=True, resolution=(1 / spacing[2], 1 / spacing[1]),
+                     metadata={"spacing": spacing[0], "unit": "um", "axes": "ZYX"})
+    r = shapeflow.run({"problem": {"type": "segmentation", "image": "input:volume"}, "flow": {"max_iterations": 200}},
+                      {"volume": path})
+    assert r.labels.shape == vol.shape
+    assert dice(r.labels > 0, vol > 100) > 0.9
+    # the surface over the array as tifffile reads it, in (z, y, x) physical units
+    v = r.vertices
+    assert np.allclose(v.mean(axis=0), centre, atol=0.6)
+    assert abs(np.linalg.norm(v - centre, axis=1).mean() - radius) < 0.6
+    r.save(workdir / "out")
+    assert np.array_equal(tifffile.imread(workdir / "out/labels.ome.tif"), r.labels)
+
+
+def dice(a, b):
+    return 2 * (a & b).sum() / (a.sum() + b.sum())
+
+
+def ome_pixels(ome):
+    import xml.etree.ElementTree as ET
+
+    root = ET.fromstring(ome.ome_metadata)
+    return next(e for e in root.iter() if e.tag.endswith("Pixels"))
 
 
 def test_tiff_and_rois_agree_with_the_labels(workdir):

@@ -86,11 +86,17 @@ pub fn to_world(image: &Grid, x: &[f64]) -> [f64; 3] {
 /// Unit-box coordinates to the axis order and units of the image as an array
 /// (numpy, scikit-image, napari): 2D `(row, column)`, rows from the top as in
 /// the file, in pixels; 3D the physical coordinates ([`to_world`]) reversed,
-/// `(z, y, x)`.
+/// `(z, y, x)`, with `y` counted from the first row where the input's rows run
+/// from the top (a TIFF stack or a stack of slices, placed at the origin along
+/// the axes): the physical coordinates of the array as tifffile reads it.
 pub fn to_array_coordinates(image: &Grid, x: &[f64]) -> Vec<f64> {
     if image.dimension == 2 {
-        to_pixel(image, x).into_iter().rev().collect()
-    } else {
-        to_world(image, x).into_iter().rev().collect()
+        return to_pixel(image, x).into_iter().rev().collect();
     }
+    let mut w = to_world(image, x);
+    if image.layout.rows_flipped {
+        // grid row j_in of the input (from the bottom) lies at y = s j_in
+        w[1] = (image.layout.dims[1] as f64 - 1.0) * image.input_spacing()[1] - w[1];
+    }
+    w.into_iter().rev().collect()
 }

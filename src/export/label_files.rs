@@ -13,9 +13,10 @@ use std::io::Cursor;
 use tiff::encoder::{colortype::Gray16, TiffEncoder};
 use tiff::tags::Tag;
 
-/// labels.tif (2D) or labels.ome.tif (3D) of grid-order `labels`.
+/// labels.tif (2D) or labels.ome.tif (3D) of grid-order `labels`, in the input's
+/// shape and order ([`labels_array`]).
 pub fn labels_tiff(image: &Grid, labels: &[u16]) -> Vec<u8> {
-    let [w, h, d] = image.dims;
+    let [w, h, d] = image.layout.dims;
     let array = labels_array(image, labels);
     let mut out = Cursor::new(Vec::new());
     let mut tiff = TiffEncoder::new(&mut out).expect("a TIFF in memory");
@@ -31,12 +32,12 @@ pub fn labels_tiff(image: &Grid, labels: &[u16]) -> Vec<u8> {
     out.into_inner()
 }
 
-/// The OME-XML of a volume's label image: `XYZCT`, uint16, the sample spacing
-/// of the grid's placement as `PhysicalSizeX/Y/Z` (in the input's units, which
-/// OME's readers take as its default, µm, when a file names none).
+/// The OME-XML of a volume's label image: `XYZCT`, uint16, the input's sample
+/// spacing as `PhysicalSizeX/Y/Z` (in the input's units, which OME's readers take
+/// as its default, µm, when a file names none).
 fn ome_xml(image: &Grid) -> String {
-    let [w, h, d] = image.dims;
-    let [sx, sy, sz] = image.placement.spacing();
+    let [w, h, d] = image.layout.dims;
+    let [sx, sy, sz] = image.input_spacing();
     format!(
         "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\
          <OME xmlns=\"http://www.openmicroscopy.org/Schemas/OME/2016-06\" \

@@ -187,32 +187,20 @@ pub fn objects(image: &Grid, mesh: &MeshData) -> (Vec<u16>, Vec<ObjectRow>) {
 
 /// The shape of the image as an array: 2D `(rows, columns)`, 3D `(planes, rows, columns)`.
 pub fn array_shape(image: &Grid) -> Vec<usize> {
-    let d = image.dims;
-    if image.dimension == 2 {
-        vec![d[1], d[0]]
-    } else {
-        vec![d[2], d[1], d[0]]
-    }
+    image.array_shape()
 }
 
-/// Grid-order labels in the order of the image as an array (C order of
-/// [`array_shape`]): 2D rows from the top as in the file, 3D the grid's own order.
+/// Grid-order labels in the order and shape of the input as an array
+/// ([`Grid::to_array`]): 2D rows from the top as in the file, 3D the input's
+/// planes, rows and columns (a resampled volume's labels sampled back onto them).
 pub fn labels_array(image: &Grid, labels: &[u16]) -> Vec<u16> {
-    array_order(image, labels)
+    image.to_array(labels)
 }
 
-/// Grid-order samples (labels, a mask) in the order of the image as an array,
+/// Grid-order samples (labels, a mask) in the order of the input as an array,
 /// as [`labels_array`].
 pub fn array_order<T: Copy>(image: &Grid, values: &[T]) -> Vec<T> {
-    let [w, h, _] = image.dims;
-    if image.dimension != 2 {
-        return values.to_vec();
-    }
-    let mut out = Vec::with_capacity(w * h);
-    for j in (0..h).rev() {
-        out.extend_from_slice(&values[j * w..(j + 1) * w]);
-    }
-    out
+    image.to_array(values)
 }
 
 /// For labels `1..=count` of a C-order label array of `shape`: the number of
@@ -278,7 +266,7 @@ fn group<const D: usize>(mesh: &Mesh<D>) -> Vec<Vec<usize>> {
 /// labels.png: 16-bit gray, the object's label at its pixels, the image's size (the
 /// encoder takes native-endian samples).
 pub fn labels_png(image: &Grid, labels: &[u16]) -> Vec<u8> {
-    let [w, h, _] = image.dims;
+    let [w, h, _] = image.layout.dims;
     let bytes: Vec<u8> = labels_array(image, labels).iter().flat_map(|l| l.to_ne_bytes()).collect();
     let mut out = Vec::new();
     PngEncoder::new(&mut out)

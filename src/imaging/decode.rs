@@ -145,5 +145,5 @@ pub fn decode_slices(
         values.extend_from_slice(&g.values);
     }
     limits.check(first, &[dims[0], dims[1], slices.len()])?;
-    Ok(Grid::new(3, [dims[0], dims[1], slices.len()], values, kind))
+    Ok(Grid::new(3, [dims[0], dims[1], slices.len()], values, kind).rows_flipped())
 }

@@ -79,6 +79,21 @@ pub struct Grid {
     pub kind: SampleKind,
     /// Where the samples lie in the file's space (written into volume results).
     pub placement: Placement,
+    /// How the samples map onto the input's array (its shape and order).
+    pub layout: ArrayLayout,
+}
+
+/// The input's array as the grid samples it: the input's `dims` along x, y, z;
+/// `rows_flipped` when its rows run from the top (a 2D image, the pages of a TIFF
+/// stack, a stack of slices) and the grid's from the bottom; `per_input` grid
+/// samples per input sample along each axis (more than 1 where a volume was
+/// resampled to cubic voxels). Input sample `i` (grid order, after the flip) has its
+/// centre at grid coordinate `(i + ½) per_input − ½`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArrayLayout {
+    pub dims: [usize; 3],
+    pub rows_flipped: bool,
+    pub per_input: [f64; 3],
 }
 
 impl Grid {
@@ -86,7 +101,50 @@ impl Grid {
     pub fn new(dimension: usize, dims: [usize; 3], values: Vec<f64>, kind: SampleKind) -> Grid {
         assert_eq!(values.len(), dims[0] * dims[1] * dims[2], "grid size");
         assert!(dimension == 3 || dims[2] == 1, "a 2D grid has one slice");
-        Grid { dimension, dims, values, kind, placement: Placement::default() }
+        let layout = ArrayLayout { dims, rows_flipped: dimension == 2, per_input: [1.0; 3] };
+        Grid { dimension, dims, values, kind, placement: Placement::default(), layout }
+    }
+
+    /// This grid with its rows counted from the bottom where the input's run from
+    /// the top (the pages of a TIFF stack, a stack of slices).
+    pub fn rows_flipped(mut self) -> Grid {
+        self.layout.rows_flipped = true;
+        self
+    }
+
+    /// The input's array shape, C order: `(rows, columns)` or `(planes, rows, columns)`.
+    pub fn array_shape(&self) -> Vec<usize> {
+        let d = self.layout.dims;
+        if self.dimension == 2 {
+            vec![d[1], d[0]]
+        } else {
+            vec![d[2], d[1], d[0]]
+        }
+    }
+
+    /// The input's sample spacing along x, y, z (the placement's, times the
+    /// resampling's factor).
+    pub fn input_spacing(&self) -> [f64; 3] {
+        let s = self.placement.spacing();
+        std::array::from_fn(|a| s[a] * self.layout.per_input[a])
+    }
+
+    /// Grid-order samples (a mask, labels) as an array of the input's shape and
+    /// order ([`Grid::array_shape`], C order): each input sample takes the grid
+    /// sample nearest its centre, rows from the top where the input's are.
+    pub fn to_array<T: Copy>(&self, values: &[T]) -> Vec<T> {
+        let ArrayLayout { dims, rows_flipped, per_input } = self.layout;
+        let nearest = |a: usize, i: usize| (((i as f64 + 0.5) * per_input[a]) as usize).min(self.dims[a] - 1);
+        let xs: Vec<usize> = (0..dims[0]).map(|i| nearest(0, i)).collect();
+        let mut out = Vec::with_capacity(dims.iter().product());
+        for k in 0..dims[2] {
+            let gk = nearest(2, k);
+            for r in 0..dims[1] {
+                let gj = nearest(1, if rows_flipped { dims[1] - 1 - r } else { r });
+                out.extend(xs.iter().map(|&gi| values[self.index(gi, gj, gk)]));
+            }
+        }
+        out
     }
 
     /// This grid placed at `placement`.

@@ -29,7 +29,7 @@ pub use background::quadratic_background;
 pub use contrast::{contrast_scale, noise_gradient};
 pub use decode::{decode_image, decode_image_channel, decode_slices, decode_volume};
 pub use edge::{EdgeField, EdgeSample};
-pub use grid::{Grid, Placement, SampleKind};
+pub use grid::{ArrayLayout, Grid, Placement, SampleKind};
 pub use limits::ImageLimits;
 pub use nrrd::{encode_nrrd_labels, encode_nrrd_mask, parse_nrrd};
 pub use raster::{draw_overlay, rasterize_curve, rasterize_curve_window, rasterize_surface, rasterize_surface_window};

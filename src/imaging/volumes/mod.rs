@@ -20,14 +20,15 @@ pub use nifti::{decode_nifti, decode_nifti_time_point, is_nifti};
 pub use nifti_out::{encode_nifti_labels, encode_nifti_mask};
 pub use tiff_stack::{decode_tiff_stack, decode_tiff_stack_plane, is_tiff, tiff_pages};
 
-use super::grid::Grid;
+use super::grid::{ArrayLayout, Grid};
 use super::limits::ImageLimits;
 use super::ImageError;
 
 /// `grid` resampled (trilinear) to cubic voxels of its smallest spacing (its
 /// placement's) when its spacings differ by more than 1 %, placed where the new
 /// samples lie: the axes shortened to that spacing, the first sample half a new
-/// voxel in from the old volume's edge. Unchanged otherwise.
+/// voxel in from the old volume's edge; its layout maps the old samples onto the
+/// new ones. Unchanged otherwise.
 pub fn isotropic(input: &str, grid: Grid, limits: &ImageLimits) -> Result<Grid, ImageError> {
     let spacing = grid.placement.spacing();
     let h = spacing.iter().copied().fold(f64::INFINITY, f64::min);
@@ -73,7 +74,13 @@ pub fn isotropic(input: &str, grid: Grid, limits: &ImageLimits) -> Result<Grid, 
             placed.origin[c] += shift * old.axes[a][c];
         }
     }
-    Ok(Grid::new(3, dims, values, grid.kind).placed(placed))
+    let mut resampled = Grid::new(3, dims, values, grid.kind).placed(placed);
+    // old sample m has its centre at new coordinate (m + ½) s/h − ½
+    resampled.layout = ArrayLayout {
+        per_input: std::array::from_fn(|a| grid.layout.per_input[a] * spacing[a] / h),
+        ..grid.layout
+    };
+    Ok(resampled)
 }
 
 #[cfg(test)]
@@ -332,5 +339,24 @@ mod tests {
             let z = ((k as f64 + 0.5) / 2.0 - 0.5).clamp(0.0, 4.0);
             assert!((g.values[g.index(1, 2, k)] - 10.0 * z).abs() < 1e-9);
         }
+    }
+
+    /// The array of a resampled TIFF stack is the file's: page p, row r, column c
+    /// of `tiff_stack` hold 10 p + c (rows alike), and a grid of each sample's row
+    /// from the top as the file counts it maps back to that row.
+    #[test]
+    fn arrays_are_the_files_pages_rows_and_columns() {
+        let g = decode_tiff_stack("stack", &tiff_stack(4, 3.0, 1), &ImageLimits::default()).unwrap();
+        assert_eq!((g.dims, g.array_shape()), ([6, 5, 12], vec![4, 5, 6]));
+        assert_eq!(g.layout.per_input, [1.0, 1.0, 3.0]);
+        let array = g.to_array(&g.values);
+        for (n, v) in array.iter().enumerate() {
+            let (p, c) = (n / 30, n % 6);
+            assert!((v - (10 * p + c) as f64).abs() < 1e-9, "sample {n}: {v}");
+        }
+        let rows: Vec<usize> = (0..g.len()).map(|n| 4 - (n / 6) % 5).collect();
+        let back = g.to_array(&rows);
+        assert!(back.iter().enumerate().all(|(n, &r)| r == (n / 6) % 5));
+        assert_eq!(g.input_spacing(), [1.0, 1.0, 3.0]);
     }
 }

@@ -182,7 +182,7 @@ pub fn decode_tiff_stack_plane(
         ),
         _ => e,
     })?;
-    let grid = Grid::new(3, [dims[0], dims[1], slices], values, kind);
+    let grid = Grid::new(3, [dims[0], dims[1], slices], values, kind).rows_flipped();
     isotropic(input, grid.placed(Placement::aligned([x_spacing, y_spacing, z_spacing], [0.0; 3])), limits)
 }
 
