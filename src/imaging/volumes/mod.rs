@@ -76,10 +76,8 @@ pub fn isotropic(input: &str, grid: Grid, limits: &ImageLimits) -> Result<Grid, 
     }
     let mut resampled = Grid::new(3, dims, values, grid.kind).placed(placed);
     // old sample m has its centre at new coordinate (m + ½) s/h − ½
-    resampled.layout = ArrayLayout {
-        per_input: std::array::from_fn(|a| grid.layout.per_input[a] * spacing[a] / h),
-        ..grid.layout
-    };
+    resampled.layout =
+        ArrayLayout { per_input: std::array::from_fn(|a| grid.layout.per_input[a] * spacing[a] / h), ..grid.layout };
     Ok(resampled)
 }
 

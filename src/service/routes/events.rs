@@ -31,7 +31,9 @@ pub(super) async fn events(
     let after: Option<usize> = match headers.get("last-event-id") {
         None => None,
         Some(v) => Some(v.to_str().ok().and_then(|v| v.trim().parse().ok()).ok_or_else(|| {
-            ApiError::BadRequest("Last-Event-ID: must be the id of an event of this stream (an iteration number)".into())
+            ApiError::BadRequest(
+                "Last-Event-ID: must be the id of an event of this stream (an iteration number)".into(),
+            )
         })?),
     };
     struct Cursor {
