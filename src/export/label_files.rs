@@ -4,7 +4,7 @@
 //! and rois.zip (an ImageJ ROI set: one sub-pixel polygon per contour).
 
 use super::image_results::to_pixel;
-use super::objects::{labels_array, object_elements};
+use super::objects::object_elements;
 use super::zip_files::zip_files;
 use crate::flow::MeshData;
 use crate::geometry::segment_cycles;
@@ -14,10 +14,10 @@ use tiff::encoder::{colortype::Gray16, TiffEncoder};
 use tiff::tags::Tag;
 
 /// labels.tif (2D) or labels.ome.tif (3D) of grid-order `labels`, in the input's
-/// shape and order ([`labels_array`]).
+/// shape and order ([`Grid::to_array`]).
 pub fn labels_tiff(image: &Grid, labels: &[u16]) -> Vec<u8> {
     let [w, h, d] = image.layout.dims;
-    let array = labels_array(image, labels);
+    let array = image.to_array(labels);
     let mut out = Cursor::new(Vec::new());
     let mut tiff = TiffEncoder::new(&mut out).expect("a TIFF in memory");
     let planes = if image.dimension == 2 { 1 } else { d };
@@ -138,7 +138,7 @@ mod tests {
         let (labels, _) = super::super::objects(&image, &mesh);
         let tif = labels_tiff(&image, &labels);
         let decoded = image::load_from_memory(&tif).unwrap().into_luma16();
-        let array = labels_array(&image, &labels);
+        let array = image.to_array(&labels);
         assert_eq!(decoded.as_raw(), &array);
         assert!(array.contains(&1));
         let roi = polygon_roi(&[[1.5, 2.5], [10.0, 2.5], [10.0, 8.0]], "0001-1");

@@ -22,9 +22,7 @@ pub use fill::{region_triangles, ribbon, Filled};
 pub use gltf::{evolution_glb, shape_glb, ColorField, GltfFrame, FRAME_SECONDS};
 pub use image_results::{mask, mask_png, overlay_png, to_array_coordinates, to_pixel, to_world};
 pub use label_files::{labels_tiff, rois_zip};
-pub use objects::{
-    array_order, array_shape, labels_array, labels_png, object_elements, objects, objects_csv, ObjectRow,
-};
+pub use objects::{labels_png, object_elements, objects, objects_csv, ObjectRow};
 pub use shape_json::shape_json;
 pub use vtk::{pvd, vtp, VtkCells, VtkPiece};
 pub use zip_files::zip_files;

@@ -34,7 +34,7 @@ pub struct ObjectRow {
     /// Number of the object's pixels (voxels).
     pub pixels: usize,
     /// (Addition) scikit-image's `regionprops` of the label in the label image
-    /// as an array ([`labels_array`]): its number of pixels (`area`, `num_pixels`)…
+    /// as an array ([`Grid::to_array`]): its number of pixels (`area`, `num_pixels`)…
     pub num_pixels: usize,
     /// … the mean of their array indices (`centroid-0`, `-1`(, `-2`): 2D
     /// `(row, column)`, 3D `(plane, row, column)`)…
@@ -177,30 +177,12 @@ pub fn objects(image: &Grid, mesh: &MeshData) -> (Vec<u16>, Vec<ObjectRow>) {
             array_bbox: vec![0; 2 * mesh.dimension],
         });
     }
-    let shape = array_shape(image);
-    let measures = label_measures(&labels_array(image, &labels), &shape, rows.len());
+    let shape = image.array_shape();
+    let measures = label_measures(&image.to_array(&labels), &shape, rows.len());
     for (row, m) in rows.iter_mut().zip(measures) {
         (row.num_pixels, row.array_centroid, row.array_bbox) = m;
     }
     (labels, rows)
-}
-
-/// The shape of the image as an array: 2D `(rows, columns)`, 3D `(planes, rows, columns)`.
-pub fn array_shape(image: &Grid) -> Vec<usize> {
-    image.array_shape()
-}
-
-/// Grid-order labels in the order and shape of the input as an array
-/// ([`Grid::to_array`]): 2D rows from the top as in the file, 3D the input's
-/// planes, rows and columns (a resampled volume's labels sampled back onto them).
-pub fn labels_array(image: &Grid, labels: &[u16]) -> Vec<u16> {
-    image.to_array(labels)
-}
-
-/// Grid-order samples (labels, a mask) in the order of the input as an array,
-/// as [`labels_array`].
-pub fn array_order<T: Copy>(image: &Grid, values: &[T]) -> Vec<T> {
-    image.to_array(values)
 }
 
 /// For labels `1..=count` of a C-order label array of `shape`: the number of
@@ -267,7 +249,7 @@ fn group<const D: usize>(mesh: &Mesh<D>) -> Vec<Vec<usize>> {
 /// encoder takes native-endian samples).
 pub fn labels_png(image: &Grid, labels: &[u16]) -> Vec<u8> {
     let [w, h, _] = image.layout.dims;
-    let bytes: Vec<u8> = labels_array(image, labels).iter().flat_map(|l| l.to_ne_bytes()).collect();
+    let bytes: Vec<u8> = image.to_array(labels).iter().flat_map(|l| l.to_ne_bytes()).collect();
     let mut out = Vec::new();
     PngEncoder::new(&mut out)
         .write_image(&bytes, w as u32, h as u32, ExtendedColorType::L16)

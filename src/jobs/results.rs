@@ -5,8 +5,7 @@ use super::frames::{Frame, GlbContext};
 use super::vtk_files::{frame_vtp, vtk_series, zip_files, EVOLUTION_VTK_ZIP};
 use super::PreparedJob;
 use crate::export::{
-    array_order, array_shape, labels_png, labels_tiff, mask, mask_png, objects, objects_csv, overlay_png, rois_zip,
-    shape_json, ObjectRow,
+    labels_png, labels_tiff, mask, mask_png, objects, objects_csv, overlay_png, rois_zip, shape_json, ObjectRow,
 };
 use crate::flow::{Checkpoint, MeshData};
 use crate::geometry::{loop_area, Point};
@@ -153,9 +152,9 @@ impl StateResults<'_> {
         let img = self.job.image.as_deref()?;
         let (labels, objects) = self.objects(img);
         Some(ImageArrays {
-            shape: array_shape(img),
-            mask: array_order(img, self.mask(img)),
-            labels: array_order(img, labels),
+            shape: img.array_shape(),
+            mask: img.to_array(self.mask(img)),
+            labels: img.to_array(labels),
             objects: objects.clone(),
         })
     }
