@@ -6,7 +6,8 @@ use super::mesh_management::{outcome, Managed, MeshManager, Surgery};
 use super::report::SurgeryKind;
 use super::FlowError;
 use crate::geometry::{
-    adapt_surface, cut_neck, edge_statistics, regularize_surface, SurfaceMesh, SurfaceRemeshSettings,
+    adapt_surface, cut_neck, edge_statistics, first_surface_intersection, regularize_surface,
+    revert_new_intersections, SurfaceMesh, SurfaceRemeshSettings,
 };
 
 /// Switches and resolved parameters of surface mesh management.
@@ -78,6 +79,7 @@ impl MeshManager<3> for SurfaceManager {
         } else {
             None
         };
+        let (remeshed, moved) = self.apart(mesh, remeshed, moved);
         if let Some((_, c)) = curvature.filter(|&(k, c)| c > 0.125 * k) {
             let result = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
             if result.quality().min_angle_deg < PINCH_MIN_ANGLE_DEG {
@@ -104,6 +106,40 @@ impl MeshManager<3> for SurfaceManager {
 }
 
 impl SurfaceManager {
+    /// The adaptation `remeshed` and the regularization `moved` of `mesh` (which
+    /// meets itself nowhere), or what of them passes through no sheet: where the
+    /// management carried a vertex through a close sheet (touching objects of a
+    /// segmentation, the parts of a neck split), the regularization's moves of
+    /// the triangles that meet are undone ([`revert_new_intersections`]), and an
+    /// adaptation that still meets is not taken. Checked only where the result
+    /// meets itself.
+    fn apart(
+        &self,
+        mesh: &SurfaceMesh,
+        remeshed: Option<SurfaceMesh>,
+        moved: Option<SurfaceMesh>,
+    ) -> (Option<SurfaceMesh>, Option<SurfaceMesh>) {
+        let meets = |m: &SurfaceMesh| first_surface_intersection(m.positions(), m.elements()).is_some();
+        let result = moved.as_ref().or(remeshed.as_ref());
+        if result.is_none_or(|m| !meets(m)) || meets(mesh) {
+            return (remeshed, moved);
+        }
+        let unmoved = |base: &SurfaceMesh, m: &SurfaceMesh| {
+            revert_new_intersections(base.positions(), m.positions(), base.elements(), 8)
+                .map(|x| base.with_positions(x))
+        };
+        // the regularization undone where it meets, on the adaptation if that is sound
+        let adapted = remeshed.is_some();
+        let remeshed = remeshed.filter(|r| !meets(r));
+        // a regularization of a dropped adaptation is dropped with it
+        let moved = match (adapted, &remeshed) {
+            (true, None) => None,
+            _ => moved.and_then(|m| unmoved(remeshed.as_ref().unwrap_or(mesh), &m)),
+        };
+        tracing::debug!(adapted = remeshed.is_some(), "management kept apart from a close sheet");
+        (remeshed, moved)
+    }
+
     /// The grid of a surgery: the mean edge the management's sizes aim at (4
     /// `h_min`: the initial mean edge by default).
     fn surgery_spacing(&self) -> f64 {
@@ -125,8 +161,9 @@ impl SurfaceManager {
         Some(self.conserved(m, mesh))
     }
 
-    /// `rounds` of the management's adaptation and regularization.
-    fn tidy(&self, mut m: SurfaceMesh, rounds: usize) -> SurfaceMesh {
+    /// `rounds` of the management's adaptation and regularization (a traced
+    /// surface's slivers made sound).
+    pub fn tidy(&self, mut m: SurfaceMesh, rounds: usize) -> SurfaceMesh {
         for _ in 0..rounds {
             if let Some(a) = adapt_surface(&m, &self.params) {
                 m = a;

@@ -39,7 +39,7 @@ pub use measures::{vertex_normals, MeshQuality};
 pub use mesh::{components, segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};
 pub use neck_cut::cut_neck;
 pub use objects::Objects;
-pub use surface_intersections::{first_surface_intersection, surface_intersections};
+pub use surface_intersections::{first_surface_intersection, revert_new_intersections, surface_intersections};
 pub use surface_remesh::{
     adapt_surface, edge_statistics, regularize_surface, surface_edges, SurfaceEdge, SurfaceRemeshSettings,
 };

@@ -119,6 +119,44 @@ pub fn surface_intersections(positions: &[Point<3>], triangles: &[[usize; 3]], m
     hits
 }
 
+/// `after` (positions of the vertices of `triangles`, which meet nowhere new at
+/// `before`) with the vertices of every pair of triangles that meet in it but
+/// not at `before` put back at `before`, repeated until no new pair meets (a
+/// vertex put back can bring a neighbouring triangle into contact) or `rounds`
+/// are done; `None` if some new pair still meets then. At worst every vertex is
+/// put back: `before`, which meets nowhere new.
+pub fn revert_new_intersections(
+    before: &[Point<3>],
+    after: &[Point<3>],
+    triangles: &[[usize; 3]],
+    rounds: usize,
+) -> Option<Vec<Point<3>>> {
+    let meeting = |x: &[Point<3>]| {
+        let mut pairs = surface_intersections(x, triangles, usize::MAX);
+        pairs.sort_unstable();
+        pairs
+    };
+    let mut x = after.to_vec();
+    let mut pairs = meeting(&x);
+    if pairs.is_empty() {
+        return Some(x);
+    }
+    let old = meeting(before);
+    for _ in 0..rounds {
+        let new: Vec<&(usize, usize)> = pairs.iter().filter(|p| old.binary_search(p).is_err()).collect();
+        if new.is_empty() {
+            return Some(x);
+        }
+        for &&(a, b) in &new {
+            for &v in triangles[a].iter().chain(&triangles[b]) {
+                x[v] = before[v];
+            }
+        }
+        pairs = meeting(&x);
+    }
+    pairs.iter().all(|p| old.binary_search(p).is_ok()).then_some(x)
+}
+
 fn bounds(x: &[Point<3>], t: &[usize; 3]) -> ([f64; 3], [f64; 3]) {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];

@@ -3,7 +3,10 @@
 //! the end), cancellation, and resumption from a checkpoint.
 
 use super::{AnyMesh, PreparedJob, ProblemKind};
-use crate::flow::{Checkpoint, Flow, FlowError, MeshData, MeshManager, Problem, Progress, StopReason, VertexFields};
+use crate::flow::{
+    Checkpoint, Flow, FlowError, MeshData, MeshManager, Problem, Progress, StopReason, SurgeryEvent, SurgeryKind,
+    SurgeryRecord, VertexFields,
+};
 use crate::geometry::Mesh;
 use std::sync::atomic::AtomicBool;
 
@@ -144,20 +147,37 @@ fn run_stages<const D: usize>(
 const MAX_NECK_SPLITS: usize = 3;
 
 /// The state after `last` with its objects split at necks (a fresh step size,
-/// its energy on the new curves), or `None` if the job splits none or has no
-/// iteration left.
+/// its energy on the new curves or surfaces; surfaces' cuts recorded as pinches),
+/// or `None` if the job splits none or has no iteration left.
 fn split_at_necks<const D: usize>(job: &PreparedJob, dim: &Dimension<'_, D>, last: &Checkpoint) -> Option<Checkpoint> {
     let split = job.neck_split.as_ref()?;
     if last.iteration >= job.settings.max_iterations {
         return None;
     }
-    let curves = split.split(&last.mesh.to_mesh_unvalidated::<2>()?)?;
-    let mesh: MeshData = (&curves).into();
+    let iteration = last.iteration + 1;
+    let mut surgeries = last.surgeries.clone();
+    let mesh: MeshData = if D == 2 {
+        (&split.split(&last.mesh.to_mesh_unvalidated::<2>()?)?).into()
+    } else {
+        // the traced parts tidied as a surgery's are (the fine edges' management)
+        let manager = job.surface_manager?;
+        let (surfaces, cuts) = split.split_surfaces(&last.mesh.to_mesh_unvalidated::<3>()?, |m| manager.tidy(m, 2))?;
+        let mut components = last.mesh.to_mesh_unvalidated::<3>()?.component_labels().1;
+        for cut in &cuts {
+            components += cut.parts - 1;
+            tracing::info!(at = ?cut.at, parts = cut.parts, "an object split at its neck");
+            let event = SurgeryEvent { kind: SurgeryKind::Pinch, at: cut.at, components };
+            surgeries.push(SurgeryRecord { iteration, time: last.time, event });
+        }
+        (&surfaces).into()
+    };
     let energy = (dim.problem)(job.stage_problem(last.stage)).ok()?.energy(&mesh.to_mesh_unvalidated::<D>()?).ok()?;
+    tracing::debug!(energy, "the energy after a neck split");
     energy.is_finite().then(|| Checkpoint {
-        iteration: last.iteration + 1,
+        iteration,
         energy,
         mesh,
+        surgeries,
         ..last.clone().with_fresh_step(job.settings.tau)
     })
 }

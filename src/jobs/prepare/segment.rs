@@ -161,11 +161,11 @@ pub(super) fn prepare_segmentation(
         voxel_spacing: (d == 3).then(|| grid.placement.spacing()),
         voxel_origin: (d == 3).then_some(grid.placement.origin),
     };
-    // the converged contours of separate objects are split where the flow brought
-    // out a neck (curves; surfaces keep the initial shape's objects)
+    // the converged contours (surfaces) of separate objects are split where the
+    // flow brought out a neck
     let separate = matches!(&problem, ProblemKind::ChanVese(cv) if cv.separate);
-    let neck_split = (d == 2 && separate && spec.split_touching.unwrap_or(true)).then(|| NeckSplit {
-        dims: [grid.dims[0], grid.dims[1]],
+    let neck_split = (separate && spec.split_touching.unwrap_or(true)).then(|| NeckSplit {
+        dims: grid.dims,
         necks: NECKS,
         min_size: min_size.ceil() as usize,
     });

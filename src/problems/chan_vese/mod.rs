@@ -31,12 +31,14 @@ use contact::{keep_apart, objects_cross};
 use moments::{accumulate_moments, Moments};
 pub use run::ChanVeseRun;
 use run::Objects;
+use surface_contact::hold_contacts;
 use std::sync::Arc;
 pub use territory::Territories;
 
 mod contact;
 mod moments;
 mod run;
+mod surface_contact;
 mod territory;
 
 /// Default `flow.tau`, in pixels: the data term's speed is at most
@@ -160,6 +162,11 @@ impl ChanVese {
     }
 }
 
+/// The least distance kept between the surfaces of two objects, in samples: the
+/// neck split's parts start 0.8 samples apart, the initial shape's objects a
+/// sample.
+const CLEARANCE: f64 = 0.25;
+
 impl<const D: usize> Problem<D> for ChanVeseRun {
     fn name(&self) -> &'static str {
         "segmentation"
@@ -252,17 +259,25 @@ impl<const D: usize> Problem<D> for ChanVeseRun {
     /// crossing segments go part of their step, or none ([`keep_apart`]: a contact
     /// holds the contours where they meet, and the rest of the step goes on).
     /// Surfaces: the vertices that would enter another object's territory keep
-    /// theirs ([`Territories::hold`]).
+    /// theirs ([`Territories::hold`]), and those of triangles that would meet
+    /// triangles they did not meet before too ([`hold_contacts`]: objects that
+    /// meet stop where they meet, whatever their territories).
     fn constrain_step(&self, current: &Mesh<D>, candidate: Mesh<D>) -> Mesh<D> {
         let mut candidate = Problem::<D>::constrain(self, candidate);
         if !self.cv.separate || current.num_vertices() != candidate.num_vertices() {
             return candidate;
         }
         if D == 3 {
-            return match &self.cv.territories {
+            let candidate = match &self.cv.territories {
                 Some(t) => t.hold(&self.cv.intensity, current, candidate),
                 None => candidate,
             };
+            let surfaces = (current as &dyn std::any::Any).downcast_ref::<Mesh<3>>();
+            let mut candidate = candidate;
+            if let (Some(current), Some(c)) = (surfaces, (&mut candidate as &mut dyn std::any::Any).downcast_mut()) {
+                hold_contacts(current, c, CLEARANCE / self.cv.intensity.scale());
+            }
+            return candidate;
         }
         let curves = (current as &dyn std::any::Any).downcast_ref::<Mesh<2>>();
         if let (Some(current), Some(candidate)) = (curves, (&mut candidate as &mut dyn std::any::Any).downcast_mut()) {

@@ -15,11 +15,13 @@ use crate::imaging::contours::{polygon_loop, zero_level};
 use crate::imaging::labels::{distance_transform, label_sizes, split_touching, Necks};
 use crate::imaging::rasterize_curve_window;
 
+mod surfaces;
+
 /// How the contours of a 2D segmentation are split after the flow converged.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NeckSplit {
-    /// The image's samples along `x` and `y`.
-    pub dims: [usize; 2],
+    /// The image's samples along `x`, `y` and `z` (1 for a 2D image).
+    pub dims: [usize; 3],
     /// The necks that split an object (those of the initial shape).
     pub necks: Necks,
     /// A part of fewer samples than this keeps its object whole.
@@ -65,7 +67,7 @@ impl NeckSplit {
     /// The traced parts of the object bounded by `cycles`, or `None` if it does not
     /// split (or a part would be below `min_size`).
     fn split_object(&self, mesh: &CurveMesh, cycles: &[&Vec<usize>]) -> Option<Vec<Vec<Point<2>>>> {
-        let [nx, ny] = self.dims;
+        let [nx, ny, _] = self.dims;
         let l = nx.max(ny) as f64;
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for &v in cycles.iter().flat_map(|c| c.iter()) {
@@ -97,7 +99,7 @@ impl NeckSplit {
         }
         for a in 1..count as u32 {
             for b in a + 1..=count as u32 {
-                if !pinched(&labels, &dist, window, self.dims, a, b) {
+                if !pinched(&labels, &dist, window, [nx, ny], a, b) {
                     return None;
                 }
             }
@@ -210,7 +212,7 @@ mod tests {
 
     #[test]
     fn a_peanut_splits_in_two_and_an_ellipse_does_not() {
-        let split = NeckSplit { dims: [100, 100], necks: NECKS, min_size: 16 };
+        let split = NeckSplit { dims: [100, 100, 1], necks: NECKS, min_size: 16 };
         // lobes of inscribed radius about 12 px joined by a waist of half-width 5
         let peanut = polar(50.0, 50.0, |t| 30.0 * (0.58 + 0.42 * (2.0 * t).cos()).max(0.17));
         let parts = split.split(&peanut).expect("the peanut splits");

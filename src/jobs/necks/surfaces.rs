@@ -1,0 +1,286 @@
+//! Necks of surfaces: the 3D counterpart of the curves' split.
+//!
+//! Each object of the converged surfaces (a component with its cavities) is
+//! sampled on the image's grid as its signed distance; its inside samples are
+//! split by the initial shape's rule ([`split_touching`]) where the cut is a
+//! notch all around its rim ([`notched`]). An object that splits is traced again,
+//! one closed surface per part, by marching tetrahedra of the signed distance
+//! within the part's samples: the surface keeps its sub-voxel place away from
+//! the cut, and the parts' surfaces pass a tenth of a sample from their own
+//! samples across it (0.8 samples apart). The traced parts are tidied by the
+//! caller (the mesh management's adaptation) and the flow goes on; the parts
+//! then stay apart by the contact rule of surfaces.
+
+use super::NeckSplit;
+use crate::geometry::{first_surface_intersection, surface_union, Point, SurfaceMesh};
+use crate::imaging::isosurface::zero_level_3d;
+use crate::imaging::labels::{distance_transform, flood_from_cores, label_sizes, split_touching};
+use crate::imaging::signed_distance::{signed_distance, SampleGrid};
+
+/// Least mean fraction of a ball around the rim of a cut that lies inside the
+/// object: more than a flat boundary's half. The rim of a neck between two balls
+/// is a notch, but a ball of the neck's radius reaches past where their surfaces
+/// curve away, so that its fraction is lower than a disc's in 2D ([`super::PINCH`]):
+/// on the generated touching pairs' necks (BENCHMARKS.md) 0.53–0.56, and 0.38–0.44
+/// for cuts through the convex side of a ball.
+const PINCH_3D: f64 = 0.5;
+
+/// A neck cut by [`NeckSplit::split_surfaces`]: where (unit-box coordinates, the
+/// widest sample of the cut) and into how many parts its object went.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceCut {
+    pub at: [f64; 3],
+    pub parts: usize,
+}
+
+impl NeckSplit {
+    /// `mesh` with every object that has a neck by [`NeckSplit::necks`] replaced by
+    /// its traced parts, each passed through `tidy`, and the cuts made; `None` if
+    /// no object splits (or the result would meet itself). The other objects keep
+    /// their triangles.
+    pub fn split_surfaces(
+        &self,
+        mesh: &SurfaceMesh,
+        tidy: impl Fn(SurfaceMesh) -> SurfaceMesh,
+    ) -> Option<(SurfaceMesh, Vec<SurfaceCut>)> {
+        let objects = mesh.objects();
+        let count = objects.owner.len();
+        let root_of = |c: usize| objects.owner[c];
+        let mut keep = vec![true; count];
+        let mut parts = Vec::new();
+        let mut cuts = Vec::new();
+        for root in objects.roots() {
+            let triangles: Vec<[usize; 3]> = mesh
+                .elements()
+                .iter()
+                .filter(|t| root_of(objects.vertex_component[t[0]]) == root)
+                .copied()
+                .collect();
+            let Some((traced, cut)) = self.split_surface_object(mesh, &triangles) else { continue };
+            for (c, k) in keep.iter_mut().enumerate() {
+                if root_of(c) == root {
+                    *k = false;
+                }
+            }
+            parts.extend(traced);
+            cuts.push(cut);
+        }
+        if cuts.is_empty() {
+            return None;
+        }
+        let kept: Vec<SurfaceMesh> = mesh.with_components(&keep).into_iter().collect();
+        let union = |parts: Vec<SurfaceMesh>| {
+            let all: Vec<SurfaceMesh> = kept.iter().cloned().chain(parts).collect();
+            let result = surface_union(&all).inspect_err(|e| tracing::debug!("neck split: {e}")).ok()?;
+            first_surface_intersection(result.positions(), result.elements()).is_none().then_some(result)
+        };
+        // tidied; where the tidying brought two parts into contact across their
+        // cut, as traced (the flow's mesh management tidies them then)
+        let tidied = union(parts.iter().cloned().map(&tidy).collect());
+        let result = tidied.or_else(|| union(parts));
+        if result.is_none() {
+            tracing::debug!("the parts of a neck split meet: not split");
+        }
+        Some((result?, cuts))
+    }
+
+    /// The traced parts (each with its cavities) of the object bounded by
+    /// `triangles`, and its cut, or `None` if it does not split.
+    fn split_surface_object(&self, mesh: &SurfaceMesh, triangles: &[[usize; 3]]) -> Option<(Vec<SurfaceMesh>, SurfaceCut)> {
+        let l = self.dims.iter().copied().max()? as f64;
+        let x: Vec<[f64; 3]> = mesh.positions().iter().map(|p| [p[0], p[1], p[2]]).collect();
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for &v in triangles.iter().flatten() {
+            for a in 0..3 {
+                lo[a] = lo[a].min(x[v][a]);
+                hi[a] = hi[a].max(x[v][a]);
+            }
+        }
+        // the samples around the object's box, one more on each side
+        let first = |q: f64, n: usize| (((q * l - 0.5).floor() - 1.0).max(0.0) as usize).min(n);
+        let end = |q: f64, n: usize| (((q * l - 0.5).ceil() + 2.0).max(0.0) as usize).min(n);
+        let start = [0, 1, 2].map(|a| first(lo[a], self.dims[a]));
+        let dims = [0, 1, 2].map(|a| end(hi[a], self.dims[a]).saturating_sub(start[a]));
+        if dims.iter().any(|&n| n < 3) {
+            return None;
+        }
+        let grid = SampleGrid {
+            origin: [0, 1, 2].map(|a| (start[a] as f64 + 0.5) / l),
+            spacing: 1.0 / l,
+            dims,
+        };
+        let sd: Vec<f64> = signed_distance(&grid, &x, triangles, 2.0 / l).iter().map(|d| d * l).collect();
+        let mask: Vec<bool> = sd.iter().map(|&d| d > 0.0).collect();
+        let dist = distance_transform(&mask, dims, [1.0; 3]);
+        let (labels, count) = split_touching(&mask, &dist, dims, &self.necks);
+        let labels = if count > 1 { flood_from_cores(&mask, &dist, dims, &labels, count) } else { labels };
+        tracing::debug!(count, sizes = ?label_sizes(&labels, count), "neck split of a surface's object");
+        if count < 2 || label_sizes(&labels, count).iter().skip(1).any(|&n| n < self.min_size) {
+            return None;
+        }
+        let mut widest: Option<(f64, usize)> = None;
+        for a in 1..count as u32 {
+            for b in a + 1..=count as u32 {
+                let (notch, at) = notched(&labels, &dist, dims, start, self.dims, a, b);
+                if !notch {
+                    tracing::debug!(a, b, "a cut that is not a notch all around: no split");
+                    return None;
+                }
+                if let Some(p) = at.filter(|&p| widest.is_none_or(|(d, _)| dist[p] > d)) {
+                    widest = Some((dist[p], p));
+                }
+            }
+        }
+        let mut traced = Vec::with_capacity(count);
+        for part in 1..=count as u32 {
+            // inside the part its distance (at least a twentieth of a sample), in the
+            // background its distance (at most a sample), in another part nine
+            // samples: a tenth of a sample from the part's samples there
+            let level = |i: usize, j: usize, k: usize| {
+                let p = grid.index(i, j, k);
+                match labels[p] {
+                    q if q == part => sd[p].clamp(0.05, 1.0),
+                    0 => sd[p].clamp(-1.0, -0.05),
+                    _ => -9.0,
+                }
+            };
+            let (v, t) = zero_level_3d([0, dims[0], 0, dims[1], 0, dims[2]], level);
+            let positions = v.iter().map(|q| Point::<3>::from_fn(|a, _| grid.origin[a] + q[a] * grid.spacing)).collect();
+            match SurfaceMesh::new(positions, t) {
+                Ok(m) => traced.push(m),
+                Err(e) => {
+                    tracing::debug!("a traced part of a neck split is invalid: {e}");
+                    return None;
+                }
+            }
+        }
+        let at = widest.map_or([0.0; 3], |(_, p)| {
+            let (i, j, k) = (p % dims[0], (p / dims[0]) % dims[1], p / (dims[0] * dims[1]));
+            grid.point(i, j, k)
+        });
+        Some((traced, SurfaceCut { at, parts: count }))
+    }
+}
+
+/// The six face neighbours of sample `p` on a grid of `dims`.
+fn faces(dims: [usize; 3], p: usize) -> impl Iterator<Item = usize> {
+    let (i, j, k) = (p % dims[0], (p / dims[0]) % dims[1], p / (dims[0] * dims[1]));
+    let (sx, sy) = (1, dims[0]);
+    let sz = dims[0] * dims[1];
+    [
+        (i > 0).then(|| p - sx),
+        (i + 1 < dims[0]).then(|| p + sx),
+        (j > 0).then(|| p - sy),
+        (j + 1 < dims[1]).then(|| p + sy),
+        (k > 0).then(|| p - sz),
+        (k + 1 < dims[2]).then(|| p + sz),
+    ]
+    .into_iter()
+    .flatten()
+}
+
+/// Whether the cut between parts `a` and `b` of `labels` (a window of `dims`
+/// samples from `start` in an image of `image` samples, with the object's
+/// distance transform `dist`) is a notch all around its rim, and the cut's widest
+/// sample (`None` where the parts do not touch, which counts as a notch). The
+/// rim is the cut's samples next to the background; around each, a ball of the
+/// neck's radius (the cut's widest distance, at least 2) lies in the object by
+/// more than [`PINCH_3D`] on average (a flat boundary fills half of it, plus
+/// `3/(8r)` for the rim sample half a sample inside it, which is taken off). A
+/// rim sample within that radius of the image's faces counts as a notch (the
+/// object goes on beyond them). As for curves, this tells a neck between two
+/// touching objects from a cut below a deep inlet into one object.
+fn notched(
+    labels: &[u32],
+    dist: &[f64],
+    dims: [usize; 3],
+    start: [usize; 3],
+    image: [usize; 3],
+    a: u32,
+    b: u32,
+) -> (bool, Option<usize>) {
+    let cut: Vec<usize> =
+        (0..labels.len()).filter(|&p| labels[p] == a && faces(dims, p).any(|q| labels[q] == b)).collect();
+    let Some(&widest) = cut.iter().max_by(|&&p, &&q| dist[p].total_cmp(&dist[q])) else {
+        return (true, None);
+    };
+    let rim: Vec<usize> = cut.iter().copied().filter(|&p| faces(dims, p).any(|q| labels[q] == 0)).collect();
+    if rim.is_empty() {
+        return (true, Some(widest));
+    }
+    let r = dist[widest].max(2.0);
+    let reach = r.ceil() as i64;
+    let mut sum = 0.0;
+    for &p in &rim {
+        let at = [p % dims[0], (p / dims[0]) % dims[1], p / (dims[0] * dims[1])];
+        let (mut inside, mut all) = (0usize, 0usize);
+        let mut at_edge = false;
+        'ball: for dk in -reach..=reach {
+            for dj in -reach..=reach {
+                for di in -reach..=reach {
+                    if ((di * di + dj * dj + dk * dk) as f64) > r * r {
+                        continue;
+                    }
+                    let q = [at[0] as i64 + di, at[1] as i64 + dj, at[2] as i64 + dk];
+                    if (0..3).any(|c| q[c] + (start[c] as i64) < 0 || q[c] + start[c] as i64 >= image[c] as i64) {
+                        at_edge = true;
+                        break 'ball;
+                    }
+                    all += 1;
+                    // beyond the window (a sample around the object's box) is background
+                    if (0..3).all(|c| q[c] >= 0 && (q[c] as usize) < dims[c]) {
+                        let s = q[0] as usize + dims[0] * (q[1] as usize + dims[1] * q[2] as usize);
+                        inside += usize::from(labels[s] != 0);
+                    }
+                }
+            }
+        }
+        sum += if at_edge { 1.0 } else { inside as f64 / all as f64 - 3.0 / (8.0 * r) };
+    }
+    let fill = sum / rim.len() as f64;
+    tracing::debug!(fill, rim = rim.len(), cut = cut.len(), radius = r, "the rim of a cut");
+    (fill > PINCH_3D, Some(widest))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::icosphere;
+    use crate::imaging::labels::Necks;
+
+    const NECKS: Necks = Necks { depth: 1.5, relative_depth: 0.18, size_ratio: 2.5 };
+
+    /// Two balls of radius 8 samples, 14 apart, joined as one surface (the
+    /// boundary of their union, traced from its signed distance) on a 64³ grid:
+    /// the neck split makes two closed surfaces that do not meet, each near a
+    /// ball of its own; one ball alone does not split.
+    #[test]
+    fn two_overlapping_balls_split_in_two_and_one_ball_does_not() {
+        let l = 64.0;
+        let split = NeckSplit { dims: [64, 64, 64], necks: NECKS, min_size: 64 };
+        let ball = |cx: f64| icosphere([cx / l, 32.0 / l, 32.0 / l], 8.0 / l, 4).unwrap();
+        assert!(split.split_surfaces(&ball(32.0), |m| m).is_none());
+        // the union of two balls, traced once on a fine grid
+        let spacing = 0.25 / l;
+        let grid = SampleGrid { origin: [10.0 / l, 20.0 / l, 20.0 / l], spacing, dims: [177, 97, 97] };
+        let value = |i: usize, j: usize, k: usize| {
+            let p = grid.point(i, j, k).map(|c| c * l);
+            let r = |cx: f64| ((p[0] - cx).powi(2) + (p[1] - 32.0).powi(2) + (p[2] - 32.0).powi(2)).sqrt();
+            (8.0 - r(25.0)).max(8.0 - r(39.0))
+        };
+        let (v, t) = zero_level_3d([0, 177, 0, 97, 0, 97], value);
+        let positions = v.iter().map(|q| Point::<3>::from_fn(|a, _| grid.origin[a] + q[a] * spacing)).collect();
+        let union = SurfaceMesh::new(positions, t).unwrap();
+        assert_eq!(union.component_labels().1, 1);
+        let (parts, cuts) = split.split_surfaces(&union, |m| m).expect("the union splits");
+        assert_eq!(cuts.len(), 1);
+        assert_eq!(cuts[0].parts, 2);
+        assert!((cuts[0].at[0] * l - 32.0).abs() < 1.5, "{:?}", cuts[0]);
+        assert_eq!(parts.component_labels().1, 2);
+        let volumes = parts.component_measures();
+        let ball_volume = 4.0 / 3.0 * std::f64::consts::PI * (8.0 / l).powi(3);
+        for v in &volumes {
+            assert!((v / ball_volume - 0.93).abs() < 0.08, "{} of a ball", v / ball_volume);
+        }
+    }
+}
