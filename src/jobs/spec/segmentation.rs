@@ -134,10 +134,10 @@ pub struct SegmentationSpec {
     /// (Addition) the automatic initial shape splits objects that touch, where a
     /// neck is clearly narrower than both sides and the sides are of comparable
     /// size (a watershed of the distance transform); they then stay separate
-    /// objects. In 2D, with separate objects (Chan–Vese with per-object means,
-    /// `merge` false), the converged contours are split by the same rule where
-    /// the cut is a notch at both ends, and the run goes on from the parts.
-    /// Default true.
+    /// objects. With separate objects (Chan–Vese with per-object means, `merge`
+    /// false), the converged contours (surfaces) are split by the same rule where
+    /// the cut is a notch at both ends (all around its rim, in 3D), and the run
+    /// goes on from the parts. Default true.
     #[serde(default)]
     pub split_touching: Option<bool>,
     /// (Addition, Chan–Vese with per-object means) whether objects merge where
