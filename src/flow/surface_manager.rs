@@ -6,8 +6,8 @@ use super::mesh_management::{outcome, Managed, MeshManager, Surgery};
 use super::report::SurgeryKind;
 use super::FlowError;
 use crate::geometry::{
-    adapt_surface, cut_neck, edge_statistics, first_surface_intersection, regularize_surface,
-    revert_new_intersections, SurfaceMesh, SurfaceRemeshSettings,
+    adapt_surface, cut_neck, edge_statistics, first_surface_intersection, regularize_surface, revert_new_intersections,
+    SurfaceMesh, SurfaceRemeshSettings,
 };
 
 /// Switches and resolved parameters of surface mesh management.

@@ -104,8 +104,9 @@ pub fn flood_from_cores(mask: &[bool], d: &[f64], dims: Dims, labels: &[u32], co
             saddle[l as usize] = saddle[l as usize].max(d[p]);
         }
     }
-    let mut out: Vec<u32> =
-        (0..labels.len()).map(|p| if labels[p] != 0 && d[p] > saddle[labels[p] as usize] { labels[p] } else { 0 }).collect();
+    let mut out: Vec<u32> = (0..labels.len())
+        .map(|p| if labels[p] != 0 && d[p] > saddle[labels[p] as usize] { labels[p] } else { 0 })
+        .collect();
     // a max-heap of (distance, sample) on the flood's front
     let mut front = std::collections::BinaryHeap::new();
     let key = |p: usize| (ordered(d[p]), std::cmp::Reverse(p));
@@ -132,7 +133,11 @@ pub fn flood_from_cores(mask: &[bool], d: &[f64], dims: Dims, labels: &[u32], co
 /// A total order of distances (no NaN among them) for the heap.
 fn ordered(x: f64) -> u64 {
     let b = x.to_bits();
-    if b >> 63 == 1 { !b } else { b | 1 << 63 }
+    if b >> 63 == 1 {
+        !b
+    } else {
+        b | 1 << 63
+    }
 }
 
 /// Background samples between touching objects: every sample adjacent to a sample
@@ -213,9 +218,7 @@ mod tests {
         // flooded again from the parts' cores, fewer still
         let again = flood_from_cores(&m, &d, dims, &labels, n);
         let small = again[42 + w * 20];
-        let wrong_after = (0..w * h)
-            .filter(|&p| m[p] && (again[p] == small) != (depth(b, p) > depth(a, p)))
-            .count();
+        let wrong_after = (0..w * h).filter(|&p| m[p] && (again[p] == small) != (depth(b, p) > depth(a, p))).count();
         assert!(wrong_after <= wrong, "{wrong_after} {wrong}");
     }
 

@@ -50,12 +50,8 @@ impl NeckSplit {
         let mut parts = Vec::new();
         let mut cuts = Vec::new();
         for root in objects.roots() {
-            let triangles: Vec<[usize; 3]> = mesh
-                .elements()
-                .iter()
-                .filter(|t| root_of(objects.vertex_component[t[0]]) == root)
-                .copied()
-                .collect();
+            let triangles: Vec<[usize; 3]> =
+                mesh.elements().iter().filter(|t| root_of(objects.vertex_component[t[0]]) == root).copied().collect();
             let Some((traced, cut)) = self.split_surface_object(mesh, &triangles) else { continue };
             for (c, k) in keep.iter_mut().enumerate() {
                 if root_of(c) == root {
@@ -86,7 +82,11 @@ impl NeckSplit {
 
     /// The traced parts (each with its cavities) of the object bounded by
     /// `triangles`, and its cut, or `None` if it does not split.
-    fn split_surface_object(&self, mesh: &SurfaceMesh, triangles: &[[usize; 3]]) -> Option<(Vec<SurfaceMesh>, SurfaceCut)> {
+    fn split_surface_object(
+        &self,
+        mesh: &SurfaceMesh,
+        triangles: &[[usize; 3]],
+    ) -> Option<(Vec<SurfaceMesh>, SurfaceCut)> {
         let l = self.dims.iter().copied().max()? as f64;
         let x: Vec<[f64; 3]> = mesh.positions().iter().map(|p| [p[0], p[1], p[2]]).collect();
         let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
@@ -104,11 +104,7 @@ impl NeckSplit {
         if dims.iter().any(|&n| n < 3) {
             return None;
         }
-        let grid = SampleGrid {
-            origin: [0, 1, 2].map(|a| (start[a] as f64 + 0.5) / l),
-            spacing: 1.0 / l,
-            dims,
-        };
+        let grid = SampleGrid { origin: [0, 1, 2].map(|a| (start[a] as f64 + 0.5) / l), spacing: 1.0 / l, dims };
         let sd: Vec<f64> = signed_distance(&grid, &x, triangles, 2.0 / l).iter().map(|d| d * l).collect();
         let mask: Vec<bool> = sd.iter().map(|&d| d > 0.0).collect();
         let dist = distance_transform(&mask, dims, [1.0; 3]);
@@ -145,7 +141,8 @@ impl NeckSplit {
                 }
             };
             let (v, t) = zero_level_3d([0, dims[0], 0, dims[1], 0, dims[2]], level);
-            let positions = v.iter().map(|q| Point::<3>::from_fn(|a, _| grid.origin[a] + q[a] * grid.spacing)).collect();
+            let positions =
+                v.iter().map(|q| Point::<3>::from_fn(|a, _| grid.origin[a] + q[a] * grid.spacing)).collect();
             match SurfaceMesh::new(positions, t) {
                 Ok(m) => traced.push(m),
                 Err(e) => {

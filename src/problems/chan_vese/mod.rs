@@ -31,8 +31,8 @@ use contact::{keep_apart, objects_cross};
 use moments::{accumulate_moments, Moments};
 pub use run::ChanVeseRun;
 use run::Objects;
-use surface_contact::hold_contacts;
 use std::sync::Arc;
+use surface_contact::hold_contacts;
 pub use territory::Territories;
 
 mod contact;

@@ -200,7 +200,8 @@ fn touching_pairs_of_balls_in_a_volume_are_kept_apart() {
             }
         }
     }
-    let mut nrrd = format!("NRRD0004\ntype: uint8\ndimension: 3\nsizes: {nx} {ny} {nz}\nencoding: raw\n\n").into_bytes();
+    let mut nrrd =
+        format!("NRRD0004\ntype: uint8\ndimension: 3\nsizes: {nx} {ny} {nz}\nencoding: raw\n\n").into_bytes();
     nrrd.extend(&voxels);
     let spec = r#"{"problem": {"type": "segmentation", "image": "input:image"}, "output": {"checkpoint_every": 1}}"#;
     let inputs: HashMap<String, Vec<u8>> = [("image".to_string(), nrrd)].into();
@@ -209,7 +210,13 @@ fn touching_pairs_of_balls_in_a_volume_are_kept_apart() {
     let out = run_prepared(&job, None, &AtomicBool::new(false), &mut states).unwrap();
     let img = job.image.as_deref().unwrap();
     let (_, rows) = objects(img, &result_state(&job, &out.last).mesh);
-    eprintln!("{:?} after {} iterations, {} objects, surgeries {:?}", out.stop, out.last.iteration, rows.len(), out.last.surgeries);
+    eprintln!(
+        "{:?} after {} iterations, {} objects, surgeries {:?}",
+        out.stop,
+        out.last.iteration,
+        rows.len(),
+        out.last.surgeries
+    );
     assert_eq!(rows.len(), 4);
     assert_eq!(out.stop, shapeflow::flow::StopReason::Converged);
     let surface = |c: &Checkpoint| {
