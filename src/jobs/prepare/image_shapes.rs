@@ -149,13 +149,24 @@ pub(super) fn threshold_mesh(s: &Grid, objects: &ThresholdObjects) -> Result<Opt
         let t = objects.levels[lab];
         let grow = |lo: usize, hi: usize, n: usize| (lo.saturating_sub(1), (hi + 1).min(n));
         let ((i0, i1), (j0, j1), (k0, k1)) = (grow(b[0], b[1], nx), grow(b[2], b[3], ny), grow(b[4], b[5], nz));
+        let depth = |p: usize| (objects.sign * (s.values[p] - t)).abs().max(1e-3);
+        // in 3D another object's samples lie three times the deepest sample of the
+        // window below the level: the surfaces of two objects whose samples are
+        // corners of one cell (diagonal neighbours, one cleared sample between
+        // them) cross the diagonal a quarter of it from their own sample each,
+        // instead of at one point
+        let deepest = if s.dimension == 3 {
+            let samples = (k0..k1).flat_map(|k| (j0..j1).flat_map(move |j| (i0..i1).map(move |i| i + nx * (j + ny * k))));
+            samples.map(depth).fold(0.0, f64::max)
+        } else {
+            0.0
+        };
         let level = |i: usize, j: usize, k: usize| {
             let p = i + nx * (j + ny * k);
-            let a = (objects.sign * (s.values[p] - t)).abs().max(1e-3);
-            if objects.labels[p] == lab as u32 {
-                a
-            } else {
-                -a
+            match objects.labels[p] {
+                l if l == lab as u32 => depth(p),
+                l if l != 0 && s.dimension == 3 => -3.0 * deepest,
+                _ => -depth(p),
             }
         };
         if s.dimension == 2 {
