@@ -161,8 +161,9 @@ fn split_at_necks<const D: usize>(job: &PreparedJob, dim: &Dimension<'_, D>, las
     } else {
         // the traced parts tidied as a surgery's are (the fine edges' management)
         let manager = job.surface_manager?;
-        let (surfaces, cuts) = split.split_surfaces(&last.mesh.to_mesh_unvalidated::<3>()?, |m| manager.tidy(m, 2))?;
-        let mut components = last.mesh.to_mesh_unvalidated::<3>()?.component_labels().1;
+        let before = last.mesh.to_mesh_unvalidated::<3>()?;
+        let (surfaces, cuts) = split.split_surfaces(&before, |m| manager.tidy(m, 2))?;
+        let mut components = before.component_labels().1;
         for cut in &cuts {
             components += cut.parts - 1;
             tracing::info!(at = ?cut.at, parts = cut.parts, "an object split at its neck");

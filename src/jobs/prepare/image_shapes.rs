@@ -156,7 +156,8 @@ pub(super) fn threshold_mesh(s: &Grid, objects: &ThresholdObjects) -> Result<Opt
         // them) cross the diagonal a quarter of it from their own sample each,
         // instead of at one point
         let deepest = if s.dimension == 3 {
-            let samples = (k0..k1).flat_map(|k| (j0..j1).flat_map(move |j| (i0..i1).map(move |i| i + nx * (j + ny * k))));
+            let samples =
+                (k0..k1).flat_map(|k| (j0..j1).flat_map(move |j| (i0..i1).map(move |i| i + nx * (j + ny * k))));
             samples.map(depth).fold(0.0, f64::max)
         } else {
             0.0
