@@ -125,11 +125,28 @@ fn curve_flow_run(mesh: &CurveMesh, steps: usize) -> (f64, f64, CurveMesh) {
     (total / steps as f64, per_step, flow.mesh().clone())
 }
 
+/// The positions of `steps` accepted steps of a curvature flow (`τ` fixed, no
+/// mesh management: one connectivity) of an ellipsoid of semi-axes 1, 0.8, 0.6 with
+/// the vertices of the level-6 icosphere (40,962), the first one included.
+fn ellipsoid_states(tau: f64, steps: usize) -> Vec<Vec<Point<3>>> {
+    let mesh = shapeflow::geometry::ellipsoid([0.0; 3], [1.0, 0.8, 0.6], 6).unwrap();
+    let mut problem = CurvatureFlow { gamma: 1.0, lambda: 0.0 };
+    let settings = FlowSettings { tau, tolerance: 0.0, step_control: None, ..FlowSettings::default() };
+    let mut states = vec![mesh.positions().to_vec()];
+    let mut flow = Flow::new(&mut problem, mesh, settings).unwrap();
+    for _ in 0..steps {
+        let report = flow.step().unwrap();
+        assert!(report.stop.is_none() && report.accepted);
+        states.push(flow.mesh().positions().to_vec());
+    }
+    states
+}
+
 fn main() {
     shapeflow::tune_allocator();
     println!("| curve vertices | L2 step (ms) | of which solve (ms) | management (ms) | management / step | management / solve |");
     println!("|---:|---:|---:|---:|---:|---:|");
-    for n in [10_000usize, 100_000] {
+    for n in [10_000usize, 100_000].into_iter().filter(|_| std::env::var_os("SURFACES_ONLY").is_none()) {
         let pts: Vec<Point<2>> = (0..n)
             .map(|k| {
                 let u = k as f64 / n as f64;
@@ -227,16 +244,53 @@ fn main() {
     );
     print_row(n, t_step, t_solve, t_manage);
 
-    // the intersection check of every trial step (3D), beside the L2 step; a merge
-    // and a cut of the surgery, each on about that many vertices
+    // the intersection check of every trial step (3D), beside the L2 step: the
+    // exhaustive search of the new state, and the watch (continuous along the
+    // step, most pairs proved apart by its certificate) over the accepted steps of
+    // a curvature flow of an ellipsoid, at a short and at a long step
     let (x, t) = (mesh.positions().to_vec(), mesh.elements().to_vec());
     let t_check = time_it(0.5, || {
         black_box(shapeflow::geometry::surface_intersections(&x, &t, 1));
     });
     println!();
-    println!("| surface vertices | L2 step (ms) | intersection check (ms) | check / step |");
+    println!("| surface vertices | L2 step (ms) | exhaustive search (ms) | search / step |");
     println!("|---:|---:|---:|---:|");
     println!("| {n} | {:.1} | {:.1} | {:.2} |", t_step * 1e3, t_check * 1e3, t_check / t_step);
+    println!();
+    println!(
+        "| ellipsoid flow, {n} vertices | most motion / edge | watch (ms) | watch / step | certificates drawn | \
+         re-anchored | steps swept | pairs tested / step |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|");
+    for tau in [1e-4, 1e-3] {
+        let states = ellipsoid_states(tau, 40);
+        let mut best = f64::INFINITY;
+        let mut watch = shapeflow::geometry::SurfaceWatch::default();
+        for _ in 0..3 {
+            watch = shapeflow::geometry::SurfaceWatch::default();
+            let start = Instant::now();
+            for w in states.windows(2) {
+                assert!(watch.meetings(&w[0], &w[1], &t, 1).is_empty());
+            }
+            best = best.min(start.elapsed().as_secs_f64() / (states.len() - 1) as f64);
+        }
+        let edge = shapeflow::geometry::edge_statistics(&mesh).0;
+        let most = states
+            .windows(2)
+            .map(|w| w[0].iter().zip(&w[1]).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max))
+            .fold(0.0, f64::max);
+        println!(
+            "| τ = {tau:e}, {} steps | {:.2} | {:.2} | {:.2} | {} | {} | {} | {:.0} |",
+            states.len() - 1,
+            most / edge,
+            best * 1e3,
+            best / t_step,
+            watch.drawn,
+            watch.reanchored,
+            watch.swept,
+            watch.tested as f64 / (states.len() - 1) as f64
+        );
+    }
     let a = icosphere([-1.002, 0.0, 0.0], 1.0, 5).unwrap();
     let b = icosphere([1.002, 0.0, 0.0], 1.0, 5).unwrap();
     let two = shapeflow::geometry::surface_union(&[a, b]).unwrap();

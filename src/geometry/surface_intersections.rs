@@ -21,7 +21,7 @@ const CELL_EDGES: f64 = 2.0;
 
 /// Cells a triangle may cover at most before it is kept aside and tested against
 /// every other (a triangle far larger than the mean: a coarse cap).
-const MAX_CELLS: usize = 512;
+pub(super) const MAX_CELLS: usize = 512;
 
 /// The first pair of triangles `(a, b)`, `a < b`, that share no vertex and meet;
 /// `None` if no two such triangles meet.
@@ -36,25 +36,45 @@ pub fn surface_intersections(positions: &[Point<3>], triangles: &[[usize; 3]], m
     if triangles.len() < 2 || most == 0 {
         return hits;
     }
-    let boxes: Vec<([f64; 3], [f64; 3])> = triangles.iter().map(|t| bounds(positions, t)).collect();
+    let boxes: Vec<Aabb> = triangles.iter().map(|t| bounds(positions, t)).collect();
+    let cell = CELL_EDGES * mean_edge(positions, triangles);
+    box_pairs(&boxes, cell, |a, b| {
+        let (ta, tb) = (&triangles[a], &triangles[b]);
+        if !ta.iter().any(|v| tb.contains(v)) && triangles_meet(positions, ta, tb) {
+            hits.push((a.min(b), a.max(b)));
+        }
+        hits.len() >= most
+    });
+    hits
+}
+
+/// An axis-aligned box: its lowest and highest corners.
+pub(super) type Aabb = ([f64; 3], [f64; 3]);
+
+/// The mean edge length of `triangles` (each interior edge counted twice).
+pub(super) fn mean_edge(positions: &[Point<3>], triangles: &[[usize; 3]]) -> f64 {
     let mut edge_sum = 0.0;
     for t in triangles {
         for k in 0..3 {
             edge_sum += (positions[t[(k + 1) % 3]] - positions[t[k]]).norm();
         }
     }
-    let cell = CELL_EDGES * edge_sum / (3 * triangles.len()) as f64;
+    edge_sum / (3 * triangles.len()).max(1) as f64
+}
+
+/// The broad phase: `visit(a, b)` once for every pair of `boxes` that overlap,
+/// until it returns `true`. The boxes are laid on a uniform grid of side `cell`; a
+/// pair is visited in the cell that holds the lowest corner of the intersection of
+/// its boxes. A box that covers more than [`MAX_CELLS`] cells is kept aside and
+/// paired with every other.
+pub(super) fn box_pairs(boxes: &[Aabb], cell: f64, mut visit: impl FnMut(usize, usize) -> bool) {
     if !(cell.is_finite() && cell > 0.0) {
-        return hits;
+        return;
     }
     let index = |x: f64| (x / cell).floor() as i64;
     // (cell, triangle) for every cell a triangle's box covers, sorted by cell: a
     // cell's triangles are a run of the list (no hashing, no list per cell)
-    let pack = |c: [i64; 3]| -> u64 {
-        let b = |v: i64| (v.rem_euclid(1 << 21)) as u64;
-        b(c[0]) | b(c[1]) << 21 | b(c[2]) << 42
-    };
-    let mut entries: Vec<(u64, u32)> = Vec::with_capacity(8 * triangles.len());
+    let mut entries: Vec<(u64, u32)> = Vec::with_capacity(8 * boxes.len());
     let mut large = Vec::new();
     for (t, (lo, hi)) in boxes.iter().enumerate() {
         let (l, h) = (lo.map(index), hi.map(index));
@@ -72,15 +92,6 @@ pub fn surface_intersections(positions: &[Point<3>], triangles: &[[usize; 3]], m
         }
     }
     entries.sort_unstable();
-    let test = |a: usize, b: usize, hits: &mut Vec<(usize, usize)>| {
-        let (ta, tb) = (&triangles[a], &triangles[b]);
-        if ta.iter().any(|v| tb.contains(v)) || !overlap(&boxes[a], &boxes[b]) {
-            return;
-        }
-        if triangles_meet(positions, ta, tb) {
-            hits.push((a.min(b), a.max(b)));
-        }
-    };
     let mut start = 0;
     while start < entries.len() {
         let key = entries[start].0;
@@ -94,29 +105,30 @@ pub fn surface_intersections(positions: &[Point<3>], triangles: &[[usize; 3]], m
                 }
                 // once: in the cell of the lowest corner of the boxes' overlap
                 let corner = [0, 1, 2].map(|k| index(boxes[a].0[k].max(boxes[b].0[k])));
-                if pack(corner) == key {
-                    test(a, b, &mut hits);
-                    if hits.len() >= most {
-                        return hits;
-                    }
+                if pack(corner) == key && visit(a, b) {
+                    return;
                 }
             }
         }
         start = end;
     }
     for (m, &a) in large.iter().enumerate() {
-        for b in 0..triangles.len() {
+        for b in 0..boxes.len() {
             // a pair of two large ones once
-            if b == a || large[..m].contains(&b) {
+            if b == a || large[..m].contains(&b) || !overlap(&boxes[a], &boxes[b]) {
                 continue;
             }
-            test(a, b, &mut hits);
-            if hits.len() >= most {
-                return hits;
+            if visit(a, b) {
+                return;
             }
         }
     }
-    hits
+}
+
+/// A grid cell's key: its three indices, 21 bits each (wrapped).
+pub(super) fn pack(c: [i64; 3]) -> u64 {
+    let b = |v: i64| (v.rem_euclid(1 << 21)) as u64;
+    b(c[0]) | b(c[1]) << 21 | b(c[2]) << 42
 }
 
 /// `after` (positions of the vertices of `triangles`, which meet nowhere new at
@@ -157,7 +169,7 @@ pub fn revert_new_intersections(
     pairs.iter().all(|p| old.binary_search(p).is_ok()).then_some(x)
 }
 
-fn bounds(x: &[Point<3>], t: &[usize; 3]) -> ([f64; 3], [f64; 3]) {
+pub(super) fn bounds(x: &[Point<3>], t: &[usize; 3]) -> Aabb {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for &v in t {
@@ -169,7 +181,7 @@ fn bounds(x: &[Point<3>], t: &[usize; 3]) -> ([f64; 3], [f64; 3]) {
     (lo, hi)
 }
 
-fn overlap(a: &([f64; 3], [f64; 3]), b: &([f64; 3], [f64; 3])) -> bool {
+pub(super) fn overlap(a: &Aabb, b: &Aabb) -> bool {
     (0..3).all(|k| a.0[k] <= b.1[k] && b.0[k] <= a.1[k])
 }
 
@@ -178,8 +190,14 @@ fn c3(p: &Point<3>) -> Coord3D<f64> {
 }
 
 /// Whether triangles `a` and `b` (sharing no vertex) touch or cross.
-fn triangles_meet(x: &[Point<3>], a: &[usize; 3], b: &[usize; 3]) -> bool {
-    let (pa, pb) = (a.map(|v| x[v]), b.map(|v| x[v]));
+pub(super) fn triangles_meet(x: &[Point<3>], a: &[usize; 3], b: &[usize; 3]) -> bool {
+    points_meet(&a.map(|v| x[v]), &b.map(|v| x[v]))
+}
+
+/// Whether the triangles of corners `pa` and `pb` (sharing no corner) touch or
+/// cross, decided exactly.
+pub(super) fn points_meet(pa: &[Point<3>; 3], pb: &[Point<3>; 3]) -> bool {
+    let (pa, pb) = (*pa, *pb);
     let side = |t: &[Point<3>; 3], p: &Point<3>| orient3d(c3(&t[0]), c3(&t[1]), c3(&t[2]), c3(p));
     let sa = pa.map(|p| side(&pb, &p));
     let sb = pb.map(|p| side(&pa, &p));

@@ -129,42 +129,7 @@ fn winding_numbers(grid: &SampleGrid, positions: &[[f64; 3]], triangles: &[[usiz
     winding
 }
 
-/// The distance from `x` to the triangle `t` (its closest point by the regions of
-/// the triangle's plane: a vertex, an edge or the face).
-pub fn point_triangle_distance(x: [f64; 3], t: &[[f64; 3]; 3]) -> f64 {
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let (a, b, c) = (t[0], t[1], t[2]);
-    let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(x, a));
-    let closest = {
-        let (d1, d2) = (dot(ab, ap), dot(ac, ap));
-        let bp = sub(x, b);
-        let (d3, d4) = (dot(ab, bp), dot(ac, bp));
-        let cp = sub(x, c);
-        let (d5, d6) = (dot(ab, cp), dot(ac, cp));
-        let (va, vb, vc) = (d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2);
-        let along = |p: [f64; 3], d: [f64; 3], s: f64| [p[0] + s * d[0], p[1] + s * d[1], p[2] + s * d[2]];
-        if d1 <= 0.0 && d2 <= 0.0 {
-            a
-        } else if d3 >= 0.0 && d4 <= d3 {
-            b
-        } else if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-            along(a, ab, d1 / (d1 - d3))
-        } else if d6 >= 0.0 && d5 <= d6 {
-            c
-        } else if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-            along(a, ac, d2 / (d2 - d6))
-        } else if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-            along(b, sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6)))
-        } else {
-            let denom = 1.0 / (va + vb + vc);
-            let (v, w) = (vb * denom, vc * denom);
-            [a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w]
-        }
-    };
-    let d = sub(x, closest);
-    dot(d, d).sqrt()
-}
+pub use crate::geometry::distance::point_triangle_distance;
 
 #[cfg(test)]
 mod tests {
