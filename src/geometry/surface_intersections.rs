@@ -103,9 +103,7 @@ pub(super) fn box_pairs(boxes: &[Aabb], cell: f64, mut visit: impl FnMut(usize, 
                 if !overlap(&boxes[a], &boxes[b]) {
                     continue;
                 }
-                // once: in the cell of the lowest corner of the boxes' overlap
-                let corner = [0, 1, 2].map(|k| index(boxes[a].0[k].max(boxes[b].0[k])));
-                if pack(corner) == key && visit(a, b) {
+                if overlap_cell(&boxes[a], &boxes[b], cell) == key && visit(a, b) {
                     return;
                 }
             }
@@ -123,6 +121,12 @@ pub(super) fn box_pairs(boxes: &[Aabb], cell: f64, mut visit: impl FnMut(usize, 
             }
         }
     }
+}
+
+/// The key of the cell (side `cell`) that holds the lowest corner of the overlap
+/// of two boxes: the one cell in which a broad phase visits the pair.
+pub(super) fn overlap_cell(a: &Aabb, b: &Aabb, cell: f64) -> u64 {
+    pack([0, 1, 2].map(|k| (a.0[k].max(b.0[k]) / cell).floor() as i64))
 }
 
 /// A grid cell's key: its three indices, 21 bits each (wrapped).

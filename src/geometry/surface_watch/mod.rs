@@ -28,7 +28,7 @@
 
 use super::distance::{sweep_apart, triangle_distance};
 use super::surface_intersections::{
-    bounds, box_pairs, mean_edge, overlap, pack, points_meet, triangles_meet, Aabb, MAX_CELLS,
+    bounds, box_pairs, mean_edge, overlap, overlap_cell, pack, points_meet, triangles_meet, Aabb, MAX_CELLS,
 };
 use super::Point;
 use std::collections::HashMap;
@@ -358,7 +358,6 @@ impl Certificate {
         }
         self.near.retain(|p| !dirty[p.a as usize] && !dirty[p.b as usize]);
         let mut near = Vec::new();
-        let index = |v: f64| (v / self.cell).floor() as i64;
         for &t in &changed {
             let mut partners = Vec::new();
             let in_grid = self.for_cells(t, |key| {
@@ -369,8 +368,7 @@ impl Certificate {
                     if u == t || (dirty[u] && u < t) || !overlap(&self.boxes[t], &self.boxes[u]) {
                         continue;
                     }
-                    let corner = [0, 1, 2].map(|k| index(self.boxes[t].0[k].max(self.boxes[u].0[k])));
-                    if pack(corner) == key {
+                    if overlap_cell(&self.boxes[t], &self.boxes[u], self.cell) == key {
                         partners.push(u);
                     }
                 }
