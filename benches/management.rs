@@ -252,10 +252,52 @@ fn main() {
     let t_check = time_it(0.5, || {
         black_box(shapeflow::geometry::surface_intersections(&x, &t, 1));
     });
+    // the patch search (the driver's), its patches cut once for the connectivity
+    let mut search = shapeflow::geometry::PatchSearch::default();
+    let t_patches = time_it(0.5, || {
+        black_box(search.intersections(&x, &t, 1));
+    });
+    let states = ellipsoid_states(1e-3, 40);
+    let start = Instant::now();
+    for state in &states {
+        assert!(search.intersections(state, &t, 1).is_empty());
+    }
+    let t_flow = start.elapsed().as_secs_f64() / states.len() as f64;
+    let (flow_embedded, flow_neighbours, flow_tested) = (search.embedded, search.neighbours, search.tested);
+    let start = Instant::now();
+    for state in &states {
+        assert!(shapeflow::geometry::surface_intersections(state, &t, 1).is_empty());
+    }
+    let t_flow_exhaustive = start.elapsed().as_secs_f64() / states.len() as f64;
+    search.intersections(&x, &t, 1);
     println!();
-    println!("| surface vertices | L2 step (ms) | exhaustive search (ms) | search / step |");
-    println!("|---:|---:|---:|---:|");
-    println!("| {n} | {:.1} | {:.1} | {:.2} |", t_step * 1e3, t_check * 1e3, t_check / t_step);
+    println!(
+        "| surface vertices | L2 step (ms) | exhaustive search (ms) | search / step | patch search (ms) | \
+         patch search / step | patches embedded | patch pairs | pairs tested |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!(
+        "| sphere, {n} | {:.1} | {:.1} | {:.2} | {:.2} | {:.3} | {} of {} | {} | {} |",
+        t_step * 1e3,
+        t_check * 1e3,
+        t_check / t_step,
+        t_patches * 1e3,
+        t_patches / t_step,
+        search.embedded,
+        search.patches_searched,
+        search.neighbours,
+        search.tested
+    );
+    println!(
+        "| ellipsoid flow, {n}, mean of {} states | {:.1} | {:.1} | {:.2} | {:.2} | {:.3} | {flow_embedded} of {} | {flow_neighbours} | {flow_tested} |",
+        states.len(),
+        t_step * 1e3,
+        t_flow_exhaustive * 1e3,
+        t_flow_exhaustive / t_step,
+        t_flow * 1e3,
+        t_flow / t_step,
+        search.patches_searched,
+    );
     println!();
     println!(
         "| ellipsoid flow, {n} vertices | most motion / edge | watch (ms) | watch / step | certificates drawn | \

@@ -1,12 +1,13 @@
 //! The acceptance rules of a trial step, one function per rule, each returning a
 //! [`Verdict`]: accept, or retry with a shorter `τ` for a [`Rejection`]. The driver
 //! applies them in the order of the module documentation of [`super::driver`]:
-//! geometric control, tangling, conservation, then the energy (backtracking).
+//! geometric control, tangling, conservation, intersections, then the energy
+//! (backtracking).
 //! Below `τ_min`, [`stop_below_tau_min`] decides between `tau_min` and `converged`.
 
 use super::intersections::new_intersection;
 use super::report::{Rejection, StopReason};
-use crate::geometry::{degenerate_measure, simplex, Mesh};
+use crate::geometry::{degenerate_measure, simplex, Mesh, PatchSearch};
 
 /// What a rule says about a trial step of size `τ`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,13 +57,14 @@ pub(super) fn tangling<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, tau: f64) -
 
 /// Intersections (surfaces): a trial surface on which two triangles that share no
 /// vertex meet (two components passing through each other, or one through
-/// itself: [`surface_intersections`]) and did not already meet in `old` halves
+/// itself), at its end or along a long step ([`new_intersection`]), and did not
+/// already meet in `old` halves
 /// `τ`. No new intersection is ever accepted; a state that starts with touching
 /// parts (a segmentation's objects split at a neck) may keep them. A run whose
 /// surfaces come into contact ends at `tau_min` with this rejection as its cause,
 /// on the last state before the contact, unless they merge.
-pub(super) fn intersection<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, tau: f64) -> Verdict {
-    match new_intersection(old, new) {
+pub(super) fn intersection<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, tau: f64, search: &mut PatchSearch) -> Verdict {
+    match new_intersection(old, new, search) {
         Some((a, b)) => {
             tracing::debug!(a, b, tau, "trial surface intersects");
             Verdict::Retry { tau: 0.5 * tau, rejection: Rejection::Intersection }

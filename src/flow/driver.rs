@@ -5,14 +5,15 @@
 //! `V⃗`, and then
 //! 1. *geometric control* (paper §4.1): if `τ max_T |V⃗(z_a) − V⃗(z_b)| / h_T > ε`
 //!    the step is retried with `τ ← 0.9 ε τ / ratio`;
-//! 2. *tangling*: an element that degenerates or flips halves `τ`; so does a trial
-//!    surface on which two triangles sharing no vertex meet (components passing
-//!    through each other, or one through itself: never accepted); so does a change
+//! 2. *tangling*: an element that degenerates or flips halves `τ`; so does a change
 //!    of the enclosed measure above `conservation` (relative, when set; down to
 //!    `4 τ_min`); an accepted change below it is then removed by offsetting each
 //!    component along its normals ([`Mesh::with_component_measures`]), after the
 //!    problem's constraints are enforced ([`Problem::constrain`]: the film's
-//!    wetting layer);
+//!    wetting layer). Last, on the state the step would accept (that offset
+//!    included), so does a surface on which two triangles sharing no vertex meet
+//!    (components passing through each other, or one through itself: never
+//!    accepted), checked along the whole step when step control is off;
 //! 3. *backtracking* (paper §3.2): while `J(Γ_{n+1}) > J(Γ_n)`, halve `τ`;
 //! 4. *contact* (paper §4.1, topological changes): a trial step in which two
 //!    curves cross ([`Problem::merges`]) and whose merged shape has a higher energy
@@ -53,7 +54,7 @@ use super::step::SemiImplicitStep;
 use super::system::LinearSystem;
 use super::FlowError;
 use crate::fem::{Matrices, Pattern};
-use crate::geometry::Mesh;
+use crate::geometry::{Mesh, PatchSearch};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 pub use super::checkpoint::{Checkpoint, MeshData};
@@ -105,6 +106,9 @@ pub struct Flow<'p, const D: usize> {
     pub(super) vertex_limit: usize,
     /// The topological surgeries so far, oldest first.
     pub(super) surgeries: Vec<SurgeryRecord>,
+    /// The intersection search of trial surfaces (its patches kept while the
+    /// connectivity is).
+    pub(super) search: PatchSearch,
 }
 
 impl<'p, const D: usize> Flow<'p, D> {
@@ -255,27 +259,6 @@ impl<'p, const D: usize> Flow<'p, D> {
                 tau = shorter;
                 continue;
             }
-            if let Some(shorter) = report.retry(rules::intersection(&self.mesh, &candidate, tau)) {
-                if shorter < super::intersections::CONTACT * s.tau {
-                    // the surfaces are in contact: shorter steps would only creep
-                    // closer, each accepted. They merge if the mesh management
-                    // does merges; else the run ends on the last state before
-                    // (a merged surface that the tidying folded through itself is not taken)
-                    let merged = self.manager.as_mut().and_then(|m| m.merge(&self.mesh));
-                    if let Some(merged) = merged.filter(|m| super::intersections::surface_intersection(m).is_none()) {
-                        let at = super::intersections::contact_point(&self.mesh, &candidate);
-                        self.take_merge(merged, at)?;
-                        report.rejected = None;
-                        report.merged = true;
-                        report.accepted = true;
-                        return Ok(report);
-                    }
-                    report.stop = Some(StopReason::TauMin);
-                    return Ok(report);
-                }
-                tau = shorter;
-                continue;
-            }
             if let Some(shorter) = report.retry(rules::conservation(a0, a1, s.conservation, tau, s.tau_min)) {
                 tau = shorter;
                 continue;
@@ -289,6 +272,28 @@ impl<'p, const D: usize> Flow<'p, D> {
                     tau = shorter;
                     continue;
                 }
+            }
+            // after the conservation's correction, which moves every vertex
+            if let Some(shorter) = report.retry(rules::intersection(&self.mesh, &candidate, tau, &mut self.search)) {
+                if shorter < super::intersections::CONTACT * s.tau {
+                    // the surfaces are in contact: shorter steps would only creep
+                    // closer, each accepted. They merge if the mesh management
+                    // does merges; else the run ends on the last state before
+                    // (a merged surface that the tidying folded through itself is not taken)
+                    let merged = self.manager.as_mut().and_then(|m| m.merge(&self.mesh));
+                    if let Some(merged) = merged.filter(|m| super::intersections::surface_intersection(m, &mut self.search).is_none()) {
+                        let at = super::intersections::contact_point(&self.mesh, &candidate, &mut self.search);
+                        self.take_merge(merged, at)?;
+                        report.rejected = None;
+                        report.merged = true;
+                        report.accepted = true;
+                        return Ok(report);
+                    }
+                    report.stop = Some(StopReason::TauMin);
+                    return Ok(report);
+                }
+                tau = shorter;
+                continue;
             }
             let mut energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
             if energy.is_nan() || energy == f64::NEG_INFINITY {

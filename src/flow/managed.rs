@@ -77,8 +77,9 @@ impl<const D: usize> Flow<'_, D> {
             );
             return Ok(None);
         }
-        let intersecting = super::intersections::surface_intersection(&mesh);
-        if let Some((a, b)) = intersecting.filter(|_| super::intersections::surface_intersection(&self.mesh).is_none())
+        let intersecting = super::intersections::surface_intersection(&mesh, &mut self.search);
+        if let Some((a, b)) =
+            intersecting.filter(|_| super::intersections::surface_intersection(&self.mesh, &mut self.search).is_none())
         {
             // the remeshed or regularized surface passes through itself (a vertex
             // moved across a close sheet, by a fold at a sharp ring): the accepted

@@ -8,7 +8,7 @@ use super::settings::{check_bending, check_settings, FlowSettings};
 use super::step::SemiImplicitStep;
 use super::{Checkpoint, FlowError};
 use crate::fem::{Matrices, Pattern};
-use crate::geometry::Mesh;
+use crate::geometry::{Mesh, PatchSearch};
 
 impl<'p, const D: usize> Flow<'p, D> {
     /// Run mesh management (regularization, adaptivity, topology) after every step.
@@ -111,6 +111,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             recent: Vec::new(),
             vertex_limit: vertex_limit(vertices),
             surgeries: Vec::new(),
+            search: PatchSearch::default(),
         }
     }
 }

@@ -26,12 +26,16 @@
 //! draw the whole certificate again. A step longer than `R` is checked without the
 //! certificate: every pair whose boxes swept over the step overlap is tested.
 
-use super::distance::{sweep_apart, triangle_distance};
+use super::distance::triangle_distance;
 use super::surface_intersections::{
-    bounds, box_pairs, mean_edge, overlap, overlap_cell, pack, points_meet, triangles_meet, Aabb, MAX_CELLS,
+    bounds, box_pairs, mean_edge, overlap, overlap_cell, pack, points_meet, Aabb, MAX_CELLS,
 };
 use super::Point;
+use swept::{pair_meets, swept_meetings};
 use std::collections::HashMap;
+
+mod swept;
+pub use swept::swept_surface_intersections;
 
 /// `R`, the displacement from the anchor that voids a vertex's part of the
 /// certificate, in mean edge lengths.
@@ -86,19 +90,12 @@ fn c(p: &Point<3>) -> [f64; 3] {
     [p[0], p[1], p[2]]
 }
 
-fn corners(x: &[Point<3>], t: &[usize; 3]) -> [[f64; 3]; 3] {
+pub(super) fn corners(x: &[Point<3>], t: &[usize; 3]) -> [[f64; 3]; 3] {
     t.map(|v| c(&x[v]))
 }
 
-fn shares(a: &[usize; 3], b: &[usize; 3]) -> bool {
+pub(super) fn shares(a: &[usize; 3], b: &[usize; 3]) -> bool {
     a.iter().any(|v| b.contains(v))
-}
-
-/// Whether triangles `a`, `b` (sharing no vertex) meet at `new` or may meet on the
-/// linear way from `old`.
-fn pair_meets(old: &[Point<3>], new: &[Point<3>], a: &[usize; 3], b: &[usize; 3], slack: f64) -> bool {
-    triangles_meet(new, a, b)
-        || !sweep_apart(&corners(old, a), &corners(new, a), &corners(old, b), &corners(new, b), slack)
 }
 
 impl SurfaceWatch {
@@ -175,34 +172,6 @@ impl SurfaceWatch {
         }
         hits
     }
-}
-
-/// [`SurfaceWatch::meetings`] without a certificate: every pair whose boxes swept
-/// over the step overlap.
-fn swept_meetings(
-    old: &[Point<3>],
-    new: &[Point<3>],
-    triangles: &[[usize; 3]],
-    most: usize,
-    slack: f64,
-) -> Vec<(usize, usize)> {
-    let boxes: Vec<Aabb> = triangles
-        .iter()
-        .map(|t| {
-            let (b0, b1) = (bounds(old, t), bounds(new, t));
-            (std::array::from_fn(|k| b0.0[k].min(b1.0[k])), std::array::from_fn(|k| b0.1[k].max(b1.1[k])))
-        })
-        .collect();
-    let mut hits = Vec::new();
-    box_pairs(&boxes, 2.0 * mean_edge(new, triangles), |a, b| {
-        let (ta, tb) = (&triangles[a], &triangles[b]);
-        if !shares(ta, tb) && pair_meets(old, new, ta, tb, slack) {
-            hits.push((a.min(b), a.max(b)));
-        }
-        hits.len() >= most
-    });
-    hits.sort_unstable();
-    hits
 }
 
 impl Certificate {

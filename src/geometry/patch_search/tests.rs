@@ -1,0 +1,161 @@
+use super::*;
+use crate::geometry::surface_intersections::mean_edge;
+use crate::geometry::{box_surface, ellipsoid, icosphere, surface_intersections, surface_union, torus};
+
+fn numbers(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn all_pairs(search: &mut PatchSearch, x: &[Point<3>], t: &[[usize; 3]]) -> Vec<(usize, usize)> {
+    let mut found = search.intersections(x, t, usize::MAX);
+    found.sort_unstable();
+    let mut exhaustive = surface_intersections(x, t, usize::MAX);
+    exhaustive.sort_unstable();
+    assert_eq!(found, exhaustive, "the patch search and the exhaustive search differ");
+    assert!(found.windows(2).all(|w| w[0] != w[1]), "a pair reported twice");
+    found
+}
+
+/// Smooth closed surfaces, and a box (flat faces, straight rows of vertices,
+/// right-angled edges): nothing meets, and nearly every patch is proved
+/// embedded, so that few pairs are tested.
+#[test]
+fn smooth_surfaces_are_proved_apart_patch_by_patch() {
+    let shapes = [
+        icosphere([0.0; 3], 1.0, 4).unwrap(),
+        ellipsoid([0.1, 0.0, 0.0], [1.0, 0.5, 0.3], 4).unwrap(),
+        torus([0.0; 3], 1.0, 0.3, 96, 32).unwrap(),
+        box_surface([0.0; 3], [8.0, 1.0, 1.0], 12.0).unwrap(),
+    ];
+    for mesh in shapes {
+        let (x, t) = (mesh.positions().to_vec(), mesh.elements().to_vec());
+        let mut search = PatchSearch::default();
+        assert!(all_pairs(&mut search, &x, &t).is_empty());
+        assert!(search.patches_searched > 20, "{} patches", search.patches_searched);
+        assert!(
+            search.embedded as f64 >= 0.95 * search.patches_searched as f64,
+            "{} of {} patches embedded",
+            search.embedded,
+            search.patches_searched
+        );
+        assert!(search.tested < t.len() / 2, "{} pairs tested for {} triangles", search.tested, t.len());
+    }
+}
+
+/// Two spheres apart, in a thin lens of contact, and overlapping deeply: the
+/// same pairs as the exhaustive search, `most` honoured.
+#[test]
+fn meeting_spheres_give_the_exhaustive_pairs() {
+    let mut search = PatchSearch::default();
+    for (gap, meet) in [(0.01, false), (-0.01, true), (-0.6, true)] {
+        let a = icosphere([-1.0 - gap / 2.0, 0.0, 0.0], 1.0, 3).unwrap();
+        let b = icosphere([1.0 + gap / 2.0, 0.0, 0.0], 1.0, 3).unwrap();
+        let two = surface_union(&[a, b]).unwrap();
+        let (x, t) = (two.positions().to_vec(), two.elements().to_vec());
+        let found = all_pairs(&mut search, &x, &t);
+        assert_eq!(!found.is_empty(), meet, "gap {gap}");
+        if meet {
+            assert_eq!(search.intersections(&x, &t, 1).len(), 1);
+        }
+    }
+}
+
+/// A sphere jittered by up to 0.3 to 3 mean edges (folds, triangles flipped,
+/// sheets through each other), and a flattened ellipsoid pushed through itself:
+/// the same pairs as the exhaustive search in every case.
+#[test]
+fn folded_and_jittered_surfaces_give_the_exhaustive_pairs() {
+    let mesh = icosphere([0.0; 3], 1.0, 3).unwrap();
+    let t = mesh.elements().to_vec();
+    let h = mean_edge(mesh.positions(), &t);
+    let mut r = numbers(7);
+    let mut search = PatchSearch::default();
+    let mut meeting = 0;
+    for amplitude in [0.3, 0.6, 1.0, 3.0] {
+        for _ in 0..3 {
+            let x: Vec<Point<3>> = mesh
+                .positions()
+                .iter()
+                .map(|p| p + Point::<3>::new(r() - 0.5, r() - 0.5, r() - 0.5) * (2.0 * amplitude * h))
+                .collect();
+            meeting += usize::from(!all_pairs(&mut search, &x, &t).is_empty());
+        }
+    }
+    assert!(meeting >= 6, "{meeting} of 12 jittered spheres meet themselves");
+    // a pancake whose top is pushed down through its bottom near the centre
+    let pancake = ellipsoid([0.0; 3], [1.0, 1.0, 0.05], 4).unwrap();
+    let t = pancake.elements().to_vec();
+    let x: Vec<Point<3>> = pancake
+        .positions()
+        .iter()
+        .map(|p| {
+            let dip = if p[2] > 0.0 { 0.2 * (-(p[0] * p[0] + p[1] * p[1]) / 0.05).exp() } else { 0.0 };
+            Point::<3>::new(p[0], p[1], p[2] - dip)
+        })
+        .collect();
+    assert!(!all_pairs(&mut search, &x, &t).is_empty());
+}
+
+/// A connectivity that is not a closed manifold (an open strip) gets patches of
+/// one triangle: the search is the exhaustive one.
+#[test]
+fn an_open_surface_is_searched_triangle_by_triangle() {
+    let x = vec![
+        Point::<3>::new(0.0, 0.0, 0.0),
+        Point::<3>::new(1.0, 0.0, 0.0),
+        Point::<3>::new(0.0, 1.0, 0.0),
+        Point::<3>::new(0.2, 0.2, -0.5),
+        Point::<3>::new(0.3, 0.2, 0.5),
+        Point::<3>::new(0.2, 0.3, 0.5),
+    ];
+    let t = vec![[0, 1, 2], [3, 4, 5]];
+    let mut search = PatchSearch::default();
+    assert_eq!(all_pairs(&mut search, &x, &t), vec![(0, 1)]);
+    assert_eq!((search.patches_searched, search.embedded), (2, 0));
+}
+
+#[test]
+fn simple_loops() {
+    let c = |pts: &[(f64, f64)]| pts.iter().map(|&(x, y)| Coord { x, y }).collect::<Vec<_>>();
+    assert!(simple_loop(&c(&[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)])));
+    // straight runs along a side
+    assert!(simple_loop(&c(&[(0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (2.0, 1.0), (0.0, 1.0)])));
+    // a bow tie, a spike folding back along itself, a loop touching itself at a corner
+    assert!(!simple_loop(&c(&[(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)])));
+    assert!(!simple_loop(&c(&[(0.0, 0.0), (2.0, 0.0), (1.0, 0.0), (1.0, 1.0)])));
+    assert!(!simple_loop(&c(&[(0.0, 0.0), (2.0, 0.0), (1.0, 1.0), (2.0, 2.0), (0.0, 2.0), (1.0, 1.0)])));
+    // a corner of one edge on another
+    assert!(!simple_loop(&c(&[(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (1.0, 0.0), (0.0, 2.0)])));
+}
+
+/// One search kept while an ellipsoid turns by 90° in steps of 10° (the
+/// connectivity unchanged, the patches cut for the first pose): the exhaustive
+/// pairs at every pose, and nearly every patch embedded at each (a patch picks its
+/// plane at each search). A crumpled state, on which most patches are not, has
+/// them cut again at the next search.
+#[test]
+fn patches_follow_a_turning_and_a_crumpling_surface() {
+    let mesh = ellipsoid([0.0; 3], [1.0, 0.6, 0.3], 4).unwrap();
+    let t = mesh.elements().to_vec();
+    let mut search = PatchSearch::default();
+    for step in 0..=9 {
+        let (s, c) = (f64::from(step) * 10f64.to_radians()).sin_cos();
+        let x: Vec<Point<3>> =
+            mesh.positions().iter().map(|p| Point::<3>::new(c * p[0] - s * p[2], p[1], s * p[0] + c * p[2])).collect();
+        assert!(all_pairs(&mut search, &x, &t).is_empty());
+        assert!(search.embedded * 10 >= 9 * search.patches_searched, "{} of {}", search.embedded, search.patches_searched);
+        assert!(!search.stale);
+    }
+    let h = mean_edge(mesh.positions(), &t);
+    let mut r = numbers(11);
+    let crumpled: Vec<Point<3>> =
+        mesh.positions().iter().map(|p| p + Point::<3>::new(r() - 0.5, r() - 0.5, r() - 0.5) * h).collect();
+    all_pairs(&mut search, &crumpled, &t);
+    assert!(search.stale, "{} of {} patches embedded", search.embedded, search.patches_searched);
+    assert!(all_pairs(&mut search, mesh.positions(), &t).is_empty());
+    assert!(!search.stale);
+}
