@@ -63,7 +63,12 @@ pub(super) fn tangling<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, tau: f64) -
 /// parts (a segmentation's objects split at a neck) may keep them. A run whose
 /// surfaces come into contact ends at `tau_min` with this rejection as its cause,
 /// on the last state before the contact, unless they merge.
-pub(super) fn intersection<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, tau: f64, search: &mut PatchSearch) -> Verdict {
+pub(super) fn intersection<const D: usize>(
+    old: &Mesh<D>,
+    new: &Mesh<D>,
+    tau: f64,
+    search: &mut PatchSearch,
+) -> Verdict {
     match new_intersection(old, new, search) {
         Some((a, b)) => {
             tracing::debug!(a, b, tau, "trial surface intersects");

@@ -281,7 +281,9 @@ impl<'p, const D: usize> Flow<'p, D> {
                     // does merges; else the run ends on the last state before
                     // (a merged surface that the tidying folded through itself is not taken)
                     let merged = self.manager.as_mut().and_then(|m| m.merge(&self.mesh));
-                    if let Some(merged) = merged.filter(|m| super::intersections::surface_intersection(m, &mut self.search).is_none()) {
+                    if let Some(merged) =
+                        merged.filter(|m| super::intersections::surface_intersection(m, &mut self.search).is_none())
+                    {
                         let at = super::intersections::contact_point(&self.mesh, &candidate, &mut self.search);
                         self.take_merge(merged, at)?;
                         report.rejected = None;

@@ -99,10 +99,12 @@ impl PatchSearch {
             }
         }
         first_chunk.push(chunks.len());
-        let patch_boxes: Vec<Aabb> =
-            (0..p.patches.len()).map(|q| union(chunks[first_chunk[q]..first_chunk[q + 1]].iter().map(|c| &c.2))).collect();
+        let patch_boxes: Vec<Aabb> = (0..p.patches.len())
+            .map(|q| union(chunks[first_chunk[q]..first_chunk[q + 1]].iter().map(|c| &c.2)))
+            .collect();
         // pairs of patches are visited on a grid of the patches' typical size
-        let mut sides: Vec<f64> = patch_boxes.iter().map(|b| (0..3).map(|k| b.1[k] - b.0[k]).fold(0.0, f64::max)).collect();
+        let mut sides: Vec<f64> =
+            patch_boxes.iter().map(|b| (0..3).map(|k| b.1[k] - b.0[k]).fold(0.0, f64::max)).collect();
         sides.sort_unstable_by(f64::total_cmp);
         let cell = sides[sides.len() / 2];
         if !(cell.is_finite() && cell > 0.0) {
@@ -127,7 +129,8 @@ impl PatchSearch {
                 continue;
             }
             // the patch's own pairs through the exhaustive search's broad phase
-            let edges: f64 = corners[start..end].iter().map(|c| (0..3).map(|k| (c[(k + 1) % 3] - c[k]).norm()).sum::<f64>()).sum();
+            let edges: f64 =
+                corners[start..end].iter().map(|c| (0..3).map(|k| (c[(k + 1) % 3] - c[k]).norm()).sum::<f64>()).sum();
             let cell = 2.0 * edges / (3 * (end - start)) as f64;
             if !(cell.is_finite() && cell > 0.0) {
                 return surface_intersections(x, triangles, most);

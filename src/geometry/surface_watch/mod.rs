@@ -31,8 +31,8 @@ use super::surface_intersections::{
     bounds, box_pairs, mean_edge, overlap, overlap_cell, pack, points_meet, Aabb, MAX_CELLS,
 };
 use super::Point;
-use swept::{pair_meets, swept_meetings};
 use std::collections::HashMap;
+use swept::{pair_meets, swept_meetings};
 
 mod swept;
 pub use swept::swept_surface_intersections;

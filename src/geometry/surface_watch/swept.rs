@@ -58,4 +58,3 @@ pub(super) fn swept_meetings(
     hits.sort_unstable();
     hits
 }
-
