@@ -58,11 +58,11 @@ pub(super) fn tangling<const D: usize>(old: &Mesh<D>, new: &Mesh<D>, tau: f64) -
 /// Intersections (surfaces): a trial surface on which two triangles that share no
 /// vertex meet (two components passing through each other, or one through
 /// itself), at its end or along a long step ([`new_intersection`]), and did not
-/// already meet in `old` halves
-/// `τ`. No new intersection is ever accepted; a state that starts with touching
-/// parts (a segmentation's objects split at a neck) may keep them. A run whose
-/// surfaces come into contact ends at `tau_min` with this rejection as its cause,
-/// on the last state before the contact, unless they merge.
+/// already meet in `old` halves `τ`. No new intersection is ever accepted; a
+/// state that starts with touching parts (a segmentation's objects split at a
+/// neck) may keep them. A run whose surfaces come into contact ends at `tau_min`
+/// with this rejection as its cause, on the last state before the contact,
+/// unless they merge.
 pub(super) fn intersection<const D: usize>(
     old: &Mesh<D>,
     new: &Mesh<D>,

@@ -13,7 +13,8 @@
 //!    wetting layer). Last, on the state the step would accept (that offset
 //!    included), so does a surface on which two triangles sharing no vertex meet
 //!    (components passing through each other, or one through itself: never
-//!    accepted), checked along the whole step when step control is off;
+//!    accepted), checked along the whole step too when it moves a vertex by more
+//!    than a quarter of the mean edge ([`super::intersections`]);
 //! 3. *backtracking* (paper §3.2): while `J(Γ_{n+1}) > J(Γ_n)`, halve `τ`;
 //! 4. *contact* (paper §4.1, topological changes): a trial step in which two
 //!    curves cross ([`Problem::merges`]) and whose merged shape has a higher energy

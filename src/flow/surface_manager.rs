@@ -7,7 +7,7 @@ use super::report::SurgeryKind;
 use super::FlowError;
 use crate::geometry::{
     adapt_surface, cut_neck, edge_statistics, first_surface_intersection, regularize_surface, revert_new_intersections,
-    SurfaceMesh, SurfaceRemeshSettings,
+    PatchSearch, SurfaceMesh, SurfaceRemeshSettings,
 };
 
 /// Switches and resolved parameters of surface mesh management.
@@ -125,7 +125,7 @@ impl SurfaceManager {
             return (remeshed, moved);
         }
         let unmoved = |base: &SurfaceMesh, m: &SurfaceMesh| {
-            revert_new_intersections(base.positions(), m.positions(), base.elements(), 8)
+            revert_new_intersections(base.positions(), m.positions(), base.elements(), 8, &mut PatchSearch::default())
                 .map(|x| base.with_positions(x))
         };
         // the regularization undone where it meets, on the adaptation if that is sound

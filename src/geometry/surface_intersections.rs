@@ -13,7 +13,7 @@
 //! Triangles that share a vertex are not tested: their contact is a fold of the
 //! surface, which the flow's tangling rule rejects.
 
-use super::Point;
+use super::{PatchSearch, Point};
 use robust::{orient2d, orient3d, Coord, Coord3D};
 
 /// Cells of the broad phase, in mean edge lengths.
@@ -140,15 +140,17 @@ pub(super) fn pack(c: [i64; 3]) -> u64 {
 /// not at `before` put back at `before`, repeated until no new pair meets (a
 /// vertex put back can bring a neighbouring triangle into contact) or `rounds`
 /// are done; `None` if some new pair still meets then. At worst every vertex is
-/// put back: `before`, which meets nowhere new.
+/// put back: `before`, which meets nowhere new. The pairs are found by `search`
+/// (the exhaustive search's pairs; its patches kept for the next call).
 pub fn revert_new_intersections(
     before: &[Point<3>],
     after: &[Point<3>],
     triangles: &[[usize; 3]],
     rounds: usize,
+    search: &mut PatchSearch,
 ) -> Option<Vec<Point<3>>> {
-    let meeting = |x: &[Point<3>]| {
-        let mut pairs = surface_intersections(x, triangles, usize::MAX);
+    let mut meeting = |x: &[Point<3>]| {
+        let mut pairs = search.intersections(x, triangles, usize::MAX);
         pairs.sort_unstable();
         pairs
     };

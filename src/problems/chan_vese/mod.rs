@@ -275,7 +275,7 @@ impl<const D: usize> Problem<D> for ChanVeseRun {
             let surfaces = (current as &dyn std::any::Any).downcast_ref::<Mesh<3>>();
             let mut candidate = candidate;
             if let (Some(current), Some(c)) = (surfaces, (&mut candidate as &mut dyn std::any::Any).downcast_mut()) {
-                hold_contacts(current, c, CLEARANCE / self.cv.intensity.scale());
+                hold_contacts(current, c, CLEARANCE / self.cv.intensity.scale(), &mut self.search.borrow_mut());
             }
             return candidate;
         }

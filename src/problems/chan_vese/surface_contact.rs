@@ -13,7 +13,7 @@
 //! a neck may start so) are left as they are: the flow's intersection check does
 //! not count them either.
 
-use crate::geometry::{revert_new_intersections, Mesh, Point};
+use crate::geometry::{revert_new_intersections, Mesh, PatchSearch, Point};
 use crate::imaging::signed_distance::point_triangle_distance;
 use std::collections::HashMap;
 
@@ -24,8 +24,9 @@ const ROUNDS: usize = 12;
 /// `candidate` (the connectivity of `current`) with the vertices held at their
 /// positions in `current` that come within `gap` of another component, or belong
 /// to a pair of triangles that meet in it but not in `current` (see the module
-/// documentation); unchanged where there are none.
-pub(super) fn hold_contacts(current: &Mesh<3>, candidate: &mut Mesh<3>, gap: f64) {
+/// documentation); unchanged where there are none. `search` finds the pairs
+/// that meet (its patches kept for the next step).
+pub(super) fn hold_contacts(current: &Mesh<3>, candidate: &mut Mesh<3>, gap: f64, search: &mut PatchSearch) {
     let triangles = current.elements();
     let (component, count) = current.component_labels();
     let here = current.positions();
@@ -54,7 +55,7 @@ pub(super) fn hold_contacts(current: &Mesh<3>, candidate: &mut Mesh<3>, gap: f64
         }
     }
     // then the triangles that would pass through each other
-    if let Some(apart) = revert_new_intersections(here, &x, triangles, ROUNDS) {
+    if let Some(apart) = revert_new_intersections(here, &x, triangles, ROUNDS, search) {
         x = apart;
     }
     tracing::trace!(held, "vertices held at a contact of surfaces");
@@ -131,7 +132,7 @@ mod tests {
         let grown = two.with_positions(grown);
         assert!(!crate::geometry::surface_intersections(grown.positions(), grown.elements(), 1).is_empty());
         let mut held = grown.clone();
-        hold_contacts(&two, &mut held, 0.0);
+        hold_contacts(&two, &mut held, 0.0, &mut PatchSearch::default());
         assert!(crate::geometry::surface_intersections(held.positions(), held.elements(), 1).is_empty());
         let kept = (0..two.num_vertices()).filter(|&v| held.positions()[v] == two.positions()[v]).count();
         let moved = (0..two.num_vertices()).filter(|&v| held.positions()[v] == grown.positions()[v]).count();
@@ -146,7 +147,7 @@ mod tests {
         // comes that close to the other sphere
 
         let mut apart = grown.clone();
-        hold_contacts(&two, &mut apart, 0.2);
+        hold_contacts(&two, &mut apart, 0.2, &mut PatchSearch::default());
         let (component, _) = two.component_labels();
         let clearance = Clearance::new(apart.positions(), two.elements(), &component, 0.2);
         for v in 0..two.num_vertices() {
@@ -160,7 +161,7 @@ mod tests {
         let small: Vec<Point<3>> = two.positions().iter().map(|x| centre(x) + (x - centre(x)) * 1.01).collect();
         let small = two.with_positions(small);
         let mut kept = small.clone();
-        hold_contacts(&two, &mut kept, 0.0);
+        hold_contacts(&two, &mut kept, 0.0, &mut PatchSearch::default());
         assert_eq!(kept.positions(), small.positions());
     }
 }
