@@ -257,6 +257,10 @@ fn main() {
     let t_patches = time_it(0.5, || {
         black_box(search.intersections(&x, &t, 1));
     });
+    // a new connectivity: the patches cut, then searched
+    let t_cut = time_it(0.5, || {
+        black_box(shapeflow::geometry::PatchSearch::default().intersections(&x, &t, 1));
+    });
     let states = ellipsoid_states(1e-3, 40);
     let start = Instant::now();
     for state in &states {
@@ -287,6 +291,14 @@ fn main() {
         search.patches_searched,
         search.neighbours,
         search.tested
+    );
+    println!(
+        "| sphere, {n}, patches cut anew (a new connectivity) | {:.1} | {:.1} | {:.2} | {:.2} | {:.3} | | | |",
+        t_step * 1e3,
+        t_check * 1e3,
+        t_check / t_step,
+        t_cut * 1e3,
+        t_cut / t_step
     );
     println!(
         "| ellipsoid flow, {n}, mean of {} states | {:.1} | {:.1} | {:.2} | {:.2} | {:.3} | {flow_embedded} of {} | {flow_neighbours} | {flow_tested} |",

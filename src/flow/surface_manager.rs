@@ -48,6 +48,12 @@ impl SurfaceManager {
     }
 }
 
+/// The mean of a surface's vertices.
+fn centroid(m: &SurfaceMesh) -> [f64; 3] {
+    let n = m.num_vertices().max(1) as f64;
+    std::array::from_fn(|k| m.positions().iter().map(|p| p[k]).sum::<f64>() / n)
+}
+
 fn edge_stats(m: &SurfaceMesh) -> (f64, (f64, f64)) {
     let (mean, hb, bh) = edge_statistics(m);
     (mean, (hb, bh))
@@ -80,6 +86,23 @@ impl MeshManager<3> for SurfaceManager {
             None
         };
         let (remeshed, moved) = self.apart(mesh, remeshed, moved);
+        // the adaptation parted a neck itself (a collapse, or a cluster of tiny
+        // triangles replaced across it): with surgery a pinch like the designed
+        // one, recorded; with the pinch test alone the paper's stop
+        let parts = mesh.component_labels().1;
+        if let Some(r) = remeshed.as_ref().filter(|r| r.component_labels().1 > parts) {
+            match (self.surgery, self.pinch_curvature) {
+                (Some(_), _) => {
+                    let components = r.component_labels().1;
+                    let parted = self.conserved(moved.unwrap_or_else(|| r.clone()), mesh);
+                    let at = super::surgery::sharpest_edge(mesh).map_or_else(|| centroid(mesh), |p| [p[0], p[1], p[2]]);
+                    tracing::info!(?at, components, "neck parted by the remeshing (pinch-off surgery)");
+                    return Ok(Managed::Surgery(parted, SurgeryKind::Pinch, at));
+                }
+                (None, Some(_)) => return Ok(Managed::PinchOff),
+                (None, None) => {}
+            }
+        }
         if let Some((_, c)) = curvature.filter(|&(k, c)| c > 0.125 * k) {
             let result = moved.as_ref().or(remeshed.as_ref()).unwrap_or(mesh);
             if result.quality().min_angle_deg < PINCH_MIN_ANGLE_DEG {

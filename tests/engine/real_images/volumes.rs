@@ -231,3 +231,61 @@ fn touching_pairs_of_balls_in_a_volume_are_kept_apart() {
         assert!(hits.is_empty(), "iteration {}: triangles {hits:?} meet", c.iteration);
     }
 }
+
+/// One surface over two balls (radii 7 and 6 voxels, 22 apart, noisy): the
+/// initial ellipsoid covers both, the flow draws it in onto them, its middle
+/// thins into a neck and the neck parts during the run. The parting is a
+/// recorded pinch surgery (between the first and the last iteration, two
+/// components after it), and the two objects have their balls' volumes to 5 %
+/// and centres to half a voxel; no accepted state intersects itself.
+#[test]
+fn one_surface_over_two_balls_splits_at_its_neck_during_the_run() {
+    let (nx, ny, nz) = (52usize, 32usize, 32usize);
+    let balls = [([13.0, 16.0, 16.0], 7.0), ([35.0, 16.5, 15.5], 6.0)];
+    let mut u = uniform(5);
+    let mut voxels = Vec::with_capacity(nx * ny * nz);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let p = [i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5];
+                let inside = balls.iter().any(|(c, r)| (0..3).map(|a| (p[a] - c[a]).powi(2)).sum::<f64>() < r * r);
+                voxels.push((60.0 + if inside { 110.0 } else { 0.0 } + 40.0 * (u() - 0.5)).clamp(0.0, 255.0) as u8);
+            }
+        }
+    }
+    let mut nrrd =
+        format!("NRRD0004\ntype: uint8\ndimension: 3\nsizes: {nx} {ny} {nz}\nencoding: raw\n\n").into_bytes();
+    nrrd.extend(&voxels);
+    let spec = r#"{"problem": {"type": "segmentation", "image": "input:image"},
+        "initial": {"shape": "ellipsoid", "center": [0.47, 0.31, 0.3], "semi_axes": [0.42, 0.2, 0.2]},
+        "output": {"checkpoint_every": 1}}"#;
+    let inputs: HashMap<String, Vec<u8>> = [("image".to_string(), nrrd)].into();
+    let job = prepare(parse_spec(spec).unwrap(), &inputs).unwrap();
+    let mut states: Vec<Checkpoint> = Vec::new();
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut states).unwrap();
+    let img = job.image.as_deref().unwrap();
+    let (_, rows) = objects(img, &result_state(&job, &out.last).mesh);
+    eprintln!("{:?} after {} iterations, surgeries {:?}", out.stop, out.last.iteration, out.last.surgeries);
+    assert_eq!(out.stop, shapeflow::flow::StopReason::Converged);
+    let pinch = out.last.surgeries.iter().find(|s| s.event.kind == shapeflow::flow::SurgeryKind::Pinch);
+    let pinch = pinch.expect("the neck's parting is recorded");
+    assert!(pinch.iteration > 1 && pinch.iteration < out.last.iteration, "{pinch:?}");
+    assert_eq!(pinch.event.components, 2);
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    for (c, r) in balls {
+        // the objects' centroids are in voxel indices (a voxel's centre at its index)
+        let row = rows.iter().find(|row| (row.centroid[0] - (c[0] - 0.5)).abs() < 3.0).expect("an object at each ball");
+        let volume = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+        assert!((row.size - volume).abs() < 0.05 * volume, "ball of radius {r}: volume {} for {volume}", row.size);
+        for a in 0..3 {
+            assert!((row.centroid[a] - (c[a] - 0.5)).abs() < 0.5, "ball of radius {r}: centroid {:?}", row.centroid);
+        }
+    }
+    for c in &states {
+        let x: Vec<shapeflow::geometry::Point<3>> =
+            c.mesh.positions.iter().map(|p| shapeflow::geometry::Point::<3>::new(p[0], p[1], p[2])).collect();
+        let t: Vec<[usize; 3]> = c.mesh.elements.iter().map(|e| [e[0], e[1], e[2]]).collect();
+        let hits = shapeflow::geometry::surface_intersections(&x, &t, 1);
+        assert!(hits.is_empty(), "iteration {}: triangles {hits:?} meet", c.iteration);
+    }
+}
