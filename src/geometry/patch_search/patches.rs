@@ -1,13 +1,13 @@
 //! The patches of a connectivity: the triangles of a cell of a grid whose
 //! normals point most nearly along one of the six axis directions, connected
 //! across edges and ordered ring by ring, each with its boundary loop when it is
-//! a disk. The cells are about [`PATCH_TRIANGLES`] triangles of the surface as it
-//! is when the patches are cut wide.
+//! a disk. A cell is as wide as a square of [`PATCH_TRIANGLES`] triangles of
+//! the surface's mean area when the patches are cut.
 
 use super::super::Point;
 use std::collections::VecDeque;
 
-/// A cell of the grid is the side of a square of this many triangles of mean area.
+/// A cell's side is that of a square of this many triangles of mean area.
 pub(super) const PATCH_TRIANGLES: usize = 512;
 
 /// A patch: its triangles (a range of [`Patches::order`]) and, when it is a
@@ -23,7 +23,7 @@ pub(super) struct Patch {
 #[derive(Debug, Clone, Default)]
 pub(super) struct Patches {
     pub triangles: Vec<[usize; 3]>,
-    /// Triangles grouped by patch: the triangle in each slot, and its corners.
+    /// Triangles grouped by patch: the triangle in each slot, and its vertices.
     pub order: Vec<u32>,
     pub slots: Vec<[usize; 3]>,
     pub patches: Vec<Patch>,
@@ -35,10 +35,10 @@ fn key(a: usize, b: usize) -> u64 {
 }
 
 impl Patches {
-    /// The patches of `triangles` at positions `x`. Only the connectivity of a closed oriented
-    /// manifold surface is cut into patches of many triangles (each directed edge
-    /// used once and reversed once, every vertex's triangles one fan); any other
-    /// gets one patch per triangle, which certifies nothing.
+    /// The patches of `triangles` at positions `x`. Only the connectivity of a
+    /// closed oriented manifold surface is cut into patches of many triangles
+    /// (each directed edge used once and reversed once, every vertex's triangles
+    /// one fan); any other gets one patch per triangle, which certifies nothing.
     pub fn new(x: &[Point<3>], triangles: &[[usize; 3]]) -> Patches {
         let (n, vertices) = (triangles.len(), x.len());
         let singletons = || Patches {
