@@ -119,6 +119,10 @@ fn a_jump_through_a_thin_plate_is_caught() {
     assert!(!SurfaceWatch::default().meetings(&x, &through, &t, 1).is_empty(), "the pass through the plate");
     let beside = jump(-0.6, 6.0);
     assert!(SurfaceWatch::default().meetings(&x, &beside, &t, 1).is_empty(), "beside the plate");
+    // the swept search alone (the driver's on a long step) says the same
+    let swept = swept_surface_intersections(&x, &through, &t, usize::MAX);
+    assert!(!swept.is_empty() && swept.windows(2).all(|w| w[0] < w[1]), "{swept:?}");
+    assert!(swept_surface_intersections(&x, &beside, &t, 1).is_empty());
 }
 
 fn ball_vertices() -> usize {
