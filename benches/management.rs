@@ -280,36 +280,24 @@ fn main() {
          patch search / step | patches embedded | patch pairs | pairs tested |"
     );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
-    println!(
-        "| sphere, {n} | {:.1} | {:.1} | {:.2} | {:.2} | {:.3} | {} of {} | {} | {} |",
-        t_step * 1e3,
-        t_check * 1e3,
-        t_check / t_step,
-        t_patches * 1e3,
-        t_patches / t_step,
-        search.embedded,
-        search.patches_searched,
-        search.neighbours,
-        search.tested
-    );
-    println!(
-        "| sphere, {n}, patches cut anew (a new connectivity) | {:.1} | {:.1} | {:.2} | {:.2} | {:.3} | | | |",
-        t_step * 1e3,
-        t_check * 1e3,
-        t_check / t_step,
-        t_cut * 1e3,
-        t_cut / t_step
-    );
-    println!(
-        "| ellipsoid flow, {n}, mean of {} states | {:.1} | {:.1} | {:.2} | {:.2} | {:.3} | {flow_embedded} of {} | {flow_neighbours} | {flow_tested} |",
-        states.len(),
-        t_step * 1e3,
-        t_flow_exhaustive * 1e3,
-        t_flow_exhaustive / t_step,
-        t_flow * 1e3,
-        t_flow / t_step,
-        search.patches_searched,
-    );
+    let row = |what: String, exhaustive: f64, patches: f64, counts: String| {
+        let (e, p) = (exhaustive, patches);
+        println!(
+            "| {what} | {:.1} | {:.1} | {:.2} | {:.2} | {:.3} | {counts} |",
+            t_step * 1e3,
+            e * 1e3,
+            e / t_step,
+            p * 1e3,
+            p / t_step
+        );
+    };
+    let of = |embedded: usize, neighbours: usize, tested: usize| {
+        format!("{embedded} of {} | {neighbours} | {tested}", search.patches_searched)
+    };
+    row(format!("sphere, {n}"), t_check, t_patches, of(search.embedded, search.neighbours, search.tested));
+    row(format!("sphere, {n}, patches cut anew (a new connectivity)"), t_check, t_cut, " | | ".into());
+    let flow = format!("ellipsoid flow, {n}, mean of {} states", states.len());
+    row(flow, t_flow_exhaustive, t_flow, of(flow_embedded, flow_neighbours, flow_tested));
     println!();
     println!(
         "| ellipsoid flow, {n} vertices | most motion / edge | watch (ms) | watch / step | certificates drawn | \
