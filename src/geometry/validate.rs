@@ -161,7 +161,9 @@ fn validate_curve<const D: usize>(n: usize, elements: &[[usize; D]]) -> Result<(
     Ok(())
 }
 
-fn validate_surface<const D: usize>(n: usize, elements: &[[usize; D]]) -> Result<(), MeshError> {
+/// A closed, consistently oriented surface whose every vertex's triangles form one
+/// fan (also the patch search's condition for cutting patches).
+pub(super) fn validate_surface<const D: usize>(n: usize, elements: &[[usize; D]]) -> Result<(), MeshError> {
     // Vertex stars: the links (a -> b for triangle (v, a, b)); the directed edges
     // out of `v` are `v -> a` for its links' first vertices.
     let mut star_start = vec![0usize; n + 1];
@@ -207,7 +209,9 @@ fn validate_surface<const D: usize>(n: usize, elements: &[[usize; D]]) -> Result
         let star = star(v);
         // a star holds a handful of links: a linear search is the fastest map
         let next = |a: usize| star.iter().find(|l| l.0 == a).map(|l| l.1);
-        let (first, _) = star[0];
+        let Some(&(first, _)) = star.first() else {
+            return Err(MeshError::NonManifoldVertex { vertex: v });
+        };
         let mut a = first;
         let mut steps = 0;
         loop {

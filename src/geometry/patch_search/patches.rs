@@ -71,7 +71,7 @@ impl Patches {
                 }
             }
         }
-        if !single_fans(vertices, triangles) {
+        if super::super::validate::validate_surface(vertices, triangles).is_err() {
             return singletons();
         }
         // patches: the triangles of a grid cell (by centroid) connected across
@@ -124,47 +124,6 @@ impl Patches {
         let slots = order.iter().map(|&t| triangles[t as usize]).collect();
         Patches { triangles: triangles.to_vec(), order, slots, patches }
     }
-}
-
-/// Whether every vertex's triangles form one fan (one cycle of the map from the
-/// triangle's next corner to the one after it), given each directed edge once.
-fn single_fans(vertices: usize, triangles: &[[usize; 3]]) -> bool {
-    let mut start = vec![0usize; vertices + 1];
-    for t in triangles {
-        for &v in t {
-            start[v + 1] += 1;
-        }
-    }
-    for v in 0..vertices {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut link = vec![(0usize, 0usize); 3 * triangles.len()];
-    for t in triangles {
-        for k in 0..3 {
-            let v = t[k];
-            link[fill[v]] = (t[(k + 1) % 3], t[(k + 2) % 3]);
-            fill[v] += 1;
-        }
-    }
-    (0..vertices).all(|v| {
-        let fan = &mut link[start[v]..start[v + 1]];
-        if fan.is_empty() {
-            return false;
-        }
-        fan.sort_unstable();
-        let next = |a: usize| fan.binary_search_by_key(&a, |l| l.0).ok().map(|i| fan[i].1);
-        let first = fan[0].0;
-        let mut at = first;
-        for steps in 1..=fan.len() {
-            match next(at) {
-                Some(b) if b == first => return steps == fan.len(),
-                Some(b) => at = b,
-                None => return false,
-            }
-        }
-        false
-    })
 }
 
 /// The boundary loop of patch `id` (its `members`), vertices in order, when the
