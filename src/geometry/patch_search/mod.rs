@@ -13,11 +13,20 @@
 //! coordinates as they are). The proof is the degree of the projection `π`:
 //! orientation-preserving on every triangle, its number of preimages of a point
 //! off `π(∂P)` is the winding number of `π(∂P)` around it, at most 1 for a simple
-//! loop; so `π` is injective and the patch a graph over the plane.
+//! loop; so `π` is injective and the patch a graph over the plane. (A loop is
+//! proved simple by a star test, every edge turning one way seen from the mean
+//! of its corners and the loop once round it, or else by a sweep.)
 //!
-//! Pairs within an embedded patch are not tested. All other pairs of triangles
-//! whose boxes overlap are, with the narrow phase of [`surface_intersections`]:
-//! those within a patch not proved embedded (through the exhaustive search's
+//! The same argument proves larger disks embedded: [`groups`] (disk patches of
+//! one class glued along single arcs, block by block of an octree of cells and
+//! then over the whole grid, their loops kept) and [`seams`] (two disk patches
+//! sharing one arc). A group or seam is embedded when all its triangles project
+//! with one strict orientation onto one coordinate plane and its loop projects
+//! simple there.
+//!
+//! Pairs within an embedded patch, group or seam are not tested. All other
+//! pairs of triangles whose boxes overlap are, with the narrow phase of
+//! [`surface_intersections`]: those within a patch not proved embedded (through the exhaustive search's
 //! broad phase), and those of two patches whose boxes overlap (the triangles of
 //! each inside the other's box, found by runs of [`CHUNK`] triangles and swept
 //! along the longest side of the overlap). The result is the exhaustive search's:
@@ -27,14 +36,17 @@
 //!
 //! [`surface_intersections`]: super::surface_intersections
 
+mod certify;
+mod groups;
 mod patches;
+mod seams;
 #[cfg(test)]
 mod tests;
 
-use super::surface_intersections::{box_pairs, overlap, points_meet, surface_intersections, Aabb};
+use super::surface_intersections::{bounds, box_pairs, overlap, points_meet, surface_intersections, Aabb};
 use super::Point;
+use certify::{embedded, loop_projects_simple};
 use patches::Patches;
-use robust::{orient2d, Coord};
 
 /// Triangles of a run along a patch's rings, boxed together.
 const CHUNK: usize = 16;
@@ -44,9 +56,10 @@ const CHUNK: usize = 16;
 #[derive(Debug, Clone, Default)]
 pub struct PatchSearch {
     patches: Patches,
-    /// Scratch: the corners and boxes of the triangles by slot.
-    corners: Vec<[Point<3>; 3]>,
+    /// Scratch: the boxes of the triangles by slot.
     boxes: Vec<Aabb>,
+    /// Scratch: the plane over which each patch was proved embedded.
+    planes: Vec<Option<(usize, bool)>>,
     /// Whether the patches are cut again at the next search.
     stale: bool,
     /// Of the last search: patches, patches proved embedded, pairs of patches
@@ -56,6 +69,10 @@ pub struct PatchSearch {
     pub embedded: usize,
     pub neighbours: usize,
     pub tested: usize,
+    /// Of the last search: groups proved embedded, and seams (not in one of
+    /// them) whose two patches were proved embedded together.
+    pub groups: usize,
+    pub sealed: usize,
 }
 
 impl PatchSearch {
@@ -73,6 +90,7 @@ impl PatchSearch {
     pub fn intersections(&mut self, x: &[Point<3>], triangles: &[[usize; 3]], most: usize) -> Vec<(usize, usize)> {
         let mut hits = Vec::new();
         (self.patches_searched, self.embedded, self.neighbours, self.tested) = (0, 0, 0, 0);
+        (self.groups, self.sealed) = (0, 0);
         if triangles.len() < 2 || most == 0 {
             return hits;
         }
@@ -82,12 +100,10 @@ impl PatchSearch {
         let (p, tested, neighbours) = (&self.patches, &mut self.tested, &mut self.neighbours);
         // everything by slot (a triangle's place in the patches' order): a
         // patch's triangles lie side by side in memory
-        let (corners, boxes) = (&mut self.corners, &mut self.boxes);
-        corners.clear();
-        corners.extend(p.slots.iter().map(|t| t.map(|v| x[v])));
+        let boxes = &mut self.boxes;
         boxes.clear();
-        boxes.extend(corners.iter().map(box_of));
-        let (corners, boxes) = (&*corners, &*boxes);
+        boxes.extend(p.slots.iter().map(|t| bounds(x, t)));
+        let boxes = &*boxes;
         // runs of CHUNK triangles of a patch (along its rings) and their boxes:
         // a patch's triangles near another patch are found run by run
         let (mut chunks, mut first_chunk) = (Vec::new(), Vec::with_capacity(p.patches.len() + 1));
@@ -114,7 +130,7 @@ impl PatchSearch {
             let (ti, tj) = (&p.slots[i], &p.slots[j]);
             if overlap(&boxes[i], &boxes[j]) && !ti.iter().any(|v| tj.contains(v)) {
                 *tested += 1;
-                if points_meet(&corners[i], &corners[j]) {
+                if points_meet(&ti.map(|v| x[v]), &tj.map(|v| x[v])) {
                     let (a, b) = (p.order[i] as usize, p.order[j] as usize);
                     hits.push((a.min(b), a.max(b)));
                 }
@@ -122,15 +138,20 @@ impl PatchSearch {
             hits.len() >= most
         };
         self.patches_searched = p.patches.len();
+        let planes = &mut self.planes;
+        planes.clear();
         for patch in &p.patches {
             let (start, end) = (patch.start, patch.end);
-            if patch.boundary.as_deref().is_some_and(|lp| embedded(x, &corners[start..end], lp)) {
+            planes.push(patch.boundary.as_deref().and_then(|lp| embedded(x, &p.slots[start..end], lp)));
+            if planes.last().is_some_and(Option::is_some) {
                 self.embedded += 1;
                 continue;
             }
             // the patch's own pairs through the exhaustive search's broad phase
-            let edges: f64 =
-                corners[start..end].iter().map(|c| (0..3).map(|k| (c[(k + 1) % 3] - c[k]).norm()).sum::<f64>()).sum();
+            let edges: f64 = p.slots[start..end]
+                .iter()
+                .map(|t| (0..3).map(|k| (x[t[(k + 1) % 3]] - x[t[k]]).norm()).sum::<f64>())
+                .sum();
             let cell = 2.0 * edges / (3 * (end - start)) as f64;
             if !(cell.is_finite() && cell > 0.0) {
                 return surface_intersections(x, triangles, most);
@@ -148,8 +169,31 @@ impl PatchSearch {
         // at the next search
         let disks = p.patches.iter().filter(|q| q.boundary.is_some()).count();
         self.stale = 2 * self.embedded < disks;
+        // groups of patches embedded over one plane, and seams of two such patches
+        // not in one of them, whose unions are too
+        let certified: Vec<bool> = (p.groups.groups.iter())
+            .map(|g| {
+                let plane = planes[g.patches[0] as usize];
+                plane.is_some_and(|(k, ccw)| {
+                    g.patches.iter().all(|&q| planes[q as usize] == plane)
+                        && loop_projects_simple(x, &g.boundary, k, ccw)
+                })
+            })
+            .collect();
+        self.groups = certified.iter().filter(|&&c| c).count();
+        let together = |a: usize, b: usize| p.groups.together(a, b, &certified);
+        let loops: Vec<Option<&Vec<usize>>> = p.patches.iter().map(|q| q.boundary.as_ref()).collect();
+        let of = |q: usize| &p.slots[p.patches[q].start..p.patches[q].end];
+        let sealed: Vec<(u32, u32)> = (p.seams.iter())
+            .filter(|seam| !together(seam.a as usize, seam.b as usize) && seam.sealed(x, &loops, of, planes))
+            .map(|seam| (seam.a, seam.b))
+            .collect();
+        self.sealed = sealed.len();
         let (mut near_a, mut near_b) = (Vec::new(), Vec::new());
         box_pairs(&patch_boxes, cell, |qa, qb| {
+            if together(qa, qb) || sealed.binary_search(&(qa.min(qb) as u32, qa.max(qb) as u32)).is_ok() {
+                return false;
+            }
             *neighbours += 1;
             let (ba, bb) = (&patch_boxes[qa], &patch_boxes[qb]);
             // sweep along the longest side of the two boxes' overlap
@@ -191,14 +235,6 @@ impl PatchSearch {
     }
 }
 
-/// The box of a triangle's corners.
-fn box_of(c: &[Point<3>; 3]) -> Aabb {
-    (
-        std::array::from_fn(|k| c[0][k].min(c[1][k]).min(c[2][k])),
-        std::array::from_fn(|k| c[0][k].max(c[1][k]).max(c[2][k])),
-    )
-}
-
 /// The box around `boxes`.
 fn union<'a>(boxes: impl Iterator<Item = &'a Aabb>) -> Aabb {
     let mut u = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
@@ -209,92 +245,4 @@ fn union<'a>(boxes: impl Iterator<Item = &'a Aabb>) -> Aabb {
         }
     }
     u
-}
-
-/// Whether the disk patch of triangles of `corners` and boundary loop `lp`
-/// (vertices of `x`) projects one to one onto the coordinate plane most nearly
-/// parallel to it (module documentation).
-fn embedded(x: &[Point<3>], corners: &[[Point<3>; 3]], lp: &[usize]) -> bool {
-    let mut n = [0.0f64; 3];
-    for [a, b, c] in corners {
-        let area = (b - a).cross(&(c - a));
-        for k in 0..3 {
-            n[k] += area[k];
-        }
-    }
-    let k = (0..3).max_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs())).unwrap_or(2);
-    // (u, w) in cyclic order after k: orient2d is the area vector's k-th component
-    let (u, w) = ((k + 1) % 3, (k + 2) % 3);
-    let flat = |p: &Point<3>| Coord { x: p[u], y: p[w] };
-    let sign = n[k].signum();
-    sign != 0.0
-        && corners.iter().all(|[a, b, c]| orient2d(flat(a), flat(b), flat(c)) * sign > 0.0)
-        && simple_loop(&lp.iter().map(|&v| flat(&x[v])).collect::<Vec<_>>())
-}
-
-/// Whether the closed polygon through `pts` is simple: no two of its edges meet
-/// but consecutive ones, at their common corner only (decided exactly).
-fn simple_loop(pts: &[Coord<f64>]) -> bool {
-    let b = pts.len();
-    if b < 3 {
-        return false;
-    }
-    let next = |i: usize| if i + 1 == b { 0 } else { i + 1 };
-    // the edges (index, ends, extent along x), by their left end
-    let mut edges: Vec<(usize, Coord<f64>, Coord<f64>, f64, f64)> = (0..b)
-        .map(|i| {
-            let (p, q) = (pts[i], pts[next(i)]);
-            (i, p, q, p.x.min(q.x), p.x.max(q.x))
-        })
-        .collect();
-    edges.sort_unstable_by(|e, f| e.3.total_cmp(&f.3));
-    for (m, &(i, p, q, _, right)) in edges.iter().enumerate() {
-        for &(j, r, s, left, _) in &edges[m + 1..] {
-            if left > right {
-                break;
-            }
-            let meet = if j == next(i) {
-                folds_back(p, q, s)
-            } else if i == next(j) {
-                folds_back(r, s, q)
-            } else {
-                p.y.max(q.y) >= r.y.min(s.y) && r.y.max(s.y) >= p.y.min(q.y) && segments_meet(p, q, r, s)
-            };
-            if meet {
-                return false;
-            }
-        }
-    }
-    true
-}
-
-/// Whether the edges `p q` and `q r` overlap beyond `q`: collinear, `r` on the
-/// side of `q` where `p` lies.
-fn folds_back(p: Coord<f64>, q: Coord<f64>, r: Coord<f64>) -> bool {
-    if orient2d(p, q, r) != 0.0 {
-        return false;
-    }
-    let side = |a: f64, b: f64| sign(a - b);
-    let (sp, sr) = match p.x != q.x {
-        true => (side(p.x, q.x), side(r.x, q.x)),
-        false => (side(p.y, q.y), side(r.y, q.y)),
-    };
-    sp * sr >= 0
-}
-
-/// Whether the closed segments `p q` and `r s` meet.
-fn segments_meet(p: Coord<f64>, q: Coord<f64>, r: Coord<f64>, s: Coord<f64>) -> bool {
-    let (d1, d2) = (sign(orient2d(p, q, r)), sign(orient2d(p, q, s)));
-    if d1 == 0 && d2 == 0 {
-        // on one line: their extents overlap
-        let over = |a: f64, b: f64, c: f64, d: f64| a.min(b) <= c.max(d) && c.min(d) <= a.max(b);
-        return over(p.x, q.x, r.x, s.x) && over(p.y, q.y, r.y, s.y);
-    }
-    let (d3, d4) = (sign(orient2d(r, s, p)), sign(orient2d(r, s, q)));
-    d1 * d2 <= 0 && d3 * d4 <= 0
-}
-
-/// The sign of `v`: -1, 0 (either zero) or 1.
-fn sign(v: f64) -> i8 {
-    (v > 0.0) as i8 - (v < 0.0) as i8
 }

@@ -5,6 +5,8 @@
 //! the surface's mean area when the patches are cut.
 
 use super::super::Point;
+use super::groups::Groups;
+use super::seams::{seams, Seam};
 use std::collections::VecDeque;
 
 /// A cell's side is that of a square of this many triangles of mean area.
@@ -27,6 +29,10 @@ pub(super) struct Patches {
     pub order: Vec<u32>,
     pub slots: Vec<[usize; 3]>,
     pub patches: Vec<Patch>,
+    /// The pairs of disk patches that share one arc of their loops.
+    pub seams: Vec<Seam>,
+    /// The patches glued into larger disks.
+    pub groups: Groups,
 }
 
 /// A directed edge's key.
@@ -46,6 +52,8 @@ impl Patches {
             order: (0..n as u32).collect(),
             slots: triangles.to_vec(),
             patches: (0..n).map(|t| Patch { start: t, end: t + 1, boundary: None }).collect(),
+            seams: Vec::new(),
+            groups: Groups::default(),
         };
         if n >= u32::MAX as usize || vertices >= u32::MAX as usize {
             return singletons();
@@ -122,7 +130,12 @@ impl Patches {
             patches.push(Patch { start, end: order.len(), boundary });
         }
         let slots = order.iter().map(|&t| triangles[t as usize]).collect();
-        Patches { triangles: triangles.to_vec(), order, slots, patches }
+        let across = |u: usize, v: usize| find(v, u).map_or(u32::MAX, |t| patch_of[t as usize]);
+        let loops: Vec<Option<&Vec<usize>>> = patches.iter().map(|q| q.boundary.as_ref()).collect();
+        let seams = seams(&loops, across);
+        let cells: Vec<[i64; 4]> = patches.iter().map(|q| cell[order[q.start] as usize]).collect();
+        let groups = Groups::new(&loops, &cells, vertices, across);
+        Patches { triangles: triangles.to_vec(), order, slots, patches, seams, groups }
     }
 }
 

@@ -1,6 +1,8 @@
+use super::certify::{simple_loop, star_simple};
 use super::*;
 use crate::geometry::surface_intersections::mean_edge;
 use crate::geometry::{box_surface, ellipsoid, icosphere, surface_intersections, surface_union, torus};
+use robust::Coord;
 
 fn numbers(seed: u64) -> impl FnMut() -> f64 {
     let mut state = seed;
@@ -43,6 +45,9 @@ fn smooth_surfaces_are_proved_apart_patch_by_patch() {
             search.patches_searched
         );
         assert!(search.tested < t.len() / 2, "{} pairs tested for {} triangles", search.tested, t.len());
+        // the groups and seams proved embedded leave few pairs of patches
+        assert!(search.groups + search.sealed > 0);
+        assert!(search.neighbours < 2 * search.patches_searched, "{} pairs of patches", search.neighbours);
     }
 }
 
@@ -130,6 +135,18 @@ fn simple_loops() {
     assert!(!simple_loop(&c(&[(0.0, 0.0), (2.0, 0.0), (1.0, 1.0), (2.0, 2.0), (0.0, 2.0), (1.0, 1.0)])));
     // a corner of one edge on another
     assert!(!simple_loop(&c(&[(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (1.0, 0.0), (0.0, 2.0)])));
+    // the star test: a polygon seen turning one way from its centre, once; not
+    // twice (a pentagram), nor the other way, nor with an edge turning back
+    let around = |turns: f64, corners: usize| {
+        let a = |i: usize| turns * std::f64::consts::TAU * i as f64 / corners as f64;
+        c(&(0..corners).map(|i| (a(i).cos(), a(i).sin())).collect::<Vec<_>>())
+    };
+    assert!(star_simple(&around(1.0, 7), true) && simple_loop(&around(1.0, 7)));
+    assert!(!star_simple(&around(1.0, 7), false) && !star_simple(&around(-1.0, 7), true));
+    assert!(star_simple(&around(-1.0, 7), false));
+    assert!(!star_simple(&around(2.0, 5), true) && !simple_loop(&around(2.0, 5)));
+    let notch = c(&[(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (1.0, 2.0), (1.5, 1.5), (0.0, 2.0)]);
+    assert!(!star_simple(&notch, true) && simple_loop(&notch));
 }
 
 /// Small jitters (0.1 to 0.4 mean edges) of a torus, a box and two spheres a
@@ -197,4 +214,21 @@ fn patches_follow_a_turning_and_a_crumpling_surface() {
     assert!(search.stale, "{} of {} patches embedded", search.embedded, search.patches_searched);
     assert!(all_pairs(&mut search, mesh.positions(), &t).is_empty());
     assert!(!search.stale);
+}
+
+/// Two arcs that close a simple loop, and the ways they fail to: crossing,
+/// touching away from the junctions, folding back at one.
+#[test]
+fn arcs_close_a_simple_loop_only_when_apart() {
+    let c = |x: f64, y: f64| Coord { x, y };
+    // P from (1, 0) over the top to (-1, 0); Q back along the bottom
+    let p = [c(1.0, 0.0), c(0.0, 1.0), c(-1.0, 0.0)];
+    assert!(seams::arcs_apart(&p, &[c(-1.0, 0.0), c(0.0, -1.0), c(1.0, 0.0)]));
+    assert!(seams::arcs_apart(&p, &[c(-1.0, 0.0), c(1.0, 0.0)]));
+    // Q crossing P, touching it at a corner, folding back along its last edge
+    assert!(!seams::arcs_apart(&p, &[c(-1.0, 0.0), c(0.5, 2.0), c(0.5, -1.0), c(1.0, 0.0)]));
+    assert!(!seams::arcs_apart(&p, &[c(-1.0, 0.0), c(0.0, 1.0), c(1.0, 0.0)]));
+    assert!(!seams::arcs_apart(&p, &[c(-1.0, 0.0), c(-0.5, 0.5), c(0.0, -1.0), c(1.0, 0.0)]));
+    // a single edge each is no loop
+    assert!(!seams::arcs_apart(&[c(1.0, 0.0), c(-1.0, 0.0)], &[c(-1.0, 0.0), c(1.0, 0.0)]));
 }
