@@ -7,20 +7,31 @@ use robust::{orient2d, Coord};
 
 /// The plane (the axis dropped, and whether the triangles project
 /// counterclockwise) over which the disk patch of triangles `slots` and
-/// boundary loop `lp` (vertices of `x`) is proved to project one to one: the
-/// coordinate plane most nearly parallel to it (module documentation).
-pub(super) fn embedded(x: &[Point<3>], slots: &[[usize; 3]], lp: &[usize]) -> Option<(usize, bool)> {
+/// boundary loop `lp` (vertices of `x`) is proved to project one to one:
+/// `preferred` (the patch's class: then the patches of a group share it), or
+/// else the coordinate plane most nearly parallel to it (module documentation).
+pub(super) fn embedded(
+    x: &[Point<3>],
+    slots: &[[usize; 3]],
+    lp: &[usize],
+    preferred: (usize, bool),
+) -> Option<(usize, bool)> {
+    let over = |(k, ccw): (usize, bool)| {
+        let at = |p: &Point<3>| flat(k, p);
+        let sign = if ccw { 1.0 } else { -1.0 };
+        slots.iter().all(|&[a, b, c]| orient2d(at(&x[a]), at(&x[b]), at(&x[c])) * sign > 0.0)
+            && loop_projects_simple(x, lp, k, ccw)
+    };
+    if over(preferred) {
+        return Some(preferred);
+    }
     // the area vector, a sum over the boundary loop
     let o = x[lp[0]];
     let n = (0..lp.len())
         .fold(nalgebra::Vector3::zeros(), |n, i| n + (x[lp[i]] - o).cross(&(x[lp[(i + 1) % lp.len()]] - o)));
     let k = (0..3).max_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs())).unwrap_or(2);
-    let sign = n[k].signum();
-    let at = |p: &Point<3>| flat(k, p);
-    (sign != 0.0
-        && slots.iter().all(|&[a, b, c]| orient2d(at(&x[a]), at(&x[b]), at(&x[c])) * sign > 0.0)
-        && loop_projects_simple(x, lp, k, sign > 0.0))
-    .then_some((k, sign > 0.0))
+    let plane = (k, n[k] > 0.0);
+    (n[k] != 0.0 && plane != preferred && over(plane)).then_some(plane)
 }
 
 /// Whether the loop `lp` (vertices of `x`) projects along axis `k` to a simple

@@ -7,11 +7,13 @@
 //! with one orientation is embedded as a whole when its loop projects simple (the
 //! degree argument of the patches): no pair of its patches needs a test.
 
-/// A group: its patches and its boundary loop (vertices in order).
+/// A group: its patches, its boundary loop (vertices in order), and its level
+/// (an index of [`Groups::of`]).
 #[derive(Debug, Clone)]
 pub(super) struct Group {
     pub patches: Vec<u32>,
     pub boundary: Vec<usize>,
+    pub level: usize,
 }
 
 /// The groups of all levels, and the group of each patch at each level
@@ -84,7 +86,7 @@ impl Groups {
                 if patches.len() > units[u].0.len() {
                     let id = groups.len() as u32;
                     patches.iter().for_each(|&q| level_of[q as usize] = id);
-                    groups.push(Group { patches: patches.clone(), boundary: lp.clone() });
+                    groups.push(Group { patches: patches.clone(), boundary: lp.clone(), level: of.len() });
                 }
                 next.push((patches, lp));
             }
@@ -94,6 +96,20 @@ impl Groups {
             units = next;
         }
         Groups { groups, of }
+    }
+
+    /// Which groups are proved embedded by `proved`, tried from the top level
+    /// down: a group inside one already proved is not tried (nor counted), its
+    /// pairs being in that one.
+    pub fn certify(&self, proved: impl Fn(&Group) -> bool) -> Vec<bool> {
+        let mut certified = vec![false; self.groups.len()];
+        for g in (0..self.groups.len()).rev() {
+            let group = &self.groups[g];
+            let q = group.patches[0] as usize;
+            let inside = self.of[group.level + 1..].iter().any(|of| of[q] != u32::MAX && certified[of[q] as usize]);
+            certified[g] = !inside && proved(group);
+        }
+        certified
     }
 
     /// Whether patches `a` and `b` are in one group that `certified` holds.

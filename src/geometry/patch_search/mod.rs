@@ -7,8 +7,9 @@
 //! one of the six axis directions, connected across edges); each that is a
 //! topological disk keeps its boundary loop. At each search a disk patch is
 //! *embedded* (no two of its triangles meet outside the vertices and edges they
-//! share) when, dropping the axis `k` of the largest component of its area
-//! vector, every triangle projects with the same strict orientation and the
+//! share) when, dropping the axis `k` of its class (else that of the largest
+//! component of its area vector), every triangle projects with the same strict
+//! orientation and the
 //! projected boundary loop is simple, both decided exactly (`orient2d` on the
 //! coordinates as they are). The proof is the degree of the projection `π`:
 //! orientation-preserving on every triangle, its number of preimages of a point
@@ -22,13 +23,16 @@
 //! then over the whole grid, their loops kept) and [`seams`] (two disk patches
 //! sharing one arc). A group or seam is embedded when all its triangles project
 //! with one strict orientation onto one coordinate plane and its loop projects
-//! simple there.
+//! simple there. Groups are tried from the top level down: one inside a group
+//! proved already is not tried. The boxes of the runs of triangles below are
+//! drawn from each run's vertices, once each; those of single triangles only
+//! where two patches' boxes overlap.
 //!
 //! Pairs within an embedded patch, group or seam are not tested. All other
 //! pairs of triangles whose boxes overlap are, with the narrow phase of
 //! [`surface_intersections`]: those within a patch not proved embedded (through the exhaustive search's
 //! broad phase), and those of two patches whose boxes overlap (the triangles of
-//! each inside the other's box, found by runs of [`CHUNK`] triangles and swept
+//! each inside the other's box, found by runs of [`patches::CHUNK`] triangles and swept
 //! along the longest side of the overlap). The result is the exhaustive search's:
 //! the same pairs, in another order. When fewer than half of the disk patches
 //! are embedded (the surface has left the shape they were cut for far behind),
@@ -48,16 +52,15 @@ use super::Point;
 use certify::{embedded, loop_projects_simple};
 use patches::Patches;
 
-/// Triangles of a run along a patch's rings, boxed together.
-const CHUNK: usize = 16;
-
 /// The search (see the module documentation); it keeps the patches of the last
 /// connectivity searched.
 #[derive(Debug, Clone, Default)]
 pub struct PatchSearch {
     patches: Patches,
-    /// Scratch: the boxes of the triangles by slot.
+    /// Scratch: the boxes of a patch's triangles, and the runs of triangles
+    /// (slots) with their boxes.
     boxes: Vec<Aabb>,
+    chunk_boxes: Vec<(usize, usize, Aabb)>,
     /// Scratch: the plane over which each patch was proved embedded.
     planes: Vec<Option<(usize, bool)>>,
     /// Whether the patches are cut again at the next search.
@@ -100,21 +103,17 @@ impl PatchSearch {
         let (p, tested, neighbours) = (&self.patches, &mut self.tested, &mut self.neighbours);
         // everything by slot (a triangle's place in the patches' order): a
         // patch's triangles lie side by side in memory
-        let boxes = &mut self.boxes;
-        boxes.clear();
-        boxes.extend(p.slots.iter().map(|t| bounds(x, t)));
-        let boxes = &*boxes;
-        // runs of CHUNK triangles of a patch (along its rings) and their boxes:
-        // a patch's triangles near another patch are found run by run
-        let (mut chunks, mut first_chunk) = (Vec::new(), Vec::with_capacity(p.patches.len() + 1));
-        for patch in &p.patches {
-            first_chunk.push(chunks.len());
-            for s in (patch.start..patch.end).step_by(CHUNK) {
-                let e = (s + CHUNK).min(patch.end);
-                chunks.push((s, e, union(boxes[s..e].iter())));
-            }
-        }
-        first_chunk.push(chunks.len());
+        // runs of `CHUNK` triangles of a patch (along its rings) and their boxes:
+        // a patch's triangles near another patch are found run by run (the
+        // boxes of triangles are drawn only there)
+        let first_chunk = &p.first_chunk;
+        let chunks = &mut self.chunk_boxes;
+        chunks.clear();
+        chunks.extend(p.chunks.iter().map(|c| {
+            let (from, to) = c.vertices;
+            (c.start, c.end, around(p.chunk_vertices[from as usize..to as usize].iter().map(|&v| &x[v as usize])))
+        }));
+        let chunks = &*chunks;
         let patch_boxes: Vec<Aabb> = (0..p.patches.len())
             .map(|q| union(chunks[first_chunk[q]..first_chunk[q + 1]].iter().map(|c| &c.2)))
             .collect();
@@ -126,9 +125,9 @@ impl PatchSearch {
         if !(cell.is_finite() && cell > 0.0) {
             return surface_intersections(x, triangles, most);
         }
-        let mut test = |i: usize, j: usize, hits: &mut Vec<(usize, usize)>| {
+        let mut test = |(i, bi): (usize, &Aabb), (j, bj): (usize, &Aabb), hits: &mut Vec<(usize, usize)>| {
             let (ti, tj) = (&p.slots[i], &p.slots[j]);
-            if overlap(&boxes[i], &boxes[j]) && !ti.iter().any(|v| tj.contains(v)) {
+            if overlap(bi, bj) && !ti.iter().any(|v| tj.contains(v)) {
                 *tested += 1;
                 if points_meet(&ti.map(|v| x[v]), &tj.map(|v| x[v])) {
                     let (a, b) = (p.order[i] as usize, p.order[j] as usize);
@@ -142,7 +141,7 @@ impl PatchSearch {
         planes.clear();
         for patch in &p.patches {
             let (start, end) = (patch.start, patch.end);
-            planes.push(patch.boundary.as_deref().and_then(|lp| embedded(x, &p.slots[start..end], lp)));
+            planes.push(patch.boundary.as_deref().and_then(|lp| embedded(x, &p.slots[start..end], lp, patch.plane)));
             if planes.last().is_some_and(Option::is_some) {
                 self.embedded += 1;
                 continue;
@@ -157,8 +156,11 @@ impl PatchSearch {
                 return surface_intersections(x, triangles, most);
             }
             let mut full = false;
-            box_pairs(&boxes[start..end], cell, |i, j| {
-                full = test(start + i, start + j, &mut hits);
+            let boxes = &mut self.boxes;
+            boxes.clear();
+            boxes.extend(p.slots[start..end].iter().map(|t| bounds(x, t)));
+            box_pairs(boxes, cell, |i, j| {
+                full = test((start + i, &boxes[i]), (start + j, &boxes[j]), &mut hits);
                 full
             });
             if full {
@@ -171,15 +173,12 @@ impl PatchSearch {
         self.stale = 2 * self.embedded < disks;
         // groups of patches embedded over one plane, and seams of two such patches
         // not in one of them, whose unions are too
-        let certified: Vec<bool> = (p.groups.groups.iter())
-            .map(|g| {
-                let plane = planes[g.patches[0] as usize];
-                plane.is_some_and(|(k, ccw)| {
-                    g.patches.iter().all(|&q| planes[q as usize] == plane)
-                        && loop_projects_simple(x, &g.boundary, k, ccw)
-                })
+        let certified = p.groups.certify(|g| {
+            let plane = planes[g.patches[0] as usize];
+            plane.is_some_and(|(k, ccw)| {
+                g.patches.iter().all(|&q| planes[q as usize] == plane) && loop_projects_simple(x, &g.boundary, k, ccw)
             })
-            .collect();
+        });
         self.groups = certified.iter().filter(|&&c| c).count();
         let together = |a: usize, b: usize| p.groups.together(a, b, &certified);
         let loops: Vec<Option<&Vec<usize>>> = p.patches.iter().map(|q| q.boundary.as_ref()).collect();
@@ -199,30 +198,30 @@ impl PatchSearch {
             // sweep along the longest side of the two boxes' overlap
             let side = |k: usize| ba.1[k].min(bb.1[k]) - ba.0[k].max(bb.0[k]);
             let axis = (0..3).max_by(|&i, &j| side(i).total_cmp(&side(j))).unwrap_or(0);
-            let lo = |i: usize| boxes[i].0[axis];
-            let hi = |i: usize| boxes[i].1[axis];
+            let lo = |(_, b): &(usize, Aabb)| b.0[axis];
+            let hi = |(_, b): &(usize, Aabb)| b.1[axis];
             for (near, q, other) in [(&mut near_a, qa, bb), (&mut near_b, qb, ba)] {
                 near.clear();
                 for &(s, e, _) in chunks[first_chunk[q]..first_chunk[q + 1]].iter().filter(|c| overlap(&c.2, other)) {
-                    near.extend((s..e).filter(|&i| overlap(&boxes[i], other)));
+                    near.extend((s..e).map(|i| (i, bounds(x, &p.slots[i]))).filter(|(_, b)| overlap(b, other)));
                 }
-                near.sort_unstable_by(|&i, &j| lo(i).total_cmp(&lo(j)));
+                near.sort_unstable_by(|a, b| lo(a).total_cmp(&lo(b)));
             }
             // each pair whose extents along the axis overlap, once: from the one
             // that starts first
             let (mut i, mut j) = (0, 0);
             while i < near_a.len() && j < near_b.len() {
-                let (a, b) = (near_a[i], near_b[j]);
+                let (a, b) = (&near_a[i], &near_b[j]);
                 if lo(a) <= lo(b) {
-                    for &b in near_b[j..].iter().take_while(|&&b| lo(b) <= hi(a)) {
-                        if test(a, b, &mut hits) {
+                    for b in near_b[j..].iter().take_while(|b| lo(b) <= hi(a)) {
+                        if test((a.0, &a.1), (b.0, &b.1), &mut hits) {
                             return true;
                         }
                     }
                     i += 1;
                 } else {
-                    for &a in near_a[i..].iter().take_while(|&&a| lo(a) <= hi(b)) {
-                        if test(a, b, &mut hits) {
+                    for a in near_a[i..].iter().take_while(|a| lo(a) <= hi(b)) {
+                        if test((a.0, &a.1), (b.0, &b.1), &mut hits) {
                             return true;
                         }
                     }
@@ -233,6 +232,23 @@ impl PatchSearch {
         });
         hits
     }
+}
+
+/// The box around `points`.
+fn around<'a>(points: impl Iterator<Item = &'a Point<3>>) -> Aabb {
+    let mut u = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in points {
+        for k in 0..3 {
+            // (a NaN coordinate widens nothing; the narrow phase sees it)
+            if p[k] < u.0[k] {
+                u.0[k] = p[k];
+            }
+            if p[k] > u.1[k] {
+                u.1[k] = p[k];
+            }
+        }
+    }
+    u
 }
 
 /// The box around `boxes`.

@@ -12,13 +12,28 @@ use std::collections::VecDeque;
 /// A cell's side is that of a square of this many triangles of mean area.
 pub(super) const PATCH_TRIANGLES: usize = 512;
 
-/// A patch: its triangles (a range of [`Patches::order`]) and, when it is a
+/// A patch: its triangles (a range of [`Patches::order`]), the plane of its
+/// class (the axis of the normals' largest component, and whether that is
+/// positive: the plane it projects onto best when cut) and, when it is a
 /// topological disk, its boundary loop (vertices in order).
 #[derive(Debug, Clone)]
 pub(super) struct Patch {
     pub start: usize,
     pub end: usize,
+    pub plane: (usize, bool),
     pub boundary: Option<Vec<usize>>,
+}
+
+/// Triangles of a run along a patch's rings, boxed together.
+pub(super) const CHUNK: usize = 16;
+
+/// A run of [`CHUNK`] triangles of a patch (a range of slots) and its vertices
+/// (a range of [`Patches::chunk_vertices`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Chunk {
+    pub start: usize,
+    pub end: usize,
+    pub vertices: (u32, u32),
 }
 
 /// The patches of one connectivity.
@@ -29,6 +44,11 @@ pub(super) struct Patches {
     pub order: Vec<u32>,
     pub slots: Vec<[usize; 3]>,
     pub patches: Vec<Patch>,
+    /// The runs of each patch's triangles (patch `q`'s from `first_chunk[q]`
+    /// to `first_chunk[q + 1]`), and the vertices of each run, once.
+    pub chunks: Vec<Chunk>,
+    pub first_chunk: Vec<usize>,
+    pub chunk_vertices: Vec<u32>,
     /// The pairs of disk patches that share one arc of their loops.
     pub seams: Vec<Seam>,
     /// The patches glued into larger disks.
@@ -47,13 +67,15 @@ impl Patches {
     /// one fan); any other gets one patch per triangle, which certifies nothing.
     pub fn new(x: &[Point<3>], triangles: &[[usize; 3]]) -> Patches {
         let (n, vertices) = (triangles.len(), x.len());
-        let singletons = || Patches {
-            triangles: triangles.to_vec(),
-            order: (0..n as u32).collect(),
-            slots: triangles.to_vec(),
-            patches: (0..n).map(|t| Patch { start: t, end: t + 1, boundary: None }).collect(),
-            seams: Vec::new(),
-            groups: Groups::default(),
+        let singletons = || {
+            Patches {
+                triangles: triangles.to_vec(),
+                order: (0..n as u32).collect(),
+                slots: triangles.to_vec(),
+                patches: (0..n).map(|t| Patch { start: t, end: t + 1, plane: (2, true), boundary: None }).collect(),
+                ..Patches::default()
+            }
+            .chunked()
         };
         if n >= u32::MAX as usize || vertices >= u32::MAX as usize {
             return singletons();
@@ -127,7 +149,8 @@ impl Patches {
             }
             let members: Vec<usize> = order[start..].iter().map(|&t| t as usize).collect();
             let boundary = disk_boundary(&members, triangles, &across, &patch_of, id);
-            patches.push(Patch { start, end: order.len(), boundary });
+            let c = cell[seed][3];
+            patches.push(Patch { start, end: order.len(), plane: ((c / 2) as usize, c % 2 == 1), boundary });
         }
         let slots = order.iter().map(|&t| triangles[t as usize]).collect();
         let across = |u: usize, v: usize| find(v, u).map_or(u32::MAX, |t| patch_of[t as usize]);
@@ -135,7 +158,28 @@ impl Patches {
         let seams = seams(&loops, across);
         let cells: Vec<[i64; 4]> = patches.iter().map(|q| cell[order[q.start] as usize]).collect();
         let groups = Groups::new(&loops, &cells, vertices, across);
-        Patches { triangles: triangles.to_vec(), order, slots, patches, seams, groups }
+        Patches { triangles: triangles.to_vec(), order, slots, patches, seams, groups, ..Patches::default() }.chunked()
+    }
+
+    /// The patches with their runs of [`CHUNK`] triangles drawn.
+    fn chunked(mut self) -> Patches {
+        let (chunks, first, vertices) = (&mut self.chunks, &mut self.first_chunk, &mut self.chunk_vertices);
+        let mut run = Vec::with_capacity(3 * CHUNK);
+        for patch in &self.patches {
+            first.push(chunks.len());
+            for start in (patch.start..patch.end).step_by(CHUNK) {
+                let end = (start + CHUNK).min(patch.end);
+                run.clear();
+                run.extend(self.slots[start..end].iter().flatten().map(|&v| v as u32));
+                run.sort_unstable();
+                run.dedup();
+                let from = vertices.len() as u32;
+                vertices.extend_from_slice(&run);
+                chunks.push(Chunk { start, end, vertices: (from, vertices.len() as u32) });
+            }
+        }
+        first.push(chunks.len());
+        self
     }
 }
 
