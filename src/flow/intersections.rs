@@ -9,7 +9,7 @@
 //! ([`swept_surface_intersections`]): a part thinner than its motion could pass
 //! wholly through a sheet within it and leave no intersection at the end.
 
-use crate::geometry::{surface_intersections, swept_surface_intersections, Mesh, PatchSearch, Point};
+use crate::geometry::{swept_surface_intersections, Mesh, PatchSearch, Point};
 
 /// A step that intersections cut below this fraction of the spec's `τ` is a
 /// contact: the surfaces touch, and shorter steps would only creep closer.
@@ -89,15 +89,13 @@ fn triangles<const D: usize>(mesh: &Mesh<D>) -> Vec<[usize; 3]> {
 
 /// Two triangles of a surface mesh (`D = 3`) that share no vertex and meet; none
 /// for curves (their crossings are the mesh management's: topological changes).
-/// `search` answers when it has the mesh's connectivity (a regularized state),
-/// the exhaustive search otherwise (its patches are kept for the trial steps).
+/// A new connectivity (a remeshed or merged state) is cut into patches by
+/// `search` here, and the cut serves the trial steps from it: one cut and one
+/// search where the exhaustive search and a cut at the next step cost twice that
+/// (BENCHMARKS.md).
 pub(super) fn surface_intersection<const D: usize>(mesh: &Mesh<D>, search: &mut PatchSearch) -> Option<(usize, usize)> {
     if D != 3 {
         return None;
     }
-    let (x, t) = (points(mesh), triangles(mesh));
-    match search.knows(&t) {
-        true => search.intersections(&x, &t, 1).pop(),
-        false => surface_intersections(&x, &t, 1).pop(),
-    }
+    search.intersections(&points(mesh), &triangles(mesh), 1).pop()
 }
