@@ -20,7 +20,7 @@ impl<const D: usize> Flow<'_, D> {
         // volume a collapse, a flip or the regularization's tangential moves
         // take off a curved surface) is given back, component by component
         let measures = self.settings.conserves_measure().then(|| self.mesh.component_measures());
-        let (mesh, remeshed, cut) = match manager.manage(&self.mesh)? {
+        let (mesh, remeshed, cut) = match manager.manage_searched(&self.mesh, &mut self.search)? {
             Managed::Unchanged => return Ok(None),
             Managed::PinchOff => return Ok(Some(StopReason::PinchOff)),
             Managed::Vanished => return Ok(Some(StopReason::Vanished)),

@@ -7,6 +7,7 @@ use super::report::SurgeryKind;
 use super::FlowError;
 use crate::geometry::{
     manage_curve, manage_curve_holding, resolve_crossings, CrossingWatch, CurveMesh, CurveRemeshSettings, Hold, Mesh,
+    PatchSearch,
 };
 
 /// What mesh management did to the mesh after a step.
@@ -30,6 +31,13 @@ pub enum Managed<const D: usize> {
 /// Called by the driver after every accepted step.
 pub trait MeshManager<const D: usize>: Send {
     fn manage(&mut self, mesh: &Mesh<D>) -> Result<Managed<D>, FlowError>;
+    /// [`MeshManager::manage`] with the flow's intersection search (what the
+    /// driver calls): a surface manager checks its result with it, at the cost of
+    /// a search where the connectivity is unchanged, and its cut of a new one
+    /// serves the trial steps after.
+    fn manage_searched(&mut self, mesh: &Mesh<D>, _search: &mut PatchSearch) -> Result<Managed<D>, FlowError> {
+        self.manage(mesh)
+    }
     /// Components in contact (the flow's intersection rule stopped them a hair
     /// apart) joined into one, if this manager does merges ([`Surgery::merge`]).
     fn merge(&mut self, _mesh: &Mesh<D>) -> Option<Mesh<D>> {

@@ -6,8 +6,8 @@ use super::mesh_management::{outcome, Managed, MeshManager, Surgery};
 use super::report::SurgeryKind;
 use super::FlowError;
 use crate::geometry::{
-    adapt_surface, cut_neck, edge_statistics, first_surface_intersection, regularize_surface, revert_new_intersections,
-    PatchSearch, SurfaceMesh, SurfaceRemeshSettings,
+    adapt_surface, cut_neck, edge_statistics, regularize_surface, revert_new_intersections, PatchSearch, SurfaceMesh,
+    SurfaceRemeshSettings,
 };
 
 /// Switches and resolved parameters of surface mesh management.
@@ -69,6 +69,11 @@ impl MeshManager<3> for SurfaceManager {
     /// longer keep its angles above `PINCH_MIN_ANGLE_DEG` (elements of at least
     /// `h_min` around a ring that small).
     fn manage(&mut self, mesh: &SurfaceMesh) -> Result<Managed<3>, FlowError> {
+        self.manage_searched(mesh, &mut PatchSearch::default())
+    }
+
+    /// [`MeshManager::manage`], its result checked for intersections by `search`.
+    fn manage_searched(&mut self, mesh: &SurfaceMesh, search: &mut PatchSearch) -> Result<Managed<3>, FlowError> {
         if let Some(done) = self.surgery.and_then(|_| self.shrunk_away(mesh)) {
             return Ok(done);
         }
@@ -85,7 +90,7 @@ impl MeshManager<3> for SurfaceManager {
         } else {
             None
         };
-        let (remeshed, moved) = self.apart(mesh, remeshed, moved);
+        let (remeshed, moved) = self.apart(mesh, remeshed, moved, search);
         // the adaptation parted a neck itself (a collapse, or a cluster of tiny
         // triangles replaced across it): with surgery a pinch like the designed
         // one, recorded; with the pinch test alone the paper's stop
@@ -141,23 +146,24 @@ impl SurfaceManager {
         mesh: &SurfaceMesh,
         remeshed: Option<SurfaceMesh>,
         moved: Option<SurfaceMesh>,
+        search: &mut PatchSearch,
     ) -> (Option<SurfaceMesh>, Option<SurfaceMesh>) {
-        let meets = |m: &SurfaceMesh| first_surface_intersection(m.positions(), m.elements()).is_some();
+        let mut meets = |m: &SurfaceMesh| !search.intersections(m.positions(), m.elements(), 1).is_empty();
         let result = moved.as_ref().or(remeshed.as_ref());
         if result.is_none_or(|m| !meets(m)) || meets(mesh) {
             return (remeshed, moved);
         }
-        let unmoved = |base: &SurfaceMesh, m: &SurfaceMesh| {
-            revert_new_intersections(base.positions(), m.positions(), base.elements(), 8, &mut PatchSearch::default())
-                .map(|x| base.with_positions(x))
-        };
         // the regularization undone where it meets, on the adaptation if that is sound
         let adapted = remeshed.is_some();
         let remeshed = remeshed.filter(|r| !meets(r));
         // a regularization of a dropped adaptation is dropped with it
         let moved = match (adapted, &remeshed) {
             (true, None) => None,
-            _ => moved.and_then(|m| unmoved(remeshed.as_ref().unwrap_or(mesh), &m)),
+            _ => moved.and_then(|m| {
+                let base = remeshed.as_ref().unwrap_or(mesh);
+                revert_new_intersections(base.positions(), m.positions(), base.elements(), 8, search)
+                    .map(|x| base.with_positions(x))
+            }),
         };
         tracing::debug!(adapted = remeshed.is_some(), "management kept apart from a close sheet");
         (remeshed, moved)
