@@ -224,18 +224,13 @@ fn main() {
         surgery: None,
         declined: None,
     };
+    let mut managed_search = shapeflow::geometry::PatchSearch::default(); // the driver's, kept
     let t_manage = time_it(0.5, || {
-        black_box(manager.manage(&mesh).unwrap());
+        black_box(manager.manage_searched(&mesh, &mut managed_search).unwrap());
     });
-    let t_stats = time_it(0.5, || {
-        black_box(shapeflow::geometry::edge_statistics(&mesh));
-    });
-    let t_adapt = time_it(0.5, || {
-        black_box(shapeflow::geometry::adapt_surface(&mesh, &params));
-    });
-    let t_reg = time_it(0.5, || {
-        black_box(shapeflow::geometry::regularize_surface(&mesh, 3));
-    });
+    let t_stats = time_it(0.5, || _ = black_box(shapeflow::geometry::edge_statistics(&mesh)));
+    let t_adapt = time_it(0.5, || _ = black_box(shapeflow::geometry::adapt_surface(&mesh, &params)));
+    let t_reg = time_it(0.5, || _ = black_box(shapeflow::geometry::regularize_surface(&mesh, 3)));
     eprintln!(
         "n={n}: pinch check {:.1} ms, adapt {:.1} ms, regularize (3 sweeps) {:.1} ms",
         t_stats * 1e3,
@@ -262,11 +257,13 @@ fn main() {
         black_box(shapeflow::geometry::PatchSearch::default().intersections(&x, &t, 1));
     });
     let states = ellipsoid_states(1e-3, 40);
-    let start = Instant::now();
-    for state in &states {
-        assert!(search.intersections(state, &t, 1).is_empty());
-    }
-    let t_flow = start.elapsed().as_secs_f64() / states.len() as f64;
+    let t_flow = (0..3) // the best of three passes
+        .map(|_| {
+            let start = Instant::now();
+            states.iter().for_each(|state| assert!(search.intersections(state, &t, 1).is_empty()));
+            start.elapsed().as_secs_f64() / states.len() as f64
+        })
+        .fold(f64::INFINITY, f64::min);
     let counts = |s: &shapeflow::geometry::PatchSearch| (s.embedded, s.groups + s.sealed, s.neighbours, s.tested);
     let flow_counts = counts(&search);
     let start = Instant::now();
@@ -296,7 +293,7 @@ fn main() {
     };
     row(format!("sphere, {n}"), t_check, t_patches, of(counts(&search)));
     row(format!("sphere, {n}, patches cut anew (a new connectivity)"), t_check, t_cut, " | | | ".into());
-    let flow = format!("ellipsoid flow, {n}, mean of {} states", states.len());
+    let flow = format!("ellipsoid flow, {n}, mean of {} states (best of three passes)", states.len());
     row(flow, t_flow_exhaustive, t_flow, of(flow_counts));
     println!();
     println!(
