@@ -46,7 +46,7 @@ pub(super) fn new_intersection<const D: usize>(
         let (ca, cb) = (labels[elements[a][0]], labels[elements[b][0]]);
         (ca.min(cb), ca.max(cb))
     };
-    let mut before: Vec<(usize, usize)> = search.intersections(&x0, &t, usize::MAX).into_iter().map(pair).collect();
+    let mut before: Vec<(usize, usize)> = search.intersections_of_state(&x0, &t).into_iter().map(pair).collect();
     before.sort_unstable();
     let mut after = search.intersections(&x1, &t, usize::MAX);
     if swept {

@@ -149,17 +149,17 @@ pub fn revert_new_intersections(
     rounds: usize,
     search: &mut PatchSearch,
 ) -> Option<Vec<Point<3>>> {
-    let mut meeting = |x: &[Point<3>]| {
+    let meeting = |x: &[Point<3>], search: &mut PatchSearch| {
         let mut pairs = search.intersections(x, triangles, usize::MAX);
         pairs.sort_unstable();
         pairs
     };
     let mut x = after.to_vec();
-    let mut pairs = meeting(&x);
+    let mut pairs = meeting(&x, search);
     if pairs.is_empty() {
         return Some(x);
     }
-    let old = meeting(before);
+    let old = search.intersections_of_state(before, triangles);
     for _ in 0..rounds {
         let new: Vec<&(usize, usize)> = pairs.iter().filter(|p| old.binary_search(p).is_err()).collect();
         if new.is_empty() {
@@ -170,7 +170,7 @@ pub fn revert_new_intersections(
                 x[v] = before[v];
             }
         }
-        pairs = meeting(&x);
+        pairs = meeting(&x, search);
     }
     pairs.iter().all(|p| old.binary_search(p).is_ok()).then_some(x)
 }

@@ -53,10 +53,12 @@ use certify::{embedded, loop_projects_simple};
 use patches::Patches;
 
 /// The search (see the module documentation); it keeps the patches of the last
-/// connectivity searched.
+/// two connectivities searched (a flow checks a new connectivity of the mesh
+/// management, and its state before, in turn).
 #[derive(Debug, Clone, Default)]
 pub struct PatchSearch {
     patches: Patches,
+    previous: Patches,
     /// Scratch: the boxes of a patch's triangles, and the runs of triangles
     /// (slots) with their boxes.
     boxes: Vec<Aabb>,
@@ -65,6 +67,9 @@ pub struct PatchSearch {
     planes: Vec<Option<(usize, bool)>>,
     /// Whether the patches are cut again at the next search.
     stale: bool,
+    /// The last answer of [`PatchSearch::intersections_of_state`]: positions,
+    /// triangles, pairs.
+    kept: Option<(Vec<Point<3>>, Vec<[usize; 3]>, Vec<(usize, usize)>)>,
     /// Of the last search: patches, patches proved embedded, pairs of patches
     /// whose boxes overlap, and pairs of triangles tested (for tests and
     /// benchmarks).
@@ -82,7 +87,23 @@ impl PatchSearch {
     /// Whether the patches kept are those of `triangles` (a search of them
     /// cuts none).
     pub fn knows(&self, triangles: &[[usize; 3]]) -> bool {
-        self.patches.triangles == triangles
+        self.patches.triangles == triangles || self.previous.triangles == triangles
+    }
+
+    /// All pairs that meet at a state searched again and again (the state a
+    /// flow's trial steps start from, against which each finds its new pairs),
+    /// sorted: [`PatchSearch::intersections`], its last answer kept for the same
+    /// positions and triangles.
+    pub fn intersections_of_state(&mut self, x: &[Point<3>], triangles: &[[usize; 3]]) -> Vec<(usize, usize)> {
+        if let Some((kx, kt, pairs)) = &self.kept {
+            if kx.as_slice() == x && kt.as_slice() == triangles {
+                return pairs.clone();
+            }
+        }
+        let mut pairs = self.intersections(x, triangles, usize::MAX);
+        pairs.sort_unstable();
+        self.kept = Some((x.to_vec(), triangles.to_vec(), pairs.clone()));
+        pairs
     }
 
     /// Up to `most` pairs `(a, b)`, `a < b`, of `triangles` that share no vertex
@@ -97,7 +118,13 @@ impl PatchSearch {
         if triangles.len() < 2 || most == 0 {
             return hits;
         }
-        if self.stale || self.patches.triangles != triangles {
+        if self.patches.triangles != triangles && self.previous.triangles == triangles {
+            std::mem::swap(&mut self.patches, &mut self.previous);
+            self.stale = false;
+        }
+        if self.patches.triangles != triangles {
+            self.previous = std::mem::replace(&mut self.patches, Patches::new(x, triangles));
+        } else if self.stale {
             self.patches = Patches::new(x, triangles);
         }
         let (p, tested, neighbours) = (&self.patches, &mut self.tested, &mut self.neighbours);

@@ -232,3 +232,31 @@ fn arcs_close_a_simple_loop_only_when_apart() {
     // a single edge each is no loop
     assert!(!seams::arcs_apart(&[c(1.0, 0.0), c(-1.0, 0.0)], &[c(-1.0, 0.0), c(1.0, 0.0)]));
 }
+
+/// Two connectivities searched in turn (a managed state and the state before
+/// it), and a state searched again after its positions changed: each answer is
+/// the exhaustive search's (the two cuts kept, and the answer kept for one
+/// state, serve only their own input), and both cuts are kept.
+#[test]
+fn kept_cuts_and_answers_serve_only_their_own_input() {
+    let overlapping =
+        surface_union(&[icosphere([-0.45, 0.0, 0.0], 0.5, 3).unwrap(), icosphere([0.45, 0.0, 0.0], 0.5, 3).unwrap()])
+            .unwrap();
+    let single = icosphere([0.0; 3], 1.0, 3).unwrap();
+    let (xa, ta) = (overlapping.positions().to_vec(), overlapping.elements().to_vec());
+    let (xb, tb) = (single.positions().to_vec(), single.elements().to_vec());
+    let mut search = PatchSearch::default();
+    let meeting = all_pairs(&mut search, &xa, &ta);
+    assert!(!meeting.is_empty());
+    assert!(all_pairs(&mut search, &xb, &tb).is_empty());
+    assert!(search.knows(&ta) && search.knows(&tb));
+    assert_eq!(all_pairs(&mut search, &xa, &ta), meeting);
+    assert_eq!(search.intersections_of_state(&xa, &ta), meeting);
+    assert_eq!(search.intersections_of_state(&xa, &ta), meeting, "the kept answer");
+    // the second sphere moved away: the kept answer is not given for it
+    let apart: Vec<Point<3>> = (xa.iter().enumerate())
+        .map(|(v, p)| if v >= xa.len() / 2 { p + Point::<3>::new(0.2, 0.0, 0.0) } else { *p })
+        .collect();
+    assert!(search.intersections_of_state(&apart, &ta).is_empty());
+    assert!(all_pairs(&mut search, &apart, &ta).is_empty());
+}
