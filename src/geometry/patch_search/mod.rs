@@ -34,9 +34,11 @@
 //! broad phase), and those of two patches whose boxes overlap (the triangles of
 //! each inside the other's box, found by runs of [`patches::CHUNK`] triangles and swept
 //! along the longest side of the overlap). The result is the exhaustive search's:
-//! the same pairs, in another order. When fewer than half of the disk patches
-//! are embedded (the surface has left the shape they were cut for far behind),
-//! they are cut again at the next search.
+//! the same pairs, in another order. When fewer than half as many patches are
+//! embedded as at the first search after their cut (the surface has left the
+//! shape they were cut for far behind), they are cut again at the next search;
+//! patches few of which were embedded from the start are not cut again and
+//! again.
 //!
 //! [`surface_intersections`]: super::surface_intersections
 
@@ -194,10 +196,12 @@ impl PatchSearch {
                 return hits;
             }
         }
-        // patches cut for a shape the surface has left far behind are cut again
-        // at the next search
-        let disks = p.patches.iter().filter(|q| q.boundary.is_some()).count();
-        self.stale = 2 * self.embedded < disks;
+        // patches cut for a shape the surface has left far behind (fewer than
+        // half as many embedded as on that shape) are cut again at the next
+        // search; patches that were few embedded from the start are kept
+        let at_cut = p.embedded_at_cut.get().unwrap_or(self.embedded);
+        p.embedded_at_cut.set(Some(at_cut));
+        self.stale = 2 * self.embedded < at_cut;
         // groups of patches embedded over one plane, and seams of two such patches
         // not in one of them, whose unions are too
         let certified = p.groups.certify(|g| {

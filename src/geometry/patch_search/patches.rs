@@ -49,6 +49,9 @@ pub(super) struct Patches {
     pub chunks: Vec<Chunk>,
     pub first_chunk: Vec<usize>,
     pub chunk_vertices: Vec<u32>,
+    /// The patches proved embedded at the first search after the cut (the
+    /// shape they were cut for).
+    pub embedded_at_cut: std::cell::Cell<Option<usize>>,
     /// The pairs of disk patches that share one arc of their loops.
     pub seams: Vec<Seam>,
     /// The patches glued into larger disks.
