@@ -175,16 +175,26 @@ pub fn revert_new_intersections(
     pairs.iter().all(|p| old.binary_search(p).is_ok()).then_some(x)
 }
 
+/// The box of triangle `t`'s corners.
 pub(super) fn bounds(x: &[Point<3>], t: &[usize; 3]) -> Aabb {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for &v in t {
+    around(t.iter().map(|&v| &x[v]))
+}
+
+/// The box around `points` (a NaN coordinate widens nothing; the narrow phase
+/// sees it).
+pub(super) fn around<'a>(points: impl Iterator<Item = &'a Point<3>>) -> Aabb {
+    let mut b = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in points {
         for k in 0..3 {
-            lo[k] = lo[k].min(x[v][k]);
-            hi[k] = hi[k].max(x[v][k]);
+            if p[k] < b.0[k] {
+                b.0[k] = p[k];
+            }
+            if p[k] > b.1[k] {
+                b.1[k] = p[k];
+            }
         }
     }
-    (lo, hi)
+    b
 }
 
 pub(super) fn overlap(a: &Aabb, b: &Aabb) -> bool {

@@ -49,7 +49,7 @@ mod seams;
 #[cfg(test)]
 mod tests;
 
-use super::surface_intersections::{bounds, box_pairs, overlap, points_meet, surface_intersections, Aabb};
+use super::surface_intersections::{around, bounds, box_pairs, overlap, points_meet, surface_intersections, Aabb};
 use super::Point;
 use certify::{embedded, loop_projects_simple};
 use patches::Patches;
@@ -263,23 +263,6 @@ impl PatchSearch {
         });
         hits
     }
-}
-
-/// The box around `points`.
-fn around<'a>(points: impl Iterator<Item = &'a Point<3>>) -> Aabb {
-    let mut u = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for p in points {
-        for k in 0..3 {
-            // (a NaN coordinate widens nothing; the narrow phase sees it)
-            if p[k] < u.0[k] {
-                u.0[k] = p[k];
-            }
-            if p[k] > u.1[k] {
-                u.1[k] = p[k];
-            }
-        }
-    }
-    u
 }
 
 /// The box around `boxes`.

@@ -6,7 +6,7 @@
 //! projects to a simple loop, so the degree argument of the patches applies to it
 //! and no pair of the two patches needs a test.
 
-use super::super::Point;
+use super::super::{bounding_box, boxes_meet, Point, Rect};
 use super::certify::{flat, folds_back, loop_projects_simple, segments_meet};
 use robust::{orient2d, Coord};
 
@@ -117,22 +117,16 @@ pub(super) fn arcs_apart(p: &[Coord<f64>], q: &[Coord<f64>]) -> bool {
     if np == 0 || nq == 0 || np + nq < 3 {
         return false;
     }
-    type Box2 = ([f64; 2], [f64; 2]);
-    let box_of = |pts: &[Coord<f64>]| -> Box2 {
-        pts.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), c| {
-            ([lo[0].min(c.x), lo[1].min(c.y)], [hi[0].max(c.x), hi[1].max(c.y)])
-        })
-    };
-    let meet = |a: &Box2, b: &Box2| a.0[0] <= b.1[0] && b.0[0] <= a.1[0] && a.0[1] <= b.1[1] && b.0[1] <= a.1[1];
+    let box_of = |pts: &[Coord<f64>]| bounding_box(pts.iter().map(|c| [c.x, c.y]));
     let (pbox, qbox) = (box_of(p), box_of(q));
     // the edges of each inside the other's box
-    let near = |pts: &[Coord<f64>], other: &Box2| -> Vec<(usize, Box2)> {
-        (0..pts.len() - 1).map(|i| (i, box_of(&pts[i..i + 2]))).filter(|(_, b)| meet(b, other)).collect()
+    let near = |pts: &[Coord<f64>], other: &Rect| -> Vec<(usize, Rect)> {
+        (0..pts.len() - 1).map(|i| (i, box_of(&pts[i..i + 2]))).filter(|(_, b)| boxes_meet(b, other)).collect()
     };
     let (near_p, near_q) = (near(p, &qbox), near(q, &pbox));
     for &(i, bi) in &near_p {
         for &(j, bj) in &near_q {
-            if !meet(&bi, &bj) {
+            if !boxes_meet(&bi, &bj) {
                 continue;
             }
             let hit = if i + 1 == np && j == 0 {
