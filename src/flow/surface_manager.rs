@@ -6,8 +6,8 @@ use super::mesh_management::{outcome, Managed, MeshManager, Surgery};
 use super::report::SurgeryKind;
 use super::FlowError;
 use crate::geometry::{
-    adapt_surface, cut_neck, edge_statistics, regularize_surface, revert_new_intersections, PatchSearch, SurfaceMesh,
-    SurfaceRemeshSettings,
+    adapt_surface, adapt_surface_except, cut_neck, edge_statistics, freeze_around, regularize_surface,
+    revert_new_intersections, PatchSearch, SurfaceMesh, SurfaceRemeshSettings,
 };
 
 /// Switches and resolved parameters of surface mesh management.
@@ -58,6 +58,10 @@ fn edge_stats(m: &SurfaceMesh) -> (f64, (f64, f64)) {
     let (mean, hb, bh) = edge_statistics(m);
     (mean, (hb, bh))
 }
+
+/// Adaptations made again with more vertices frozen where the last one carried
+/// a triangle through a close sheet ([`SurfaceManager::apart`]).
+pub const APART_ROUNDS: usize = 3;
 
 /// Smallest angle the surface management keeps while a neck collapses: below it,
 /// once the neck is thinner than `4 h_min`, the neck counts as pinched.
@@ -137,10 +141,11 @@ impl SurfaceManager {
     /// The adaptation `remeshed` and the regularization `moved` of `mesh` (which
     /// meets itself nowhere), or what of them passes through no sheet: where the
     /// management carried a vertex through a close sheet (touching objects of a
-    /// segmentation, the parts of a neck split), the regularization's moves of
-    /// the triangles that meet are undone ([`revert_new_intersections`]), and an
-    /// adaptation that still meets is not taken. Checked only where the result
-    /// meets itself.
+    /// segmentation, the parts of a neck split), the adaptation is made again
+    /// with the vertices around the triangles that meet left as they are
+    /// ([`adapt_surface_except`], up to [`APART_ROUNDS`] times, else not taken),
+    /// and the regularization's moves of the triangles that meet are undone
+    /// ([`revert_new_intersections`]). Checked only where the result meets itself.
     fn apart(
         &self,
         mesh: &SurfaceMesh,
@@ -153,18 +158,28 @@ impl SurfaceManager {
         if result.is_none_or(|m| !meets(m)) || meets(mesh) {
             return (remeshed, moved);
         }
-        // the regularization undone where it meets, on the adaptation if that is sound
-        let adapted = remeshed.is_some();
-        let remeshed = remeshed.filter(|r| !meets(r));
-        // a regularization of a dropped adaptation is dropped with it
-        let moved = match (adapted, &remeshed) {
-            (true, None) => None,
-            _ => moved.and_then(|m| {
-                let base = remeshed.as_ref().unwrap_or(mesh);
-                revert_new_intersections(base.positions(), m.positions(), base.elements(), 8, search)
-                    .map(|x| base.with_positions(x))
-            }),
-        };
+        // the adaptation kept away from where it meets
+        let (mut remeshed, mut again) = (remeshed, false);
+        let mut frozen = vec![false; mesh.num_vertices()];
+        for round in 0..=APART_ROUNDS {
+            let Some(r) = remeshed.take() else { break };
+            let pairs = search.intersections(r.positions(), r.elements(), usize::MAX);
+            if pairs.is_empty() {
+                remeshed = Some(r);
+                break;
+            }
+            if round < APART_ROUNDS {
+                freeze_around(mesh, &r, &pairs, &mut frozen);
+                remeshed = adapt_surface_except(mesh, &self.params, &frozen);
+                again = true;
+            }
+        }
+        // the regularization of what is kept, undone where it meets
+        let base = remeshed.as_ref().unwrap_or(mesh);
+        let moved = moved.map(|m| if again { regularize_surface(base, self.sweeps) } else { m }).and_then(|m| {
+            revert_new_intersections(base.positions(), m.positions(), base.elements(), 8, search)
+                .map(|x| base.with_positions(x))
+        });
         tracing::debug!(adapted = remeshed.is_some(), "management kept apart from a close sheet");
         (remeshed, moved)
     }

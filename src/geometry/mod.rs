@@ -46,7 +46,8 @@ pub use neck_cut::cut_neck;
 pub use objects::Objects;
 pub use surface_intersections::{first_surface_intersection, revert_new_intersections, surface_intersections};
 pub use surface_remesh::{
-    adapt_surface, edge_statistics, regularize_surface, surface_edges, SurfaceEdge, SurfaceRemeshSettings,
+    adapt_surface, adapt_surface_except, edge_statistics, freeze_around, regularize_surface, surface_edges,
+    SurfaceEdge, SurfaceRemeshSettings,
 };
 pub use surfaces::{box_surface, ellipsoid, icosphere, torus};
 pub use unions::{surface_union, union};

@@ -16,7 +16,7 @@
 
 use super::adjacency::Adjacency;
 use super::ears::{ear_cap, folded};
-use super::SurfaceRemeshSettings;
+use super::{Frozen, SurfaceRemeshSettings};
 use crate::geometry::{components, Point};
 
 /// Edges shorter than this fraction of `h_min` join their ends into a cluster.
@@ -39,9 +39,10 @@ pub(super) fn replace_clusters(
     tris: &mut Vec<[usize; 3]>,
     adjacency: &Adjacency,
     s: &SurfaceRemeshSettings,
+    frozen: &Frozen,
 ) -> bool {
     let clusters = clusters(p, adjacency, TINY * s.h_min);
-    let mut locked = vec![false; p.len()];
+    let mut locked: Vec<bool> = (0..p.len()).map(|v| frozen.any(&[v])).collect();
     let mut dead = vec![false; tris.len()];
     let mut fans: Vec<Cap> = Vec::new();
     // patches replaced, and whether one was cut at a neck (or vanished)
@@ -263,7 +264,7 @@ mod tests {
     fn replaced(m: &SurfaceMesh, s: &SurfaceRemeshSettings) -> Option<SurfaceMesh> {
         let (mut p, mut t) = (m.positions().to_vec(), m.elements().to_vec());
         let adjacency = Adjacency::of(p.len(), &t);
-        replace_clusters(&mut p, &mut t, &adjacency, s).then(|| {
+        replace_clusters(&mut p, &mut t, &adjacency, s, &Frozen(&[])).then(|| {
             let mut used: Vec<usize> = t.iter().flatten().copied().collect();
             used.sort_unstable();
             used.dedup();

@@ -2,7 +2,7 @@
 
 use super::adjacency::Adjacency;
 use super::triangles::{tri_normal, unit_normals};
-use super::SurfaceRemeshSettings;
+use super::{Frozen, SurfaceRemeshSettings};
 use crate::geometry::Point;
 
 /// Coarsening by edge collapses: an edge shorter than `h_min`, or flat (`h β` below
@@ -16,6 +16,7 @@ pub(super) fn collapse_edges(
     tris: &mut Vec<[usize; 3]>,
     adjacency: &Adjacency,
     s: &SurfaceRemeshSettings,
+    frozen: &Frozen,
 ) -> bool {
     let n = p.len();
     let edges = &adjacency.edges;
@@ -42,7 +43,7 @@ pub(super) fn collapse_edges(
     }
     keys.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
     let stars = &adjacency.stars;
-    let mut locked = vec![false; n];
+    let mut locked: Vec<bool> = (0..n).map(|v| frozen.any(&[v])).collect();
     let mut dead = vec![false; tris.len()];
     let mut remap: Vec<usize> = (0..n).collect();
     let mut any = false;

@@ -2,7 +2,7 @@
 
 use super::adjacency::Adjacency;
 use super::triangles::{angle_at, thin_triangles, tri_normal};
-use super::SurfaceRemeshSettings;
+use super::{Frozen, SurfaceRemeshSettings};
 use crate::geometry::Point;
 use std::collections::HashSet;
 
@@ -18,6 +18,7 @@ pub(super) fn flip_edges(
     tris: &mut [[usize; 3]],
     adjacency: &Adjacency,
     s: &SurfaceRemeshSettings,
+    frozen: &Frozen,
 ) -> bool {
     let mut valence = vec![0i64; p.len()];
     let edges = &adjacency.edges;
@@ -57,7 +58,11 @@ pub(super) fn flip_edges(
         if after >= before && !sliver {
             continue;
         }
-        if c == d || adjacency.edge(c, d).is_some() || added.contains(&(c.min(d), c.max(d))) {
+        if c == d
+            || frozen.any(&[a, b, c, d])
+            || adjacency.edge(c, d).is_some()
+            || added.contains(&(c.min(d), c.max(d)))
+        {
             continue;
         }
         let (n0, n1) = (tri_normal(p, &t0), tri_normal(p, &t1));
@@ -130,7 +135,7 @@ mod tests {
         let before = Adjacency::of(p.len(), &tris);
         assert!(before.edge(a, b).is_some());
         let s = SurfaceRemeshSettings { epsilon: 1.0, h_min: 1e-3, h_max: 1.0, max_angle_deg: 150.0 };
-        assert!(flip_edges(&p, &mut tris, &before, &s));
+        assert!(flip_edges(&p, &mut tris, &before, &s, &Frozen(&[])));
         let after = Adjacency::of(p.len(), &tris);
         assert!(after.edge(a, b).is_none(), "the cap's long edge is gone");
         let widest = tris

@@ -25,6 +25,7 @@ use flip::flip_edges;
 use split::split_edges;
 use triangles::tri_normal;
 
+use super::surface_intersections::around;
 use super::{Mesh, Point, SurfaceMesh};
 
 /// Parameters of surface mesh management.
@@ -58,11 +59,50 @@ pub fn edge_statistics(mesh: &SurfaceMesh) -> (f64, f64, f64) {
     (sum / edges.len().max(1) as f64, hb, bh)
 }
 
+/// Vertices of the input that an adaptation leaves as they are: no operation
+/// takes an edge, a flip's quad or a cluster's patch with one of them.
+pub(super) struct Frozen<'a>(&'a [bool]);
+
+impl Frozen<'_> {
+    /// Whether one of `vertices` is frozen (those past the input's, new ones, are not).
+    fn any(&self, vertices: &[usize]) -> bool {
+        vertices.iter().any(|&v| self.0.get(v).copied().unwrap_or(false))
+    }
+}
+
+/// Freezes (for [`adapt_surface_except`]) the vertices of `mesh` that an
+/// adaptation `adapted` of it may have used for the triangles of `pairs`: those
+/// within twice the longest edge of a pair's two triangles from their box (a
+/// split's new vertex lies half an edge from its ends, a collapse's between its
+/// two, and a flip's and a cluster's cap are made of their corners).
+pub fn freeze_around(mesh: &SurfaceMesh, adapted: &SurfaceMesh, pairs: &[(usize, usize)], frozen: &mut [bool]) {
+    let boxes: Vec<_> = pairs
+        .iter()
+        .map(|&(a, b)| {
+            let corners: Vec<Point<3>> = [a, b].iter().flat_map(|&t| adapted.element_points(t)).collect();
+            let edge = (0..6).map(|k| (corners[k] - corners[k / 3 * 3 + (k + 1) % 3]).norm()).fold(0.0, f64::max);
+            let (lo, hi) = around(corners.iter());
+            (lo.map(|c| c - 2.0 * edge), hi.map(|c| c + 2.0 * edge))
+        })
+        .collect();
+    for (v, x) in mesh.positions().iter().enumerate() {
+        frozen[v] |= boxes.iter().any(|(lo, hi)| (0..3).all(|k| lo[k] <= x[k] && x[k] <= hi[k]));
+    }
+}
+
 /// One adaptation pass: clusters of tiny triangles replaced ([`replace_clusters`]),
 /// splits (refinement and angle-width control), collapses, flips, each stage kept
 /// only if its result is a valid closed oriented surface (a stage that would break
 /// it is skipped, the others still apply). Returns `None` if nothing changed.
 pub fn adapt_surface(mesh: &SurfaceMesh, s: &SurfaceRemeshSettings) -> Option<SurfaceMesh> {
+    adapt_surface_except(mesh, s, &[])
+}
+
+/// [`adapt_surface`] with the vertices `v` of `frozen[v]` left as they are, with
+/// every triangle that has one of them (`frozen` may be shorter than the
+/// vertices: those past it are not frozen).
+pub fn adapt_surface_except(mesh: &SurfaceMesh, s: &SurfaceRemeshSettings, frozen: &[bool]) -> Option<SurfaceMesh> {
+    let frozen = Frozen(frozen);
     let mut p = mesh.positions().to_vec();
     let mut tris = mesh.elements().to_vec();
     let mut adjacency = Adjacency::of(p.len(), &tris);
@@ -81,9 +121,9 @@ pub fn adapt_surface(mesh: &SurfaceMesh, s: &SurfaceRemeshSettings) -> Option<Su
             changed = true;
         }
     };
-    stage(&|p, t, a| replace_clusters(p, t, a, s), &mut p, &mut tris, &mut adjacency);
+    stage(&|p, t, a| replace_clusters(p, t, a, s, &frozen), &mut p, &mut tris, &mut adjacency);
     stage(
-        &|p, t, a| match split_edges(p, t, a, s) {
+        &|p, t, a| match split_edges(p, t, a, s, &frozen) {
             Some(new) => {
                 *t = new;
                 true
@@ -94,8 +134,8 @@ pub fn adapt_surface(mesh: &SurfaceMesh, s: &SurfaceRemeshSettings) -> Option<Su
         &mut tris,
         &mut adjacency,
     );
-    stage(&|p, t, a| collapse_edges(p, t, a, s), &mut p, &mut tris, &mut adjacency);
-    stage(&|p, t, a| flip_edges(p, t, a, s), &mut p, &mut tris, &mut adjacency);
+    stage(&|p, t, a| collapse_edges(p, t, a, s, &frozen), &mut p, &mut tris, &mut adjacency);
+    stage(&|p, t, a| flip_edges(p, t, a, s, &frozen), &mut p, &mut tris, &mut adjacency);
     if !changed {
         return None;
     }
@@ -186,5 +226,36 @@ mod tests {
         let flanks = mean_edge(&|x| x.abs() < 0.5);
         eprintln!("tips {tips} flanks {flanks} vertices {} quality {q:?}", m.num_vertices());
         assert!(flanks > 1.5 * tips, "tips {tips} flanks {flanks}");
+    }
+
+    /// An adaptation with the vertices of one half of an ellipsoid frozen keeps
+    /// every triangle that has one of them as it was, and adapts the other half;
+    /// `freeze_around` freezes the vertices near a pair of triangles.
+    #[test]
+    fn frozen_vertices_keep_their_triangles() {
+        let e = ellipsoid([0.0; 3], [2.0, 0.5, 0.5], 3).unwrap();
+        let q = e.quality();
+        let mean = 0.5 * (q.min_edge + q.max_edge);
+        let s = SurfaceRemeshSettings { epsilon: 0.02, h_min: 0.1 * mean, h_max: 2.0 * mean, max_angle_deg: 120.0 };
+        let corners = |m: &SurfaceMesh, t: &[usize; 3]| {
+            let mut c = t.map(|v| m.positions()[v].map(f64::to_bits));
+            c.sort_unstable_by_key(|p| [p[0], p[1], p[2]]);
+            c
+        };
+        let frozen: Vec<bool> = e.positions().iter().map(|x| x.x < 0.0).collect();
+        let m = adapt_surface_except(&e, &s, &frozen).unwrap();
+        let after: std::collections::HashSet<_> = m.elements().iter().map(|t| corners(&m, t)).collect();
+        let kept = e.elements().iter().filter(|t| t.iter().any(|&v| frozen[v]));
+        assert!(kept.clone().all(|t| after.contains(&corners(&e, t))));
+        let changed =
+            |m: &SurfaceMesh, side: f64| m.elements().iter().filter(|t| side * m.positions()[t[0]].x > 0.0).count();
+        assert_eq!(changed(&m, -1.0), changed(&e, -1.0), "the frozen half");
+        assert!(changed(&m, 1.0) > changed(&e, 1.0) + 20, "the free half refined at its tip");
+        // the vertices near two triangles at the tip x = 2
+        let tip: Vec<usize> = (0..e.num_elements()).filter(|&t| e.element_points(t)[0].x > 1.9).take(2).collect();
+        let mut near = vec![false; e.num_vertices()];
+        freeze_around(&e, &e, &[(tip[0], tip[1])], &mut near);
+        let frozen_x: Vec<f64> = (0..e.num_vertices()).filter(|&v| near[v]).map(|v| e.positions()[v].x).collect();
+        assert!(frozen_x.len() >= 6 && frozen_x.iter().all(|&x| x > 1.0), "{frozen_x:?}");
     }
 }

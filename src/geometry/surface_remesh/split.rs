@@ -2,7 +2,7 @@
 
 use super::adjacency::Adjacency;
 use super::triangles::{unit_normals, wide_vertices};
-use super::SurfaceRemeshSettings;
+use super::{Frozen, SurfaceRemeshSettings};
 use crate::geometry::measures::vertex_normals;
 use crate::geometry::Point;
 
@@ -17,6 +17,7 @@ pub(super) fn split_edges(
     tris: &[[usize; 3]],
     adjacency: &Adjacency,
     s: &SurfaceRemeshSettings,
+    frozen: &Frozen,
 ) -> Option<Vec<[usize; 3]>> {
     let edges = &adjacency.edges;
     let unit = unit_normals(p, tris);
@@ -28,7 +29,7 @@ pub(super) fn split_edges(
     let mut count = 0;
     for (k, edge) in edges.iter().enumerate() {
         let (a, b) = (edge.a, edge.b);
-        if edge.t[1] == usize::MAX {
+        if edge.t[1] == usize::MAX || frozen.any(&[a, b]) {
             continue;
         }
         let ts = &edge.t;
