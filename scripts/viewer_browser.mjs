@@ -4,14 +4,15 @@
 // job to end, and report what the page drew (energy points and ink, rendered
 // meshes and ink of the 3D canvas). Then an image job: the example EXAMPLE picked
 // from the list, IMAGE dropped on the form, its overlay shown. Screenshots go to
-// OUT_DIR (job.png, image-job.png).
+// OUT_DIR (job.png, image-job.png). With SURGERY_SPEC, a 3D job whose number of
+// components changes: every frame of its slider drawn in turn, with its label.
 //
-//   node scripts/viewer_browser.mjs URL TOKEN SPEC_FILE OUT_DIR EXAMPLE IMAGE
+//   node scripts/viewer_browser.mjs URL TOKEN SPEC_FILE OUT_DIR EXAMPLE IMAGE [SURGERY_SPEC]
 import { chromium } from 'playwright-core';
 import { readFileSync } from 'node:fs';
 import { basename, join } from 'node:path';
 
-const [base, token, specFile, shots, example, imageFile] = process.argv.slice(2);
+const [base, token, specFile, shots, example, imageFile, surgeryFile] = process.argv.slice(2);
 const spec = readFileSync(specFile, 'utf8');
 const FINAL = ['successful', 'failed', 'dismissed'];
 const browser = await chromium.launch({
@@ -25,6 +26,21 @@ try {
   const errors = [];
   page.on('pageerror', (e) => errors.push(String(e)));
   page.on('console', (m) => m.type() === 'error' && !m.text().includes('401') && errors.push(m.text()));
+  // pixels of a canvas that differ from its corner (the background)
+  await page.addInitScript(() => {
+    window.ink = (canvas) => {
+      const c = document.createElement('canvas');
+      c.width = canvas.width; c.height = canvas.height;
+      const g = c.getContext('2d');
+      g.drawImage(canvas, 0, 0);
+      const d = g.getImageData(0, 0, c.width, c.height).data;
+      let n = 0;
+      for (let k = 0; k < d.length; k += 4) {
+        if (Math.abs(d[k] - d[0]) + Math.abs(d[k + 1] - d[1]) + Math.abs(d[k + 2] - d[2]) + Math.abs(d[k + 3] - d[3]) > 24) n++;
+      }
+      return n;
+    };
+  });
   await page.goto(base + '/');
   // no token yet: the list answers 401 and the page says so
   await page.waitForSelector('#alert:not([hidden])', { timeout: 20000 });
@@ -44,19 +60,7 @@ try {
   await page.waitForFunction(() => document.querySelector('#frame-label')?.textContent.startsWith('result')
     && Number(document.querySelector('#shape')?.dataset.meshes) > 0, null, { timeout: 60000 });
   Object.assign(report, await page.evaluate(() => {
-    // pixels of a canvas that differ from its corner (the background)
-    const ink = (canvas) => {
-      const c = document.createElement('canvas');
-      c.width = canvas.width; c.height = canvas.height;
-      const g = c.getContext('2d');
-      g.drawImage(canvas, 0, 0);
-      const d = g.getImageData(0, 0, c.width, c.height).data;
-      let n = 0;
-      for (let k = 0; k < d.length; k += 4) {
-        if (Math.abs(d[k] - d[0]) + Math.abs(d[k + 1] - d[1]) + Math.abs(d[k + 2] - d[2]) + Math.abs(d[k + 3] - d[3]) > 24) n++;
-      }
-      return n;
-    };
+    const ink = window.ink;
     const shape = document.querySelector('#shape');
     return {
       points: Number(document.querySelector('#energy').dataset.points),
@@ -95,6 +99,41 @@ try {
     && Number(document.querySelector('#shape')?.dataset.meshes) > 0, null, { timeout: 60000 });
   report.overlayWidth = await page.evaluate(() => document.querySelector('#overlay').naturalWidth);
   await page.screenshot({ path: join(shots, 'image-job.png'), fullPage: true });
+
+  if (surgeryFile) {
+    // a job whose surfaces merge (or pinch): each frame drawn, and its label
+    await page.click('a.brand');
+    await page.waitForSelector('#jobs', { timeout: 20000 });
+    await page.fill('#spec', readFileSync(surgeryFile, 'utf8'));
+    const seen = [report.job, report.imageJob];
+    await page.click('#submit button[type=submit]');
+    await page.waitForURL((u) => /\/jobs\/[0-9a-f-]+$/.test(u.pathname) && !seen.includes(u.pathname.split('/').pop()),
+      { timeout: 20000 });
+    report.surgeryJob = page.url().split('/').pop();
+    await page.waitForFunction((final) => final.includes(document.querySelector('#status')?.textContent),
+      FINAL, { timeout: 180000 });
+    report.surgeryStatus = await page.textContent('#status');
+    await page.waitForFunction(() => document.querySelector('#frame-label')?.textContent.startsWith('result')
+      && Number(document.querySelector('#shape')?.dataset.meshes) > 0, null, { timeout: 60000 });
+    const count = Number(await page.getAttribute('#frame', 'max')) + 1;
+    report.surgeryFrames = [];
+    for (let k = 0; k < count; k++) {
+      const drawn = Number(await page.getAttribute('#shape', 'data-frames'));
+      await page.evaluate((k) => {
+        const s = document.querySelector('#frame');
+        s.value = String(k);
+        s.dispatchEvent(new Event('input'));
+      }, k);
+      await page.waitForFunction((n) => Number(document.querySelector('#shape').dataset.frames) > n, drawn,
+        { timeout: 20000 });
+      report.surgeryFrames.push(await page.evaluate(() => ({
+        label: document.querySelector('#frame-label').textContent,
+        meshes: Number(document.querySelector('#shape').dataset.meshes),
+        ink: window.ink(document.querySelector('#shape canvas')),
+      })));
+    }
+    await page.screenshot({ path: join(shots, 'surgery-job.png'), fullPage: true });
+  }
   report.errors = errors;
 } finally {
   await browser.close();

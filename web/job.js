@@ -36,7 +36,19 @@ export function showJob(main, id) {
   const plot = new EnergyPlot(canvas);
   plot.draw();
   let view = null;
-  let frames = []; // {label, href}
+  let frames = []; // {label, href, iteration}
+  // [iteration, components] of the history's rows, in order: a frame's label
+  // says how many components its shape has (a surgery changes it)
+  const parts = [];
+  const addParts = (rows) => rows.forEach((r) => {
+    const last = parts[parts.length - 1];
+    if (r.components != null && (!last || r.iteration > last[0])) parts.push([r.iteration, r.components]);
+  });
+  const partsAt = (iteration) => {
+    let n = null;
+    for (const [it, c] of parts) { if (iteration != null && it > iteration) break; n = c; }
+    return n;
+  };
   let following = true; // the slider sits on the newest frame
   const cache = new Map();
   let job = null;
@@ -56,7 +68,8 @@ export function showJob(main, id) {
   async function showFrame(k) {
     const f = frames[k];
     if (!f) return;
-    frameLabel.textContent = f.label;
+    const n = partsAt(f.iteration);
+    frameLabel.textContent = n == null ? f.label : `${f.label}, ${n} component${n === 1 ? '' : 's'}`;
     try {
       if (!cache.has(f.href)) cache.set(f.href, await getBytes(f.href));
       if (!view) view = new ShapeView(shape, legend);
@@ -100,9 +113,11 @@ export function showJob(main, id) {
       try {
         const manifest = await getJson(`/v1/jobs/${id}/results`);
         const { checkpoints } = await getJson(`/v1/jobs/${id}/checkpoints`);
-        frames = checkpoints.map((c) => ({ label: `checkpoint: iteration ${c.iteration}, time ${fmt(c.time, 5)}`, href: c.href }));
+        frames = checkpoints.map((c) => ({
+          label: `checkpoint: iteration ${c.iteration}, time ${fmt(c.time, 5)}`, href: c.href, iteration: c.iteration,
+        }));
         if (manifest.final && checkpoints.length) {
-          frames.push({ label: 'result (shape.glb)', href: `/v1/jobs/${id}/results/shape.glb` });
+          frames.push({ label: 'result (shape.glb)', href: `/v1/jobs/${id}/results/shape.glb`, iteration: null });
         }
         slider.max = String(Math.max(frames.length - 1, 0));
         slider.disabled = play.disabled = frames.length < 2;
@@ -150,6 +165,7 @@ export function showJob(main, id) {
       showStatus(await getJson(`/v1/jobs/${id}`));
       const { history } = await getJson(`/v1/jobs/${id}/energy`);
       plot.add(history);
+      addParts(history);
     } catch (e) {
       if (e.status !== 401) say(e.status === 404 ? `There is no job ${id}.` : `Could not read job ${id}: ${e.message}`);
       return;
@@ -161,6 +177,7 @@ export function showJob(main, id) {
     await follow(id, after, (type, data) => {
       if (type === 'progress') {
         plot.add([data]);
+        addParts([data]);
         showStatus({ ...job, status: 'running', progress: data });
         if (Date.now() - last > 1500) { last = Date.now(); refreshResults(); }
       } else if (type === 'status') {

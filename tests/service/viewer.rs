@@ -2,7 +2,8 @@
 //! playwright-core, scripts/viewer_browser.mjs) against the service on 127.0.0.1
 //! with a token: the 401 message, a job submitted through the form, its energy
 //! plot and its shape drawn; an image job from the examples list with its image
-//! dropped on the form, and its overlay. CI installs Chromium (.ci/run) and sets
+//! dropped on the form, and its overlay; a job whose spheres merge, each frame
+//! drawn and labelled with its number of components. CI installs Chromium (.ci/run) and sets
 //! `SHAPEFLOW_REQUIRE_BROWSER=1`; elsewhere, without Chromium when the tests are
 //! built (build.rs), the test shows as ignored with the reason.
 
@@ -19,6 +20,16 @@ const SPEC: &str = r#"{"problem": {"type": "curvature_flow"},
   "initial": {"shape": "circle", "radius": 1.0, "resolution": 64},
   "flow": {"tau": 1e-3, "end_time": 0.1, "tolerance": 0},
   "output": {"checkpoint_every": 10}}"#;
+
+/// Two spheres that grow into each other and merge (docs/problems/surface-evolution.md),
+/// checkpointed before and after the merge.
+const SURGERY: &str = r#"{"problem": {"type": "curvature_flow", "gamma": 1e-3, "lambda": -0.2},
+  "initial": {"shape": "union", "parts": [
+    {"shape": "sphere", "center": [-0.25, 0.0, 0.0], "radius": 0.2, "resolution": 2},
+    {"shape": "sphere", "center": [0.25, 0.0, 0.0], "radius": 0.2, "resolution": 2}]},
+  "flow": {"tau": 1e-3, "end_time": 0.3, "max_iterations": 5000, "tolerance": 0},
+  "mesh": {"pinch_off": false},
+  "output": {"checkpoint_every": 50}}"#;
 
 fn chromium() -> Option<PathBuf> {
     let path = PathBuf::from(std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into()));
@@ -59,6 +70,8 @@ fn the_page_submits_a_job_and_draws_its_energy_and_shape() {
 
     let spec_file = dir.path().join("spec.json");
     std::fs::write(&spec_file, SPEC).unwrap();
+    let surgery_file = dir.path().join("surgery.json");
+    std::fs::write(&surgery_file, SURGERY).unwrap();
     let shots = root.join("target/viewer");
     std::fs::create_dir_all(&shots).unwrap();
     let out = Command::new("node")
@@ -69,6 +82,7 @@ fn the_page_submits_a_job_and_draws_its_energy_and_shape() {
         .arg(&shots)
         .arg("segment_star")
         .arg(root.join("examples/data/star.png"))
+        .arg(&surgery_file)
         .env("CHROMIUM", &chromium)
         .output()
         .expect("node");
@@ -109,7 +123,37 @@ fn the_page_submits_a_job_and_draws_its_energy_and_shape() {
     assert_eq!(s, 200);
     let star = image::image_dimensions(root.join("examples/data/star.png")).unwrap();
     assert_eq!(report["overlayWidth"].as_u64(), Some(star.0 as u64), "{report}");
+    surgery_frames(addr, &report);
     assert_eq!(report["errors"], serde_json::json!([]), "{report}");
 
     srv.stop();
+}
+
+/// The merging spheres' job: every frame of the slider drawn (its primitives, ink on
+/// the canvas), its label naming the components its checkpoint has by the job's
+/// history, two before the merge and one after.
+fn surgery_frames(addr: SocketAddr, report: &Value) {
+    assert_eq!(report["surgeryStatus"], "successful", "{report}");
+    let id = report["surgeryJob"].as_str().unwrap();
+    let (_, body) = get(addr, &format!("/v1/jobs/{id}/energy"));
+    let history: Value = serde_json::from_slice(&body).unwrap();
+    let parts_at = |iteration: u64| {
+        let rows = history["history"].as_array().unwrap();
+        let row = rows.iter().rev().find(|r| r["iteration"].as_u64().unwrap() <= iteration).unwrap();
+        row["components"].as_u64().unwrap()
+    };
+    let (_, list) = get(addr, &format!("/v1/jobs/{id}/checkpoints"));
+    let list: Value = serde_json::from_slice(&list).unwrap();
+    let mut expected: Vec<u64> =
+        list["checkpoints"].as_array().unwrap().iter().map(|c| parts_at(c["iteration"].as_u64().unwrap())).collect();
+    expected.push(parts_at(u64::MAX));
+    let frames = report["surgeryFrames"].as_array().unwrap();
+    assert_eq!(frames.len(), expected.len(), "{report}");
+    assert_eq!((expected[0], expected[expected.len() - 1]), (2, 1), "the spheres merged: {expected:?}");
+    for (frame, n) in frames.iter().zip(&expected) {
+        let label = frame["label"].as_str().unwrap();
+        let named = if *n == 1 { "1 component".to_string() } else { format!("{n} components") };
+        assert!(label.ends_with(&named), "{label} for {n}: {report}");
+        assert!(frame["meshes"].as_u64().unwrap() >= 1 && frame["ink"].as_u64().unwrap() > 2000, "{frame}");
+    }
 }
