@@ -60,7 +60,8 @@ fn edge_stats(m: &SurfaceMesh) -> (f64, (f64, f64)) {
 }
 
 /// Adaptations made again with more vertices frozen where the last one carried
-/// a triangle through a close sheet ([`SurfaceManager::apart`]).
+/// a triangle through a close sheet ([`SurfaceManager::apart`]): within 1, 2 and
+/// 4 edges of the triangles that meet.
 pub const APART_ROUNDS: usize = 3;
 
 /// Smallest angle the surface management keeps while a neck collapses: below it,
@@ -143,7 +144,8 @@ impl SurfaceManager {
     /// management carried a vertex through a close sheet (touching objects of a
     /// segmentation, the parts of a neck split), the adaptation is made again
     /// with the vertices around the triangles that meet left as they are
-    /// ([`adapt_surface_except`], up to [`APART_ROUNDS`] times, else not taken),
+    /// ([`adapt_surface_except`], up to [`APART_ROUNDS`] times, each freezing
+    /// twice as far around what still meets; else not taken),
     /// and the regularization's moves of the triangles that meet are undone
     /// ([`revert_new_intersections`]). Checked only where the result meets itself.
     fn apart(
@@ -169,7 +171,7 @@ impl SurfaceManager {
                 break;
             }
             if round < APART_ROUNDS {
-                freeze_around(mesh, &r, &pairs, &mut frozen);
+                freeze_around(mesh, &r, &pairs, f64::from(1u32 << round), &mut frozen);
                 remeshed = adapt_surface_except(mesh, &self.params, &frozen);
                 again = true;
             }

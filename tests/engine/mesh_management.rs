@@ -264,3 +264,61 @@ fn a_pass_that_would_make_two_objects_cross_still_manages_the_others() {
     assert_eq!(points(1), vec![w[0], 0.5 * (w[1] + w[2]), w[3]]);
     assert!(points(2).len() < ring.num_vertices(), "the ring's short segment is collapsed");
 }
+
+/// Surfaces kept apart (a segmentation's touching objects): where the
+/// adaptation would carry a triangle through a close sheet, it is made again
+/// with the vertices there frozen, and the rest of the surface is still
+/// adapted. A unit sphere (edges 0.62, longer than `h_max`) has a small ball
+/// beside the midpoint of one edge, between the chord and the sphere: that
+/// edge's split, lifted onto the sphere, would enter the ball. Before, the whole
+/// adaptation was dropped, and a sliver anywhere that only the adaptation
+/// removes held every later step (the nuclei volume crawled at `τ` ≈ 1e-7).
+#[test]
+fn an_adaptation_that_would_meet_a_close_sheet_still_adapts_the_rest() {
+    use shapeflow::flow::{Managed, SurfaceManager};
+    use shapeflow::geometry::{
+        adapt_surface, icosphere, surface_intersections, Mesh, PatchSearch, SurfaceRemeshSettings,
+    };
+    let sphere = icosphere([0.0; 3], 1.0, 1).unwrap();
+    let [a, b, _] = sphere.elements()[0];
+    let (pa, pb) = (sphere.positions()[a], sphere.positions()[b]);
+    let mid = (pa + pb) * 0.5;
+    let sagitta = 1.0 - mid.norm();
+    let r = 0.05;
+    let centre = mid.normalize() * (mid.norm() + 0.5 * sagitta + r);
+    let ball = icosphere([centre.x, centre.y, centre.z], r, 1).unwrap();
+    let mut x = sphere.positions().to_vec();
+    x.extend(ball.positions());
+    let n = sphere.num_vertices();
+    let mut triangles = sphere.elements().to_vec();
+    triangles.extend(ball.elements().iter().map(|t| t.map(|v| v + n)));
+    let mesh = Mesh::<3>::new(x, triangles).unwrap();
+    assert!(surface_intersections(mesh.positions(), mesh.elements(), 1).is_empty(), "the two start apart");
+    let params = SurfaceRemeshSettings { epsilon: 0.01, h_min: 1e-3, h_max: 0.5, max_angle_deg: 120.0 };
+    let free = adapt_surface(&mesh, &params).unwrap();
+    assert!(!surface_intersections(free.positions(), free.elements(), 1).is_empty(), "the free adaptation meets");
+
+    let mut manager = SurfaceManager {
+        regularize: false,
+        sweeps: 0,
+        adapt: true,
+        params,
+        pinch_curvature: None,
+        surgery: None,
+        declined: None,
+    };
+    let Managed::Remeshed(m) = manager.manage_searched(&mesh, &mut PatchSearch::default()).unwrap() else {
+        panic!("the adaptation was not taken")
+    };
+    assert!(surface_intersections(m.positions(), m.elements(), usize::MAX).is_empty(), "the result meets");
+    // the sphere's edges split away from the ball (120 edges; a handful near it kept)
+    let (component, _) = m.component_labels();
+    let first = m.positions().iter().position(|p| *p == pa).expect("the edge's end is kept");
+    let sphere_vertices: Vec<Point<3>> =
+        m.positions().iter().zip(&component).filter(|(_, &c)| c == component[first]).map(|(p, _)| *p).collect();
+    assert!(sphere_vertices.len() > n + 100, "{} sphere vertices from {n}", sphere_vertices.len());
+    // and the edge beside the ball kept whole: its two ends, and no vertex between
+    assert!(sphere_vertices.contains(&pb));
+    let between = sphere_vertices.iter().filter(|p| (**p - mid).norm() < 0.1 || (**p - centre).norm() < r).count();
+    assert_eq!(between, 0, "no sphere vertex at the edge's midpoint");
+}

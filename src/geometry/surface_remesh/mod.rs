@@ -72,17 +72,25 @@ impl Frozen<'_> {
 
 /// Freezes (for [`adapt_surface_except`]) the vertices of `mesh` that an
 /// adaptation `adapted` of it may have used for the triangles of `pairs`: those
-/// within twice the longest edge of a pair's two triangles from their box (a
-/// split's new vertex lies half an edge from its ends, a collapse's between its
-/// two, and a flip's and a cluster's cap are made of their corners).
-pub fn freeze_around(mesh: &SurfaceMesh, adapted: &SurfaceMesh, pairs: &[(usize, usize)], frozen: &mut [bool]) {
+/// within `reach` times the longest edge of a pair's two triangles from their
+/// box. At `reach` 1 that holds the operations of one stage (a split's new
+/// vertex lies half the split edge, one new edge, from its ends, a collapse's
+/// between its two, and a flip's and a cluster's cap are made of their
+/// corners); a chain of operations over the stages reaches further.
+pub fn freeze_around(
+    mesh: &SurfaceMesh,
+    adapted: &SurfaceMesh,
+    pairs: &[(usize, usize)],
+    reach: f64,
+    frozen: &mut [bool],
+) {
     let boxes: Vec<_> = pairs
         .iter()
         .map(|&(a, b)| {
             let corners: Vec<Point<3>> = [a, b].iter().flat_map(|&t| adapted.element_points(t)).collect();
             let edge = (0..6).map(|k| (corners[k] - corners[k / 3 * 3 + (k + 1) % 3]).norm()).fold(0.0, f64::max);
             let (lo, hi) = around(corners.iter());
-            (lo.map(|c| c - 2.0 * edge), hi.map(|c| c + 2.0 * edge))
+            (lo.map(|c| c - reach * edge), hi.map(|c| c + reach * edge))
         })
         .collect();
     for (v, x) in mesh.positions().iter().enumerate() {
@@ -254,7 +262,7 @@ mod tests {
         // the vertices near two triangles at the tip x = 2
         let tip: Vec<usize> = (0..e.num_elements()).filter(|&t| e.element_points(t)[0].x > 1.9).take(2).collect();
         let mut near = vec![false; e.num_vertices()];
-        freeze_around(&e, &e, &[(tip[0], tip[1])], &mut near);
+        freeze_around(&e, &e, &[(tip[0], tip[1])], 1.0, &mut near);
         let frozen_x: Vec<f64> = (0..e.num_vertices()).filter(|&v| near[v]).map(|v| e.positions()[v].x).collect();
         assert!(frozen_x.len() >= 6 && frozen_x.iter().all(|&x| x > 1.0), "{frozen_x:?}");
     }
