@@ -46,6 +46,8 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
 pub async fn sweep_forever(store: Store, retain: Option<Duration>, node: String, closing: Arc<AtomicBool>) {
     let expire_every = retain.map(|r| (r / 4).clamp(Duration::from_secs(1), Duration::from_secs(60)));
     let mut expired_at: Option<Instant> = None;
+    // the space of a purge not all given back yet (a busy writer)
+    let mut unreclaimed = false;
     while !closing.load(Ordering::Relaxed) {
         let expire = match (retain, expire_every) {
             (Some(r), Some(every)) if expired_at.is_none_or(|t| t.elapsed() >= every) => {
@@ -55,25 +57,37 @@ pub async fn sweep_forever(store: Store, retain: Option<Duration>, node: String,
             _ => None,
         };
         match sweep(&store, expire, &node).await {
-            Ok(Swept { expired: 0, purged: 0 }) => {}
-            Ok(Swept { expired, purged }) => tracing::info!(expired, purged, "sweep: deleted jobs purged"),
+            Ok(Swept { expired: 0, purged: 0, .. }) => {}
+            Ok(Swept { expired, purged, reclaimed }) => {
+                unreclaimed = !reclaimed;
+                tracing::info!(expired, purged, reclaimed, "sweep: deleted jobs purged");
+            }
             Err(e) => tracing::warn!("sweep: {e}"),
+        }
+        if unreclaimed {
+            match store.reclaim().await {
+                Ok(done) => unreclaimed = !done,
+                Err(e) => tracing::warn!("sweep: reclaim: {e}"),
+            }
         }
         tokio::time::sleep(PERIOD).await;
     }
 }
 
-/// What one sweep did: jobs marked deleted for their age, jobs purged.
+/// What one sweep did: jobs marked deleted for their age, jobs purged, and
+/// whether the space of a purge all went back to the disk ([`Store::reclaim`];
+/// true with nothing purged).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Swept {
     pub expired: usize,
     pub purged: usize,
+    pub reclaimed: bool,
 }
 
 /// One sweep (see [`sweep_forever`]), if this node leads it: with `expire`, the
 /// jobs that ended longer ago are marked deleted first.
 pub async fn sweep(store: &Store, expire: Option<Duration>, node: &str) -> Result<Swept, StoreError> {
-    let mut swept = Swept { expired: 0, purged: 0 };
+    let mut swept = Swept { expired: 0, purged: 0, reclaimed: true };
     let mut led = false;
     if let Some(retain) = expire {
         let before = rfc3339_ago(retain.as_secs_f64());
@@ -98,7 +112,7 @@ pub async fn sweep(store: &Store, expire: Option<Duration>, node: &str) -> Resul
         swept.purged += ids.len();
     }
     if swept.purged > 0 {
-        store.reclaim().await?;
+        swept.reclaimed = store.reclaim().await?;
     }
     Ok(swept)
 }

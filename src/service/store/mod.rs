@@ -89,9 +89,11 @@ pub trait JobStore: Send + Sync + 'static {
     /// Jobs that ended before `before` (RFC 3339), oldest first, at most `limit`.
     async fn ended_before(&self, before: &str, limit: i64) -> StoreResult<Vec<String>>;
     /// Give the space of deleted rows back to the disk (SQLite: an incremental
-    /// vacuum and a checkpoint of the WAL); nothing to do elsewhere.
-    async fn reclaim(&self) -> StoreResult<()> {
-        Ok(())
+    /// vacuum and a checkpoint of the WAL); nothing to do elsewhere. Whether it
+    /// all went back: false when a busy writer kept the checkpoint from the end
+    /// of the WAL (the sweep tries again).
+    async fn reclaim(&self) -> StoreResult<bool> {
+        Ok(true)
     }
     /// The number of jobs of each status present.
     async fn counts_by_status(&self) -> StoreResult<Vec<(String, i64)>>;

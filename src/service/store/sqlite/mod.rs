@@ -93,10 +93,11 @@ job_store!(SqliteStore, sqlx::sqlite::SqliteRow, read: reader, write: pool, {
         "sqlite"
     }
 
-    async fn reclaim(&self) -> StoreResult<()> {
+    async fn reclaim(&self) -> StoreResult<bool> {
         sqlx::query("PRAGMA incremental_vacuum").execute(&self.pool).await?;
-        sqlx::query("PRAGMA wal_checkpoint(TRUNCATE)").execute(&self.pool).await?;
-        Ok(())
+        // (busy, frames in the WAL, frames checkpointed)
+        let (busy, _, _): (i64, i64, i64) = sqlx::query_as("PRAGMA wal_checkpoint(TRUNCATE)").fetch_one(&self.pool).await?;
+        Ok(busy == 0)
     }
 
     /// The write lock taken and given back.
