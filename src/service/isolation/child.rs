@@ -168,8 +168,10 @@ fn run(
     let mut kept = prior;
     // a resumed run's first checkpoint repeats the last one stored before
     let resumed_at = kept.last().map(|f| f.state.iteration);
+    let sent = std::sync::atomic::AtomicUsize::new(0);
     let (result, mut kept) = std::thread::scope(|scope| {
         let (send, receive) = std::sync::mpsc::sync_channel::<Checkpoint>(FRAMES_AHEAD);
+        let sent = &sent;
         let job = &job;
         let maker = scope.spawn(move || {
             let mut maker = FrameMaker::default();
@@ -177,13 +179,14 @@ fn run(
                 let frame = maker.make(job, &c);
                 let json = serde_json::to_vec(&frame).expect("frames serialize");
                 out.send(&Report::Checkpoint { iteration: c.iteration, time: c.time }, &json);
+                sent.fetch_add(1, Ordering::Release);
                 if Some(c.iteration) != resumed_at {
                     kept.push(frame);
                 }
             }
             kept
         });
-        let mut events = Events { out, frames: send, fault };
+        let mut events = Events { out, frames: send, fault, handed: 0, sent };
         let result = run_prepared(job, resume.as_ref(), cancel, &mut events);
         drop(events);
         (result, maker.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
@@ -209,18 +212,30 @@ struct Events<'a> {
     out: &'a Reports,
     frames: std::sync::mpsc::SyncSender<Checkpoint>,
     fault: Option<Fault>,
+    /// Checkpoints handed to the frame maker, and those it has sent.
+    handed: usize,
+    sent: &'a std::sync::atomic::AtomicUsize,
 }
 
 impl RunEvents for Events<'_> {
     fn progress(&mut self, p: &Progress) {
         self.out.send(&Report::Progress(*p), &[]);
-        if let Some(f) = &self.fault {
+        if let Some(f) = self.fault.as_ref().filter(|f| f.due(p.iteration)) {
+            // the checkpoints before the fault sent first (as a run that has
+            // gone on for a while would have), so that a `:once` fault's
+            // attempt after it resumes from them whatever the machine's load
+            let waited = std::time::Instant::now();
+            while self.sent.load(Ordering::Acquire) < self.handed && waited.elapsed().as_secs() < 30 {
+                std::thread::sleep(std::time::Duration::from_millis(1));
+            }
             f.strike(p.iteration);
         }
     }
 
     fn checkpoint(&mut self, c: &Checkpoint) {
-        let _ = self.frames.send(c.clone());
+        if self.frames.send(c.clone()).is_ok() {
+            self.handed += 1;
+        }
     }
 }
 

@@ -56,9 +56,14 @@ impl Fault {
         Some(Fault { what, at: at.parse().ok()?, once })
     }
 
+    /// Whether the run is at the fault's iteration.
+    pub fn due(&self, iteration: usize) -> bool {
+        iteration >= self.at
+    }
+
     /// Commit the fault if the run is at its iteration.
     pub fn strike(&self, iteration: usize) {
-        if iteration < self.at {
+        if !self.due(iteration) {
             return;
         }
         match self.what {
