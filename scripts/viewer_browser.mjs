@@ -15,6 +15,27 @@ import { basename, join } from 'node:path';
 const [base, token, specFile, shots, example, imageFile, surgeryFile] = process.argv.slice(2);
 const spec = readFileSync(specFile, 'utf8');
 const FINAL = ['successful', 'failed', 'dismissed'];
+
+/** Submit the form and wait for the page of the new job (none of `seen`); its id. */
+async function submitted(page, seen) {
+  await page.click('#submit button[type=submit]');
+  await page.waitForURL((u) => /\/jobs\/[0-9a-f-]+$/.test(u.pathname) && !seen.includes(u.pathname.split('/').pop()),
+    { timeout: 20000 });
+  return page.url().split('/').pop();
+}
+
+/** Wait for the job shown to end (within `timeout` ms); its status. */
+async function finished(page, timeout) {
+  await page.waitForFunction((final) => final.includes(document.querySelector('#status')?.textContent),
+    FINAL, { timeout });
+  return page.textContent('#status');
+}
+
+/** Wait for the final frame (shape.glb) to be drawn. */
+async function resultDrawn(page) {
+  await page.waitForFunction(() => document.querySelector('#frame-label')?.textContent.startsWith('result')
+    && Number(document.querySelector('#shape')?.dataset.meshes) > 0, null, { timeout: 60000 });
+}
 const browser = await chromium.launch({
   executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
   args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
@@ -50,15 +71,10 @@ try {
   await page.click('#token-form button');
   await page.waitForSelector('#jobs', { timeout: 20000 });
   await page.fill('#spec', spec);
-  await page.click('#submit button[type=submit]');
-  await page.waitForURL(/\/jobs\/[0-9a-f-]+$/, { timeout: 20000 });
-  report.job = page.url().split('/').pop();
-  await page.waitForFunction((final) => final.includes(document.querySelector('#status')?.textContent),
-    FINAL, { timeout: 120000 });
-  report.status = await page.textContent('#status');
+  report.job = await submitted(page, []);
+  report.status = await finished(page, 120000);
   // the final frame (shape.glb) drawn, the slider over every frame
-  await page.waitForFunction(() => document.querySelector('#frame-label')?.textContent.startsWith('result')
-    && Number(document.querySelector('#shape')?.dataset.meshes) > 0, null, { timeout: 60000 });
+  await resultDrawn(page);
   Object.assign(report, await page.evaluate(() => {
     const ink = window.ink;
     const shape = document.querySelector('#shape');
@@ -88,12 +104,8 @@ try {
     drop.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
   }, [basename(imageFile), bytes]);
   report.dropped = await page.inputValue('#files li input');
-  await page.click('#submit button[type=submit]');
-  await page.waitForURL((u) => /\/jobs\/[0-9a-f-]+$/.test(u.pathname) && !u.pathname.endsWith(report.job), { timeout: 20000 });
-  report.imageJob = page.url().split('/').pop();
-  await page.waitForFunction((final) => final.includes(document.querySelector('#status')?.textContent),
-    FINAL, { timeout: 120000 });
-  report.imageStatus = await page.textContent('#status');
+  report.imageJob = await submitted(page, [report.job]);
+  report.imageStatus = await finished(page, 120000);
   await page.waitForFunction(() => document.querySelector('#overlay')?.complete
     && document.querySelector('#overlay').naturalWidth > 0
     && Number(document.querySelector('#shape')?.dataset.meshes) > 0, null, { timeout: 60000 });
@@ -105,16 +117,9 @@ try {
     await page.click('a.brand');
     await page.waitForSelector('#jobs', { timeout: 20000 });
     await page.fill('#spec', readFileSync(surgeryFile, 'utf8'));
-    const seen = [report.job, report.imageJob];
-    await page.click('#submit button[type=submit]');
-    await page.waitForURL((u) => /\/jobs\/[0-9a-f-]+$/.test(u.pathname) && !seen.includes(u.pathname.split('/').pop()),
-      { timeout: 20000 });
-    report.surgeryJob = page.url().split('/').pop();
-    await page.waitForFunction((final) => final.includes(document.querySelector('#status')?.textContent),
-      FINAL, { timeout: 180000 });
-    report.surgeryStatus = await page.textContent('#status');
-    await page.waitForFunction(() => document.querySelector('#frame-label')?.textContent.startsWith('result')
-      && Number(document.querySelector('#shape')?.dataset.meshes) > 0, null, { timeout: 60000 });
+    report.surgeryJob = await submitted(page, [report.job, report.imageJob]);
+    report.surgeryStatus = await finished(page, 180000);
+    await resultDrawn(page);
     const count = Number(await page.getAttribute('#frame', 'max')) + 1;
     report.surgeryFrames = [];
     for (let k = 0; k < count; k++) {
