@@ -6,8 +6,8 @@ use super::mesh_management::{outcome, Managed, MeshManager, Surgery};
 use super::report::SurgeryKind;
 use super::FlowError;
 use crate::geometry::{
-    adapt_surface, adapt_surface_except, cut_neck, edge_statistics, freeze_around, regularize_surface,
-    revert_new_intersections, PatchSearch, SurfaceMesh, SurfaceRemeshSettings,
+    adapt_surface, adapt_surface_except, closest_facing_vertices, cut_neck, edge_statistics, freeze_around,
+    regularize_surface, revert_new_intersections, zip_sheets, PatchSearch, SurfaceMesh, SurfaceRemeshSettings,
 };
 
 /// Switches and resolved parameters of surface mesh management.
@@ -125,12 +125,17 @@ impl MeshManager<3> for SurfaceManager {
         Ok(outcome(remeshed, moved))
     }
 
-    /// Two sheets in contact become one (a merge on a grid of the initial mean
-    /// edge, bridged over twice that), if the surgery merges.
+    /// Two sheets in contact become one, if the surgery merges: zipped on the
+    /// mesh where two vertices closer than the initial mean edge face each other
+    /// ([`SurfaceManager::zipped`]), else rebuilt by a merge on a grid of that
+    /// edge, bridged over twice it.
     fn merge(&mut self, mesh: &SurfaceMesh) -> Option<SurfaceMesh> {
         self.surgery.filter(|s| s.merge)?;
         let spacing = self.surgery_spacing();
-        let merged = self.operate(mesh, super::surgery::Operation::Merge { blend: 2.0 * spacing })?;
+        let merged = match self.zipped(mesh, spacing) {
+            Some(m) => m,
+            None => self.operate(mesh, super::surgery::Operation::Merge { blend: 2.0 * spacing })?,
+        };
         // a new surface: a ring that a cut did not part before is gone
         self.declined = None;
         tracing::info!(components = merged.component_labels().1, vertices = merged.num_vertices(), "surfaces merged");
@@ -184,6 +189,25 @@ impl SurfaceManager {
         });
         tracing::debug!(adapted = remeshed.is_some(), "management kept apart from a close sheet");
         (remeshed, moved)
+    }
+
+    /// `mesh` with the closest two facing vertices within `reach` zipped
+    /// ([`zip_sheets`]), tidied by the management (two rounds, else as zipped),
+    /// and for a conserving flow given back its volume; `None` where no two face
+    /// each other, the zipper declines, or the zipped surface meets itself.
+    fn zipped(&self, mesh: &SurfaceMesh, reach: f64) -> Option<SurfaceMesh> {
+        let (a, b) = closest_facing_vertices(mesh, reach)?;
+        let zipped = zip_sheets(mesh, a, b, reach)?;
+        let mut search = PatchSearch::default();
+        let mut sound = |m: &SurfaceMesh| search.intersections(m.positions(), m.elements(), 1).is_empty();
+        if !sound(&zipped) {
+            tracing::debug!("a zipped surface meets itself");
+            return None;
+        }
+        let tidied = self.tidy(zipped.clone(), 2);
+        let kept = if sound(&tidied) { tidied } else { zipped };
+        tracing::debug!(at = ?(mesh.positions()[a] + mesh.positions()[b]) * 0.5, "sheets zipped");
+        Some(self.conserved(kept, mesh))
     }
 
     /// The grid of a surgery: the mean edge the management's sizes aim at (4
