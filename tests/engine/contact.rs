@@ -193,3 +193,36 @@ fn the_prism_pinches_into_spheres_with_surgery() {
     eprintln!("prism past its pinch: cut at t = {}, {count} parts, volume {volume} of 8", cut.time);
     assert!((volume / 8.0 - 1.0).abs() < 1e-3, "volume {volume}");
 }
+
+/// An ellipsoid and a smaller sphere, off axis and meshed at different sizes,
+/// grow into each other (`mesh.pinch_off: false`): they merge once, by the
+/// zipper on the mesh (the merged state keeps about the vertices of the state
+/// before, where the level-set rebuild of the whole surface has several times
+/// as many), no state intersects itself, and the run reaches its end time as
+/// one surface.
+#[test]
+fn an_ellipsoid_and_a_sphere_merge_by_a_zipper_and_go_on() {
+    let spec = parse_spec(
+        r#"{"problem": {"type": "curvature_flow", "gamma": 1e-3, "lambda": -0.2},
+            "initial": {"shape": "union", "parts": [
+                {"shape": "ellipsoid", "center": [-0.27, 0.03, 0.0], "semi_axes": [0.25, 0.18, 0.2], "resolution": 3},
+                {"shape": "sphere", "center": [0.22, -0.02, 0.05], "radius": 0.15, "resolution": 3}]},
+            "flow": {"tau": 1e-3, "end_time": 0.3, "max_iterations": 5000, "tolerance": 0},
+            "mesh": {"pinch_off": false},
+            "output": {"checkpoint_every": 1}}"#,
+    )
+    .unwrap();
+    let job = prepare(spec, &HashMap::new()).unwrap();
+    let mut every = Every::default();
+    let out = run_prepared(&job, None, &AtomicBool::new(false), &mut every).unwrap();
+    assert_eq!(out.stop, StopReason::EndTime);
+    assert_eq!(assert_no_intersections(&every.states), 1, "one surface after the contact");
+    let parts = |c: &Checkpoint| c.mesh.to_mesh::<3>().unwrap().component_labels().1;
+    let at = every.states.iter().position(|c| parts(c) == 1).expect("a merge");
+    let (before, merged) = (&every.states[at - 1], &every.states[at]);
+    assert_eq!(merged.surgeries.len(), 1, "{:?}", merged.surgeries);
+    assert_eq!(merged.surgeries[0].event.kind, SurgeryKind::Merge);
+    let (n0, n1) = (before.mesh.positions.len(), merged.mesh.positions.len());
+    eprintln!("merged at t = {}: {n0} → {n1} vertices", merged.time);
+    assert!(n1 < n0 + n0 / 4, "{n0} → {n1} vertices: not zipped");
+}
