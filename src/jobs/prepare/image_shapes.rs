@@ -7,7 +7,7 @@ use crate::geometry::AnyMesh;
 use crate::geometry::{self, Mesh, Point};
 pub(super) use crate::imaging::labels::RegionWeights;
 use crate::imaging::labels::{
-    clean_mask, components, distance_transform, reopen_holes, separate, split_touching, Necks,
+    clean_mask, components, distance_transform, flood_from_cores, reopen_holes, separate, split_touching, Necks,
 };
 use crate::imaging::{contours, isosurface, Grid};
 use crate::jobs::spec::SpecError;
@@ -85,7 +85,10 @@ pub(super) fn threshold_objects(
     let main = clean_mask(&main, s.dims, min, HOLE_FRACTION);
     let (mut labels, mut count) = if split {
         let dist = distance_transform(&main, s.dims, [1.0; 3]);
-        split_touching(&main, &dist, s.dims, &NECKS)
+        let (labels, count) = split_touching(&main, &dist, s.dims, &NECKS);
+        // the cut along the ridge of each neck, not around the smaller side's outer layers
+        let labels = if count > 1 { flood_from_cores(&main, &dist, s.dims, &labels, count) } else { labels };
+        (labels, count)
     } else {
         components(&main, s.dims)
     };
