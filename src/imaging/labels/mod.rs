@@ -14,7 +14,7 @@ mod watershed;
 pub use distance::distance_transform;
 pub use holes::{reopen_holes, RegionWeights};
 pub use territory::territories;
-pub use watershed::{flood_from_cores, separate, split_touching, Necks};
+pub use watershed::{flood_from_cores, separate, split_at_ridges, split_touching, Necks};
 
 /// Grid dimensions `[n_x, n_y, n_z]` (`n_z = 1` in 2D).
 pub type Dims = [usize; 3];

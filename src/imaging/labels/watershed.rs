@@ -82,6 +82,14 @@ pub fn split_touching(mask: &[bool], d: &[f64], dims: Dims, necks: &Necks) -> (V
     (labels, count as usize)
 }
 
+/// [`split_touching`] with its parts flooded again from their cores
+/// ([`flood_from_cores`]): the cut along the ridge of each neck.
+pub fn split_at_ridges(mask: &[bool], d: &[f64], dims: Dims, necks: &Necks) -> (Vec<u32>, usize) {
+    let (labels, count) = split_touching(mask, d, dims, necks);
+    let labels = if count > 1 { flood_from_cores(mask, d, dims, &labels, count) } else { labels };
+    (labels, count)
+}
+
 /// The parts of [`split_touching`] flooded again from their cores: each part
 /// keeps its samples whose distance is above the highest saddle at which it meets
 /// another part, and the rest of `mask` is flooded from there in order of

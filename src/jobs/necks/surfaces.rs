@@ -2,7 +2,7 @@
 //!
 //! Each object of the converged surfaces (a component with its cavities) is
 //! sampled on the image's grid as its signed distance; its inside samples are
-//! split by the initial shape's rule ([`split_touching`]) where the cut is a
+//! split by the initial shape's rule ([`split_at_ridges`]) where the cut is a
 //! notch all around its rim ([`notched`]). An object that splits is traced again,
 //! one closed surface per part, by marching tetrahedra of the signed distance
 //! within the part's samples: the surface keeps its sub-voxel place away from
@@ -14,7 +14,7 @@
 use super::NeckSplit;
 use crate::geometry::{first_surface_intersection, surface_union, Point, SurfaceMesh};
 use crate::imaging::isosurface::zero_level_3d;
-use crate::imaging::labels::{distance_transform, flood_from_cores, label_sizes, split_touching};
+use crate::imaging::labels::{distance_transform, label_sizes, split_at_ridges};
 use crate::imaging::signed_distance::{signed_distance, SampleGrid};
 
 /// Least mean fraction of a ball around the rim of a cut that lies inside the
@@ -108,8 +108,7 @@ impl NeckSplit {
         let sd: Vec<f64> = signed_distance(&grid, &x, triangles, 2.0 / l).iter().map(|d| d * l).collect();
         let mask: Vec<bool> = sd.iter().map(|&d| d > 0.0).collect();
         let dist = distance_transform(&mask, dims, [1.0; 3]);
-        let (labels, count) = split_touching(&mask, &dist, dims, &self.necks);
-        let labels = if count > 1 { flood_from_cores(&mask, &dist, dims, &labels, count) } else { labels };
+        let (labels, count) = split_at_ridges(&mask, &dist, dims, &self.necks);
         tracing::debug!(count, sizes = ?label_sizes(&labels, count), "neck split of a surface's object");
         if count < 2 || label_sizes(&labels, count).iter().skip(1).any(|&n| n < self.min_size) {
             return None;

@@ -7,12 +7,12 @@ use crate::geometry::AnyMesh;
 use crate::geometry::{self, Mesh, Point};
 pub(super) use crate::imaging::labels::RegionWeights;
 use crate::imaging::labels::{
-    clean_mask, components, distance_transform, flood_from_cores, reopen_holes, separate, split_touching, Necks,
+    clean_mask, components, distance_transform, reopen_holes, separate, split_at_ridges, Necks,
 };
 use crate::imaging::{contours, isosurface, Grid};
 use crate::jobs::spec::SpecError;
 
-/// The necks that split touching objects ([`split_touching`]): at least 1.5
+/// The necks that split touching objects ([`split_at_ridges`]): at least 1.5
 /// samples and 18 % of the smaller side's inscribed radius below it (two equal
 /// discs whose centres are at least 1.15 radii apart), between sides whose
 /// inscribed radii differ by at most 2.5 times. Measured: the 20 splits of the
@@ -85,10 +85,8 @@ pub(super) fn threshold_objects(
     let main = clean_mask(&main, s.dims, min, HOLE_FRACTION);
     let (mut labels, mut count) = if split {
         let dist = distance_transform(&main, s.dims, [1.0; 3]);
-        let (labels, count) = split_touching(&main, &dist, s.dims, &NECKS);
         // the cut along the ridge of each neck, not around the smaller side's outer layers
-        let labels = if count > 1 { flood_from_cores(&main, &dist, s.dims, &labels, count) } else { labels };
-        (labels, count)
+        split_at_ridges(&main, &dist, s.dims, &NECKS)
     } else {
         components(&main, s.dims)
     };
