@@ -82,11 +82,7 @@ fn folded_and_jittered_surfaces_give_the_exhaustive_pairs() {
     let mut meeting = 0;
     for amplitude in [0.3, 0.6, 1.0, 3.0] {
         for _ in 0..3 {
-            let x: Vec<Point<3>> = mesh
-                .positions()
-                .iter()
-                .map(|p| p + Point::<3>::new(r() - 0.5, r() - 0.5, r() - 0.5) * (2.0 * amplitude * h))
-                .collect();
+            let x = jittered(mesh.positions(), amplitude * h, &mut r);
             meeting += usize::from(!all_pairs(&mut search, &x, &t).is_empty());
         }
     }
@@ -170,11 +166,7 @@ fn slightly_jittered_surfaces_give_the_exhaustive_pairs() {
         for seed in 0..8 {
             let mut r = numbers(100 * k as u64 + seed);
             let amplitude = 0.1 + 0.3 * r();
-            let x: Vec<Point<3>> = mesh
-                .positions()
-                .iter()
-                .map(|p| p + Point::<3>::new(r() - 0.5, r() - 0.5, r() - 0.5) * (2.0 * amplitude * h))
-                .collect();
+            let x = jittered(mesh.positions(), amplitude * h, &mut r);
             meeting += usize::from(!all_pairs(&mut search, &x, &t).is_empty());
             (embedded, patches) = (embedded + search.embedded, patches + search.patches_searched);
         }
@@ -265,4 +257,9 @@ fn kept_cuts_and_answers_serve_only_their_own_input() {
         .collect();
     assert!(search.intersections_of_state(&apart, &ta).is_empty());
     assert!(all_pairs(&mut search, &apart, &ta).is_empty());
+}
+
+/// `x` with every vertex moved by up to `reach` along each axis (uniform, from `r`).
+fn jittered(x: &[Point<3>], reach: f64, r: &mut impl FnMut() -> f64) -> Vec<Point<3>> {
+    x.iter().map(|p| p + Point::<3>::new(r() - 0.5, r() - 0.5, r() - 0.5) * (2.0 * reach)).collect()
 }

@@ -188,22 +188,8 @@ fn a_step_flattened_against_the_image_box_is_retried() {
 fn touching_pairs_of_balls_in_a_volume_are_kept_apart() {
     let (nx, ny, nz) = (48usize, 32usize, 36usize);
     let pairs = [([12.0, 16.0, 9.0], 8.0, [26.0, 16.0, 9.0], 7.0), ([18.0, 16.0, 27.0], 8.0, [31.0, 16.0, 27.0], 6.0)];
-    let mut u = uniform(11);
-    let mut noise = move || u() - 0.5;
-    let mut voxels = Vec::with_capacity(nx * ny * nz);
-    for k in 0..nz {
-        for j in 0..ny {
-            for i in 0..nx {
-                let p = [i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5];
-                let d = |c: [f64; 3]| ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt();
-                let inside = pairs.iter().any(|&(a, ra, b, rb)| d(a) < ra || d(b) < rb);
-                voxels.push((60.0 + if inside { 110.0 } else { 0.0 } + 40.0 * noise()).clamp(0.0, 255.0) as u8);
-            }
-        }
-    }
-    let mut nrrd =
-        format!("NRRD0004\ntype: uint8\ndimension: 3\nsizes: {nx} {ny} {nz}\nencoding: raw\n\n").into_bytes();
-    nrrd.extend(&voxels);
+    let balls: Vec<([f64; 3], f64)> = pairs.iter().flat_map(|&(a, ra, b, rb)| [(a, ra), (b, rb)]).collect();
+    let nrrd = balls_nrrd([nx, ny, nz], &balls, 11);
     let spec = r#"{"problem": {"type": "segmentation", "image": "input:image"}, "output": {"checkpoint_every": 1}}"#;
     let inputs: HashMap<String, Vec<u8>> = [("image".to_string(), nrrd)].into();
     let job = prepare(parse_spec(spec).unwrap(), &inputs).unwrap();
@@ -243,20 +229,7 @@ fn touching_pairs_of_balls_in_a_volume_are_kept_apart() {
 fn one_surface_over_two_balls_splits_at_its_neck_during_the_run() {
     let (nx, ny, nz) = (52usize, 32usize, 32usize);
     let balls = [([13.0, 16.0, 16.0], 7.0), ([35.0, 16.5, 15.5], 6.0)];
-    let mut u = uniform(5);
-    let mut voxels = Vec::with_capacity(nx * ny * nz);
-    for k in 0..nz {
-        for j in 0..ny {
-            for i in 0..nx {
-                let p = [i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5];
-                let inside = balls.iter().any(|(c, r)| (0..3).map(|a| (p[a] - c[a]).powi(2)).sum::<f64>() < r * r);
-                voxels.push((60.0 + if inside { 110.0 } else { 0.0 } + 40.0 * (u() - 0.5)).clamp(0.0, 255.0) as u8);
-            }
-        }
-    }
-    let mut nrrd =
-        format!("NRRD0004\ntype: uint8\ndimension: 3\nsizes: {nx} {ny} {nz}\nencoding: raw\n\n").into_bytes();
-    nrrd.extend(&voxels);
+    let nrrd = balls_nrrd([nx, ny, nz], &balls, 5);
     let spec = r#"{"problem": {"type": "segmentation", "image": "input:image"},
         "initial": {"shape": "ellipsoid", "center": [0.47, 0.31, 0.3], "semi_axes": [0.42, 0.2, 0.2]},
         "output": {"checkpoint_every": 1}}"#;
@@ -289,4 +262,24 @@ fn one_surface_over_two_balls_splits_at_its_neck_during_the_run() {
         let hits = shapeflow::geometry::surface_intersections(&x, &t, 1);
         assert!(hits.is_empty(), "iteration {}: triangles {hits:?} meet", c.iteration);
     }
+}
+
+/// A raw uint8 NRRD volume of `dims` voxels: the union of `balls` (centre and
+/// radius in voxels, a voxel's centre at `i + 0.5`) at 170 on a background of 60,
+/// with uniform noise of ±20 drawn from `seed`.
+fn balls_nrrd(dims: [usize; 3], balls: &[([f64; 3], f64)], seed: u64) -> Vec<u8> {
+    let [nx, ny, nz] = dims;
+    let mut u = uniform(seed);
+    let mut nrrd =
+        format!("NRRD0004\ntype: uint8\ndimension: 3\nsizes: {nx} {ny} {nz}\nencoding: raw\n\n").into_bytes();
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let p = [i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5];
+                let inside = balls.iter().any(|(c, r)| (0..3).map(|a| (p[a] - c[a]).powi(2)).sum::<f64>() < r * r);
+                nrrd.push((60.0 + if inside { 110.0 } else { 0.0 } + 40.0 * (u() - 0.5)).clamp(0.0, 255.0) as u8);
+            }
+        }
+    }
+    nrrd
 }
