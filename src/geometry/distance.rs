@@ -18,12 +18,18 @@ fn along(p: P, d: P, s: f64) -> P {
     [p[0] + s * d[0], p[1] + s * d[1], p[2] + s * d[2]]
 }
 
-/// The distance from `x` to the triangle `t` (its closest point by the regions of
-/// the triangle's plane: a vertex, an edge or the face).
+/// The distance from `x` to the triangle `t` ([`closest_point_on_triangle`]).
 pub fn point_triangle_distance(x: P, t: &[P; 3]) -> f64 {
+    let d = sub(x, closest_point_on_triangle(x, t));
+    dot(d, d).sqrt()
+}
+
+/// The point of the triangle `t` closest to `x`, by the regions of the
+/// triangle's plane: a vertex, an edge or the face.
+pub fn closest_point_on_triangle(x: P, t: &[P; 3]) -> P {
     let (a, b, c) = (t[0], t[1], t[2]);
     let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(x, a));
-    let closest = {
+    {
         let (d1, d2) = (dot(ab, ap), dot(ac, ap));
         let bp = sub(x, b);
         let (d3, d4) = (dot(ab, bp), dot(ac, bp));
@@ -47,9 +53,7 @@ pub fn point_triangle_distance(x: P, t: &[P; 3]) -> f64 {
             let (v, w) = (vb * denom, vc * denom);
             [a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w]
         }
-    };
-    let d = sub(x, closest);
-    dot(d, d).sqrt()
+    }
 }
 
 /// The distance between the segments `p0 p1` and `q0 q1` (their closest points by

@@ -48,7 +48,31 @@ impl SampleGrid {
 /// The signed distance of the surface (`positions`, `triangles`: closed and
 /// oriented with outward normals) at every sample of `grid`, clamped to `band`.
 pub fn signed_distance(grid: &SampleGrid, positions: &[[f64; 3]], triangles: &[[usize; 3]], band: f64) -> Vec<f64> {
+    nearest(grid, positions, triangles, band, false).0
+}
+
+/// [`signed_distance`] and, at every sample within `band` of the surface, the
+/// surface's point closest to it.
+pub fn signed_distance_and_closest(
+    grid: &SampleGrid,
+    positions: &[[f64; 3]],
+    triangles: &[[usize; 3]],
+    band: f64,
+) -> (Vec<f64>, Vec<Option<[f64; 3]>>) {
+    nearest(grid, positions, triangles, band, true)
+}
+
+/// The signed distance, and the closest points if `keep` (else none: they take
+/// four times the distances' memory).
+fn nearest(
+    grid: &SampleGrid,
+    positions: &[[f64; 3]],
+    triangles: &[[usize; 3]],
+    band: f64,
+    keep: bool,
+) -> (Vec<f64>, Vec<Option<[f64; 3]>>) {
     let mut distance = vec![band; grid.len()];
+    let mut closest = vec![None; if keep { grid.len() } else { 0 }];
     for t in triangles {
         let p = t.map(|v| positions[v]);
         let lo = [0, 1, 2].map(|a| p.iter().map(|q| q[a]).fold(f64::INFINITY, f64::min) - band);
@@ -58,16 +82,79 @@ pub fn signed_distance(grid: &SampleGrid, positions: &[[f64; 3]], triangles: &[[
             for j in rj.clone() {
                 for i in ri.clone() {
                     let at = grid.index(i, j, k);
-                    let d = point_triangle_distance(grid.point(i, j, k), &p);
+                    let x = grid.point(i, j, k);
+                    let c = closest_point_on_triangle(x, &p);
+                    let d = ((x[0] - c[0]).powi(2) + (x[1] - c[1]).powi(2) + (x[2] - c[2]).powi(2)).sqrt();
                     if d < distance[at] {
                         distance[at] = d;
+                        if keep {
+                            closest[at] = Some(c);
+                        }
                     }
                 }
             }
         }
     }
     let winding = winding_numbers(grid, positions, triangles);
-    distance.iter().zip(&winding).map(|(&d, &w)| if w != 0 { d } else { -d }).collect()
+    let signed = distance.iter().zip(&winding).map(|(&d, &w)| if w != 0 { d } else { -d }).collect();
+    (signed, closest)
+}
+
+/// The distance to the surface at every inside sample (`sd > 0`; 0 elsewhere),
+/// from the closest points of [`signed_distance_and_closest`]: exact within its
+/// band, and carried inwards by closest-point propagation (each sample takes the
+/// closest point of the neighbour, among its 26, that gives it the smallest
+/// distance, in order of increasing distance, as a fast-marching front: exact
+/// wherever a sample's closest point is one of its neighbours', else an upper
+/// bound; inside an octahedron, its test, within 1e-3 of a sample).
+/// A voxel distance transform of the inside samples measures to the nearest
+/// outside sample instead, in steps of the grid; this keeps the surface's
+/// sub-sample place.
+pub fn distance_inside(grid: &SampleGrid, sd: &[f64], closest: &[Option<[f64; 3]>]) -> Vec<f64> {
+    use std::cmp::Reverse;
+    let [nx, ny, nz] = grid.dims;
+    let mut best = vec![f64::INFINITY; grid.len()];
+    let mut from: Vec<Option<[f64; 3]>> = vec![None; grid.len()];
+    let mut front = std::collections::BinaryHeap::new();
+    for p in 0..grid.len() {
+        if let (true, Some(c)) = (sd[p] > 0.0, closest[p]) {
+            best[p] = sd[p];
+            from[p] = Some(c);
+            front.push(Reverse((sd[p].to_bits(), p)));
+        }
+    }
+    let dist =
+        |x: [f64; 3], c: [f64; 3]| ((x[0] - c[0]).powi(2) + (x[1] - c[1]).powi(2) + (x[2] - c[2]).powi(2)).sqrt();
+    // non-negative distances order as their bits
+    while let Some(Reverse((bits, p))) = front.pop() {
+        if f64::from_bits(bits) > best[p] {
+            continue;
+        }
+        let Some(c) = from[p] else { continue };
+        let (i, j, k) = (p % nx, (p / nx) % ny, p / (nx * ny));
+        for dk in -1i64..=1 {
+            for dj in -1i64..=1 {
+                for di in -1i64..=1 {
+                    let (a, b, e) = (i as i64 + di, j as i64 + dj, k as i64 + dk);
+                    if a < 0 || b < 0 || e < 0 || a >= nx as i64 || b >= ny as i64 || e >= nz as i64 {
+                        continue;
+                    }
+                    let (a, b, e) = (a as usize, b as usize, e as usize);
+                    let q = grid.index(a, b, e);
+                    if sd[q] <= 0.0 {
+                        continue;
+                    }
+                    let d = dist(grid.point(a, b, e), c);
+                    if d < best[q] {
+                        best[q] = d;
+                        from[q] = Some(c);
+                        front.push(Reverse((d.to_bits(), q)));
+                    }
+                }
+            }
+        }
+    }
+    best.iter().zip(sd).map(|(&d, &s)| if s > 0.0 && d.is_finite() { d } else { 0.0 }).collect()
 }
 
 /// The winding number of the surface at every sample (see the module documentation).
@@ -129,7 +216,7 @@ fn winding_numbers(grid: &SampleGrid, positions: &[[f64; 3]], triangles: &[[usiz
     winding
 }
 
-pub use crate::geometry::distance::point_triangle_distance;
+pub use crate::geometry::distance::{closest_point_on_triangle, point_triangle_distance};
 
 #[cfg(test)]
 mod tests {
@@ -147,6 +234,38 @@ mod tests {
         ];
         let t = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
         (v, t)
+    }
+
+    /// Inside an octahedron the distance to its surface is that to the nearest
+    /// face's plane, `(1 − |x|₁)/√3`: from a band of 0.15 (three samples) the
+    /// propagation carries it to the centre (0.577 away) within 1e-3 of a sample,
+    /// where a voxel distance transform is off by up to half a sample and more.
+    #[test]
+    fn the_distance_inside_an_octahedron_is_carried_from_its_band() {
+        let (v, t) = octahedron();
+        let grid = SampleGrid { origin: [-1.2; 3], spacing: 0.05, dims: [49; 3] };
+        let (sd, closest) = signed_distance_and_closest(&grid, &v, &t, 0.15);
+        let inside = distance_inside(&grid, &sd, &closest);
+        let mut worst: f64 = 0.0;
+        let mut deep = 0;
+        for k in 0..49 {
+            for j in 0..49 {
+                for i in 0..49 {
+                    let p = grid.point(i, j, k);
+                    let l1 = p[0].abs() + p[1].abs() + p[2].abs();
+                    let at = grid.index(i, j, k);
+                    if l1 < 1.0 - 1e-6 {
+                        let exact = (1.0 - l1) / 3f64.sqrt();
+                        worst = worst.max((inside[at] - exact).abs());
+                        deep += usize::from(exact > 0.3);
+                    } else if l1 > 1.0 + 1e-6 {
+                        assert_eq!(inside[at], 0.0);
+                    }
+                }
+            }
+        }
+        assert!(deep > 100, "{deep}");
+        assert!(worst < 1e-3 * grid.spacing, "off by {worst}");
     }
 
     #[test]

@@ -2,7 +2,9 @@
 //!
 //! Each object of the converged surfaces (a component with its cavities) is
 //! sampled on the image's grid as its signed distance; its inside samples are
-//! split by the initial shape's rule ([`split_at_ridges`]) where the cut is a
+//! split by the initial shape's rule ([`split_at_ridges`]), on the exact distance
+//! to the surface ([`distance_inside`]: a voxel distance transform measures in
+//! steps of the grid, which can put a neck just under the rule), where the cut is a
 //! notch all around its rim ([`notched`]). An object that splits is traced again,
 //! one closed surface per part, by marching tetrahedra of the signed distance
 //! within the part's samples: the surface keeps its sub-voxel place away from
@@ -15,7 +17,7 @@ use super::NeckSplit;
 use crate::geometry::{first_surface_intersection, surface_union, Point, SurfaceMesh};
 use crate::imaging::isosurface::zero_level_3d;
 use crate::imaging::labels::{distance_transform, label_sizes, split_at_ridges};
-use crate::imaging::signed_distance::{signed_distance, SampleGrid};
+use crate::imaging::signed_distance::{distance_inside, signed_distance_and_closest, SampleGrid};
 
 /// Least mean fraction of a ball around the rim of a cut that lies inside the
 /// object: more than a flat boundary's half. The rim of a neck between two balls
@@ -105,10 +107,14 @@ impl NeckSplit {
             return None;
         }
         let grid = SampleGrid { origin: [0, 1, 2].map(|a| (start[a] as f64 + 0.5) / l), spacing: 1.0 / l, dims };
-        let sd: Vec<f64> = signed_distance(&grid, &x, triangles, 2.0 / l).iter().map(|d| d * l).collect();
+        let (sd, closest) = signed_distance_and_closest(&grid, &x, triangles, 2.0 / l);
+        // the split's depths on the distance to the surface itself (sub-sample),
+        // the notch test's balls on the voxel distance transform it was measured with
+        let exact: Vec<f64> = distance_inside(&grid, &sd, &closest).iter().map(|d| d * l).collect();
+        let sd: Vec<f64> = sd.iter().map(|d| d * l).collect();
         let mask: Vec<bool> = sd.iter().map(|&d| d > 0.0).collect();
         let dist = distance_transform(&mask, dims, [1.0; 3]);
-        let (labels, count) = split_at_ridges(&mask, &dist, dims, &self.necks);
+        let (labels, count) = split_at_ridges(&mask, &exact, dims, &self.necks);
         tracing::debug!(count, sizes = ?label_sizes(&labels, count), "neck split of a surface's object");
         if count < 2 || label_sizes(&labels, count).iter().skip(1).any(|&n| n < self.min_size) {
             return None;
