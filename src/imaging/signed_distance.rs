@@ -84,7 +84,7 @@ fn nearest(
                     let at = grid.index(i, j, k);
                     let x = grid.point(i, j, k);
                     let c = closest_point_on_triangle(x, &p);
-                    let d = ((x[0] - c[0]).powi(2) + (x[1] - c[1]).powi(2) + (x[2] - c[2]).powi(2)).sqrt();
+                    let d = euclidean(x, c);
                     if d < distance[at] {
                         distance[at] = d;
                         if keep {
@@ -123,8 +123,6 @@ pub fn distance_inside(grid: &SampleGrid, sd: &[f64], closest: &[Option<[f64; 3]
             front.push(Reverse((sd[p].to_bits(), p)));
         }
     }
-    let dist =
-        |x: [f64; 3], c: [f64; 3]| ((x[0] - c[0]).powi(2) + (x[1] - c[1]).powi(2) + (x[2] - c[2]).powi(2)).sqrt();
     // non-negative distances order as their bits
     while let Some(Reverse((bits, p))) = front.pop() {
         if f64::from_bits(bits) > best[p] {
@@ -132,19 +130,15 @@ pub fn distance_inside(grid: &SampleGrid, sd: &[f64], closest: &[Option<[f64; 3]
         }
         let Some(c) = from[p] else { continue };
         let (i, j, k) = (p % nx, (p / nx) % ny, p / (nx * ny));
-        for dk in -1i64..=1 {
-            for dj in -1i64..=1 {
-                for di in -1i64..=1 {
-                    let (a, b, e) = (i as i64 + di, j as i64 + dj, k as i64 + dk);
-                    if a < 0 || b < 0 || e < 0 || a >= nx as i64 || b >= ny as i64 || e >= nz as i64 {
-                        continue;
-                    }
-                    let (a, b, e) = (a as usize, b as usize, e as usize);
+        let around = |at: usize, n: usize| at.saturating_sub(1)..(at + 2).min(n);
+        for e in around(k, nz) {
+            for b in around(j, ny) {
+                for a in around(i, nx) {
                     let q = grid.index(a, b, e);
                     if sd[q] <= 0.0 {
                         continue;
                     }
-                    let d = dist(grid.point(a, b, e), c);
+                    let d = euclidean(grid.point(a, b, e), c);
                     if d < best[q] {
                         best[q] = d;
                         from[q] = Some(c);
@@ -155,6 +149,10 @@ pub fn distance_inside(grid: &SampleGrid, sd: &[f64], closest: &[Option<[f64; 3]
         }
     }
     best.iter().zip(sd).map(|(&d, &s)| if s > 0.0 && d.is_finite() { d } else { 0.0 }).collect()
+}
+
+fn euclidean(x: [f64; 3], c: [f64; 3]) -> f64 {
+    ((x[0] - c[0]).powi(2) + (x[1] - c[1]).powi(2) + (x[2] - c[2]).powi(2)).sqrt()
 }
 
 /// The winding number of the surface at every sample (see the module documentation).
