@@ -319,7 +319,7 @@ mod tests {
                 let n = state.mesh.num_vertices();
                 Ok(ShapeGradient { g: vec![1.0; n], f: vec![-100.0; n], aux: Vec::new() })
             }
-            fn constrain_step(&self, current: &Mesh<2>, _candidate: Mesh<2>) -> Mesh<2> {
+            fn constrain_step(&self, current: &Mesh<2>, _: Mesh<2>, _: &mut crate::geometry::PatchSearch) -> Mesh<2> {
                 current.clone()
             }
         }

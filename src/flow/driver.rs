@@ -247,7 +247,7 @@ impl<'p, const D: usize> Flow<'p, D> {
             let a1 = if s.conservation.is_some() { advanced.enclosed_measure() } else { a0 };
             // the problem's constraints (an obstacle, the image's box, the objects'
             // territories)
-            let mut candidate = self.problem.constrain_step(&self.mesh, advanced);
+            let mut candidate = self.problem.constrain_step(&self.mesh, advanced, &mut self.search);
             let limit = rules::motion_limit(&self.mesh, &candidate, tau, s.step_control);
             if let Some(shorter) = report.retry(rules::step_control(tau, limit)) {
                 tau = shorter;

@@ -1,7 +1,7 @@
 //! The interface between the flow and an application (implemented in `problems`).
 
 use crate::fem::{Matrices, Pattern, Weight};
-use crate::geometry::{Mesh, Point};
+use crate::geometry::{Mesh, PatchSearch, Point};
 
 use super::ScalarProduct;
 
@@ -136,7 +136,10 @@ pub trait Problem<const D: usize>: Send {
     /// [`Problem::constrain`] with the shape the step starts from (the same
     /// connectivity), for constraints between parts of the shape (segmentation:
     /// objects that meet stop where they meet); by default `constrain(candidate)`.
-    fn constrain_step(&self, _current: &Mesh<D>, candidate: Mesh<D>) -> Mesh<D> {
+    /// `search` is the flow's intersection search of surfaces, which then checks
+    /// the result: a constraint that searches the result in full leaves its
+    /// answer there.
+    fn constrain_step(&self, _current: &Mesh<D>, candidate: Mesh<D>, _search: &mut PatchSearch) -> Mesh<D> {
         self.constrain(candidate)
     }
 }

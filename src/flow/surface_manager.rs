@@ -7,7 +7,8 @@ use super::report::SurgeryKind;
 use super::FlowError;
 use crate::geometry::{
     adapt_surface, adapt_surface_except, closest_facing_vertices, cut_neck, edge_statistics, freeze_around,
-    regularize_surface, revert_new_intersections, zip_sheets, PatchSearch, SurfaceMesh, SurfaceRemeshSettings,
+    regularize_surface, revert_new_intersections, surface_union, zip_sheets, PatchSearch, Point, SurfaceMesh,
+    SurfaceRemeshSettings,
 };
 
 /// Switches and resolved parameters of surface mesh management.
@@ -216,19 +217,43 @@ impl SurfaceManager {
         (4.0 * self.params.h_min).min(self.params.h_max)
     }
 
-    /// `mesh` rebuilt by `op`, tidied (four rounds of the management's adaptation
-    /// and regularization: the slivers of marching tetrahedra made sound) and,
-    /// for a conserving flow, given back its volume; `None` if the rebuild fails.
+    /// `mesh` rebuilt by `op` and tidied ([`SurfaceManager::rebuilt`]) and, for a
+    /// conserving flow, given back its volume; `None` if the rebuild fails.
     fn operate(&self, mesh: &SurfaceMesh, op: super::surgery::Operation) -> Option<SurfaceMesh> {
-        let mut m = match super::surgery::rebuild(mesh, self.surgery_spacing(), op) {
-            Ok(m) => m?,
+        Some(self.conserved(self.rebuilt(mesh, op)?, mesh))
+    }
+
+    /// `mesh` rebuilt by the level-set operation `op`, tidied (four rounds of the
+    /// management's adaptation and regularization: the slivers of marching
+    /// tetrahedra made sound); `None` if the rebuild fails.
+    fn rebuilt(&self, mesh: &SurfaceMesh, op: super::surgery::Operation) -> Option<SurfaceMesh> {
+        match super::surgery::rebuild(mesh, self.surgery_spacing(), op) {
+            Ok(m) => Some(self.tidy(m?, 4)),
             Err(e) => {
                 tracing::warn!("the surface a surgery rebuilt is invalid: {e}");
-                return None;
+                None
             }
+        }
+    }
+
+    /// The level-set cut `op` at `at` ([`SurfaceManager::operate`]) made on the
+    /// object there alone (the component of the vertex nearest to `at`, with its
+    /// cavities): the other objects keep their triangles, and their signed
+    /// distances are not sampled.
+    fn cut_object(&self, mesh: &SurfaceMesh, at: Point<3>, op: super::surgery::Operation) -> Option<SurfaceMesh> {
+        let objects = mesh.objects();
+        let near = (mesh.positions().iter().enumerate())
+            .min_by(|a, b| (a.1 - at).norm_squared().total_cmp(&(b.1 - at).norm_squared()))?
+            .0;
+        let root = objects.owner[objects.vertex_component[near]];
+        let mine: Vec<bool> = objects.owner.iter().map(|&o| o == root).collect();
+        let Some(others) = mesh.with_components(&mine.iter().map(|m| !m).collect::<Vec<_>>()) else {
+            return self.operate(mesh, op);
         };
-        m = self.tidy(m, 4);
-        Some(self.conserved(m, mesh))
+        let object = mesh.with_components(&mine)?;
+        let cut = self.rebuilt(&object, op)?;
+        let joined = surface_union(&[others, cut]).ok()?;
+        Some(self.conserved(joined, mesh))
     }
 
     /// `rounds` of the management's adaptation and regularization (a traced
@@ -299,7 +324,7 @@ impl SurfaceManager {
         // else by the level set: a neck the ball does not part (a wide one)
         let spacing = self.surgery_spacing();
         let op = super::surgery::Operation::Cut { at, radius: 3.0 * spacing, depth: 2.0 * spacing };
-        match self.operate(mesh, op) {
+        match self.cut_object(mesh, at, op) {
             // a cut that parts the surface: the neck was one
             Some(cut) if cut.component_labels().1 > parts => {
                 self.declined = None;

@@ -26,6 +26,7 @@ pub use patch_search::PatchSearch;
 pub mod simplex;
 mod surface_intersections;
 mod surface_remesh;
+mod surface_revert;
 mod surface_watch;
 mod surface_zip;
 pub use surface_watch::{swept_surface_intersections, SurfaceWatch};
@@ -46,11 +47,12 @@ pub use measures::{vertex_normals, MeshQuality};
 pub use mesh::{components, segment_cycles, CurveMesh, Mesh, MeshError, SurfaceMesh};
 pub use neck_cut::cut_neck;
 pub use objects::Objects;
-pub use surface_intersections::{first_surface_intersection, revert_new_intersections, surface_intersections};
+pub use surface_intersections::{first_surface_intersection, surface_intersections};
 pub use surface_remesh::{
     adapt_surface, adapt_surface_except, edge_statistics, freeze_around, regularize_surface, surface_edges,
     SurfaceEdge, SurfaceRemeshSettings,
 };
+pub use surface_revert::revert_new_intersections;
 pub use surfaces::{box_surface, ellipsoid, icosphere, torus};
 pub use unions::{surface_union, union};
 pub use winding::{mesh_winding_number, winding_number};

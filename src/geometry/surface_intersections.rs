@@ -13,11 +13,11 @@
 //! Triangles that share a vertex are not tested: their contact is a fold of the
 //! surface, which the flow's tangling rule rejects.
 
-use super::{PatchSearch, Point};
+use super::Point;
 use robust::{orient2d, orient3d, Coord, Coord3D};
 
 /// Cells of the broad phase, in mean edge lengths.
-const CELL_EDGES: f64 = 2.0;
+pub(super) const CELL_EDGES: f64 = 2.0;
 
 /// Cells a triangle may cover at most before it is kept aside and tested against
 /// every other (a triangle far larger than the mean: a coarse cap).
@@ -133,46 +133,6 @@ pub(super) fn overlap_cell(a: &Aabb, b: &Aabb, cell: f64) -> u64 {
 pub(super) fn pack(c: [i64; 3]) -> u64 {
     let b = |v: i64| (v.rem_euclid(1 << 21)) as u64;
     b(c[0]) | b(c[1]) << 21 | b(c[2]) << 42
-}
-
-/// `after` (positions of the vertices of `triangles`, which meet nowhere new at
-/// `before`) with the vertices of every pair of triangles that meet in it but
-/// not at `before` put back at `before`, repeated until no new pair meets (a
-/// vertex put back can bring a neighbouring triangle into contact) or `rounds`
-/// are done; `None` if some new pair still meets then. At worst every vertex is
-/// put back: `before`, which meets nowhere new. The pairs are found by `search`
-/// (the exhaustive search's pairs; its patches kept for the next call).
-pub fn revert_new_intersections(
-    before: &[Point<3>],
-    after: &[Point<3>],
-    triangles: &[[usize; 3]],
-    rounds: usize,
-    search: &mut PatchSearch,
-) -> Option<Vec<Point<3>>> {
-    let meeting = |x: &[Point<3>], search: &mut PatchSearch| {
-        let mut pairs = search.intersections(x, triangles, usize::MAX);
-        pairs.sort_unstable();
-        pairs
-    };
-    let mut x = after.to_vec();
-    let mut pairs = meeting(&x, search);
-    if pairs.is_empty() {
-        return Some(x);
-    }
-    let old = search.intersections_of_state(before, triangles);
-    for _ in 0..rounds {
-        let new: Vec<&(usize, usize)> = pairs.iter().filter(|p| old.binary_search(p).is_err()).collect();
-        if new.is_empty() {
-            return Some(x);
-        }
-        for &&(a, b) in &new {
-            for &v in triangles[a].iter().chain(&triangles[b]) {
-                x[v] = before[v];
-            }
-        }
-        pairs = meeting(&x, search);
-    }
-    pairs.iter().all(|p| old.binary_search(p).is_ok()).then_some(x)
 }
 
 /// The box of triangle `t`'s corners.

@@ -69,9 +69,10 @@ pub struct PatchSearch {
     planes: Vec<Option<(usize, bool)>>,
     /// Whether the patches are cut again at the next search.
     stale: bool,
-    /// The last answer of [`PatchSearch::intersections_of_state`]: positions,
-    /// triangles, pairs.
-    kept: Option<(Vec<Point<3>>, Vec<[usize; 3]>, Vec<(usize, usize)>)>,
+    /// The last answer of [`PatchSearch::intersections_of_state`], and that of
+    /// the last search that found every pair (or of [`PatchSearch::remember`]).
+    kept: Option<Answer>,
+    last: Option<Answer>,
     /// Of the last search: patches, patches proved embedded, pairs of patches
     /// whose boxes overlap, and pairs of triangles tested (for tests and
     /// benchmarks).
@@ -83,6 +84,15 @@ pub struct PatchSearch {
     /// them) whose two patches were proved embedded together.
     pub groups: usize,
     pub sealed: usize,
+}
+
+/// Positions, triangles and all their pairs that meet, sorted.
+type Answer = (Vec<Point<3>>, Vec<[usize; 3]>, Vec<(usize, usize)>);
+
+/// The pairs of `answer` if it is that of `x` and `triangles`.
+fn known<'a>(answer: &'a Option<Answer>, x: &[Point<3>], triangles: &[[usize; 3]]) -> Option<&'a [(usize, usize)]> {
+    let (kx, kt, pairs) = answer.as_ref()?;
+    (kx.as_slice() == x && kt.as_slice() == triangles).then_some(pairs.as_slice())
 }
 
 impl PatchSearch {
@@ -97,10 +107,8 @@ impl PatchSearch {
     /// sorted: [`PatchSearch::intersections`], its last answer kept for the same
     /// positions and triangles.
     pub fn intersections_of_state(&mut self, x: &[Point<3>], triangles: &[[usize; 3]]) -> Vec<(usize, usize)> {
-        if let Some((kx, kt, pairs)) = &self.kept {
-            if kx.as_slice() == x && kt.as_slice() == triangles {
-                return pairs.clone();
-            }
+        if let Some(pairs) = known(&self.kept, x, triangles) {
+            return pairs.to_vec();
         }
         let mut pairs = self.intersections(x, triangles, usize::MAX);
         pairs.sort_unstable();
@@ -108,12 +116,43 @@ impl PatchSearch {
         pairs
     }
 
+    /// Keep `pairs` as every pair of `triangles` that meets at `x` (found by the
+    /// caller, as [`revert_new_intersections`] finds them around the vertices it
+    /// put back): the next search of that state answers with them.
+    ///
+    /// [`revert_new_intersections`]: crate::geometry::revert_new_intersections
+    pub fn remember(&mut self, x: &[Point<3>], triangles: &[[usize; 3]], mut pairs: Vec<(usize, usize)>) {
+        pairs.sort_unstable();
+        self.last = Some((x.to_vec(), triangles.to_vec(), pairs));
+    }
+
+    /// Forget the answers kept: the next search of any state searches (for
+    /// benchmarks of the search itself).
+    pub fn forget(&mut self) {
+        (self.kept, self.last) = (None, None);
+    }
+
     /// Up to `most` pairs `(a, b)`, `a < b`, of `triangles` that share no vertex
     /// and meet at `x`, each once ([`surface_intersections`] of the same input:
-    /// the same pairs when all are asked for).
+    /// the same pairs when all are asked for). A state searched last in full (a
+    /// flow's trial step, searched by its contact rule and then by its check) is
+    /// answered from that search, in sorted order; the counts below are then
+    /// those of that search.
     ///
     /// [`surface_intersections`]: super::surface_intersections
     pub fn intersections(&mut self, x: &[Point<3>], triangles: &[[usize; 3]], most: usize) -> Vec<(usize, usize)> {
+        if let Some(pairs) = known(&self.last, x, triangles).or_else(|| known(&self.kept, x, triangles)) {
+            return pairs.iter().take(most).copied().collect();
+        }
+        let hits = self.search(x, triangles, most);
+        if hits.len() < most {
+            self.remember(x, triangles, hits.clone());
+        }
+        hits
+    }
+
+    /// [`PatchSearch::intersections`] by a search.
+    fn search(&mut self, x: &[Point<3>], triangles: &[[usize; 3]], most: usize) -> Vec<(usize, usize)> {
         let mut hits = Vec::new();
         (self.patches_searched, self.embedded, self.neighbours, self.tested) = (0, 0, 0, 0);
         (self.groups, self.sealed) = (0, 0);

@@ -25,7 +25,7 @@ use crate::flow::{
     Confinement, FlowDefaults, H1Weights, OwnField, Problem, ProblemError, ScalarProduct, ShapeGradient, StepLimits,
     SurfaceState,
 };
-use crate::geometry::{Mesh, Point};
+use crate::geometry::{Mesh, PatchSearch, Point};
 use crate::imaging::EdgeField;
 use contact::{keep_apart, objects_cross};
 use moments::{accumulate_moments, Moments};
@@ -262,7 +262,7 @@ impl<const D: usize> Problem<D> for ChanVeseRun {
     /// theirs ([`Territories::hold`]), and those of triangles that would meet
     /// triangles they did not meet before too ([`hold_contacts`]: objects that
     /// meet stop where they meet, whatever their territories).
-    fn constrain_step(&self, current: &Mesh<D>, candidate: Mesh<D>) -> Mesh<D> {
+    fn constrain_step(&self, current: &Mesh<D>, candidate: Mesh<D>, search: &mut PatchSearch) -> Mesh<D> {
         let mut candidate = Problem::<D>::constrain(self, candidate);
         if !self.cv.separate || current.num_vertices() != candidate.num_vertices() {
             return candidate;
@@ -275,7 +275,7 @@ impl<const D: usize> Problem<D> for ChanVeseRun {
             let surfaces = (current as &dyn std::any::Any).downcast_ref::<Mesh<3>>();
             let mut candidate = candidate;
             if let (Some(current), Some(c)) = (surfaces, (&mut candidate as &mut dyn std::any::Any).downcast_mut()) {
-                hold_contacts(current, c, CLEARANCE / self.cv.intensity.scale(), &mut self.search.borrow_mut());
+                hold_contacts(current, c, CLEARANCE / self.cv.intensity.scale(), search);
             }
             return candidate;
         }

@@ -5,8 +5,7 @@
 //! computing them again.
 
 use super::{ChanVese, Moments};
-use crate::geometry::{Mesh, PatchSearch};
-use std::cell::RefCell;
+use crate::geometry::Mesh;
 use std::sync::Arc;
 
 /// The objects of a mesh ([`ChanVese`]'s `objects`): the component of every
@@ -47,15 +46,12 @@ impl Key {
 pub struct ChanVeseRun {
     pub(super) cv: ChanVese,
     last: Option<(Key, Arc<Objects>)>,
-    /// The contact rule's intersection search, its patches kept between trial
-    /// steps (a step is constrained through `&self`).
-    pub(super) search: RefCell<PatchSearch>,
 }
 
 impl ChanVese {
     /// A run of this problem, with nothing computed yet.
     pub fn start(&self) -> ChanVeseRun {
-        ChanVeseRun { cv: self.clone(), last: None, search: RefCell::default() }
+        ChanVeseRun { cv: self.clone(), last: None }
     }
 }
 

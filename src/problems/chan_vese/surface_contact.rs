@@ -15,7 +15,6 @@
 
 use crate::geometry::{revert_new_intersections, Mesh, PatchSearch, Point};
 use crate::imaging::signed_distance::point_triangle_distance;
-use std::collections::HashMap;
 
 /// Rounds of holding after which the step is left to the flow's intersection
 /// check (which then halves it).
@@ -34,17 +33,18 @@ pub(super) fn hold_contacts(current: &Mesh<3>, candidate: &mut Mesh<3>, gap: f64
     let mut x = candidate.positions().to_vec();
     let mut held = 0;
     if count > 1 && gap > 0.0 {
-        // closer than the clearance, and closer than the vertex was
-        let mut around: Option<Clearance> = None;
+        // closer than the clearance, and closer than the vertex was; every round's
+        // positions lie between `here` and the candidate's, whose swept boxes
+        // the grid holds
+        let close = Clearance::new(here, &x, triangles, &component, gap);
         for _ in 0..ROUNDS {
-            let close = Clearance::new(&x, triangles, &component, gap);
-            let near: Vec<usize> = (0..x.len()).filter(|&v| moved(&x, v) && close.within(&x, v)).collect();
-            if near.is_empty() {
-                break;
-            }
-            let around = around.get_or_insert_with(|| Clearance::new(here, triangles, &component, gap));
-            let hold: Vec<usize> =
-                near.into_iter().filter(|&v| close.distance(&x, v) < around.distance(here, v)).collect();
+            let hold: Vec<usize> = (0..x.len())
+                .filter(|&v| moved(&x, v))
+                .filter(|&v| {
+                    let d = close.distance(&x, v);
+                    d < gap && d < close.distance(here, v)
+                })
+                .collect();
             if hold.is_empty() {
                 break;
             }
@@ -63,55 +63,102 @@ pub(super) fn hold_contacts(current: &Mesh<3>, candidate: &mut Mesh<3>, gap: f64
 }
 
 /// The triangles of a surface on a grid of cells of at least `gap`, for the
-/// distance from a vertex to the nearest triangle of another component.
+/// distance from a vertex to the nearest triangle of another component, at any
+/// positions between two states: each triangle is entered in the cells of its
+/// box swept from one to the other and grown by `gap`, in a list sorted by cell;
+/// only the triangles that come that close to another component's swept box.
 struct Clearance<'a> {
     triangles: &'a [[usize; 3]],
     component: &'a [usize],
     gap: f64,
     cell: f64,
-    cells: HashMap<[i64; 3], Vec<u32>>,
+    /// Each component's box swept from one state to the other.
+    boxes: Vec<([f64; 3], [f64; 3])>,
+    /// (cell, triangle), sorted.
+    cells: Vec<([i64; 3], u32)>,
+    /// Triangles whose swept box covers more than `MAX_CELLS` cells: near every
+    /// vertex.
+    large: Vec<u32>,
 }
 
+/// Cells a triangle's swept box may cover at most before it is kept aside.
+const MAX_CELLS: usize = 512;
+
 impl<'a> Clearance<'a> {
-    fn new(x: &[Point<3>], triangles: &'a [[usize; 3]], component: &'a [usize], gap: f64) -> Clearance<'a> {
-        let mean = triangles.iter().map(|t| (x[t[1]] - x[t[0]]).norm()).sum::<f64>() / triangles.len().max(1) as f64;
+    fn new(
+        from: &[Point<3>],
+        to: &[Point<3>],
+        triangles: &'a [[usize; 3]],
+        component: &'a [usize],
+        gap: f64,
+    ) -> Clearance<'a> {
+        let mean =
+            triangles.iter().map(|t| (from[t[1]] - from[t[0]]).norm()).sum::<f64>() / triangles.len().max(1) as f64;
         let cell = (2.0 * mean).max(gap).max(f64::MIN_POSITIVE);
-        let mut cells: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+        let count = component.iter().max().map_or(0, |&c| c + 1);
+        let mut boxes = vec![([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]); count];
+        for (v, &c) in component.iter().enumerate() {
+            for p in [from[v], to[v]] {
+                for a in 0..3 {
+                    boxes[c].0[a] = boxes[c].0[a].min(p[a]);
+                    boxes[c].1[a] = boxes[c].1[a].max(p[a]);
+                }
+            }
+        }
+        let mut cells = Vec::new();
+        let mut large = Vec::new();
         for (t, tri) in triangles.iter().enumerate() {
-            let lo = [0, 1, 2].map(|a| tri.iter().map(|&v| x[v][a]).fold(f64::INFINITY, f64::min) - gap);
-            let hi = [0, 1, 2].map(|a| tri.iter().map(|&v| x[v][a]).fold(f64::NEG_INFINITY, f64::max) + gap);
+            let corners = || tri.iter().flat_map(|&v| [from[v], to[v]]);
+            let lo = [0, 1, 2].map(|a| corners().map(|p| p[a]).fold(f64::INFINITY, f64::min) - gap);
+            let hi = [0, 1, 2].map(|a| corners().map(|p| p[a]).fold(f64::NEG_INFINITY, f64::max) + gap);
+            if !near_another(&boxes, component[tri[0]], (lo, hi)) {
+                continue;
+            }
             let (l, h) = (lo.map(|c| (c / cell).floor() as i64), hi.map(|c| (c / cell).floor() as i64));
-            if (0..3).map(|a| (h[a] - l[a] + 1) as usize).product::<usize>() > 512 {
+            if (0..3).map(|a| (h[a] - l[a] + 1) as usize).product::<usize>() > MAX_CELLS {
+                large.push(t as u32);
                 continue;
             }
             for i in l[0]..=h[0] {
                 for j in l[1]..=h[1] {
                     for k in l[2]..=h[2] {
-                        cells.entry([i, j, k]).or_default().push(t as u32);
+                        cells.push(([i, j, k], t as u32));
                     }
                 }
             }
         }
-        Clearance { triangles, component, gap, cell, cells }
+        cells.sort_unstable();
+        Clearance { triangles, component, gap, cell, boxes, cells, large }
     }
 
     /// The distance from vertex `v` (at `x[v]`) to the nearest triangle of
     /// another component among those within `gap` of its cell; `gap` if none.
     fn distance(&self, x: &[Point<3>], v: usize) -> f64 {
         let p = x[v];
+        let around = ([0, 1, 2].map(|a| p[a] - self.gap), [0, 1, 2].map(|a| p[a] + self.gap));
+        if !near_another(&self.boxes, self.component[v], around) {
+            return self.gap;
+        }
         let key = [0, 1, 2].map(|a| (p[a] / self.cell).floor() as i64);
-        let Some(list) = self.cells.get(&key) else { return self.gap };
+        let start = self.cells.partition_point(|e| e.0 < key);
+        let end = start + self.cells[start..].partition_point(|e| e.0 == key);
         let at = [p[0], p[1], p[2]];
-        list.iter()
-            .map(|&t| self.triangles[t as usize])
+        (self.cells[start..end].iter().map(|e| e.1).chain(self.large.iter().copied()))
+            .map(|t| self.triangles[t as usize])
             .filter(|t| self.component[t[0]] != self.component[v])
             .map(|t| point_triangle_distance(at, &t.map(|q| [x[q][0], x[q][1], x[q][2]])))
             .fold(self.gap, f64::min)
     }
 
+    #[cfg(test)]
     fn within(&self, x: &[Point<3>], v: usize) -> bool {
         self.distance(x, v) < self.gap
     }
+}
+
+/// Whether the box `b` overlaps the box of a component other than `own`.
+fn near_another(boxes: &[([f64; 3], [f64; 3])], own: usize, b: ([f64; 3], [f64; 3])) -> bool {
+    (boxes.iter().enumerate()).any(|(c, o)| c != own && (0..3).all(|a| b.0[a] <= o.1[a] && o.0[a] <= b.1[a]))
 }
 
 #[cfg(test)]
@@ -149,7 +196,7 @@ mod tests {
         let mut apart = grown.clone();
         hold_contacts(&two, &mut apart, 0.2, &mut PatchSearch::default());
         let (component, _) = two.component_labels();
-        let clearance = Clearance::new(apart.positions(), two.elements(), &component, 0.2);
+        let clearance = Clearance::new(apart.positions(), apart.positions(), two.elements(), &component, 0.2);
         for v in 0..two.num_vertices() {
             if apart.positions()[v] != two.positions()[v] {
                 assert!(!clearance.within(apart.positions(), v), "vertex {v}");
