@@ -21,26 +21,45 @@ pub(super) struct Node {
 }
 
 impl Node {
+    /// The server listens on a port the system gives it (`--bind 127.0.0.1:0`),
+    /// read from its log line `shapeflow serving address=…`: a port picked by
+    /// the test and freed before the server binds it could be taken meanwhile
+    /// by another test's server, which this test would then talk to.
     pub(super) fn start(dir: &std::path::Path, args: &[&str], faults: &str) -> Node {
-        let addr: SocketAddr = format!("127.0.0.1:{}", free_port()).parse().unwrap();
-        let child = Command::new(env!("CARGO_BIN_EXE_shapeflow"))
-            .args(["serve", "--bind", &addr.to_string(), "--data-dir"])
+        let mut child = Command::new(env!("CARGO_BIN_EXE_shapeflow"))
+            .args(["serve", "--bind", "127.0.0.1:0", "--data-dir"])
             .arg(dir)
             .args(args)
             .env("SHAPEFLOW_TEST_FAULTS", faults)
             .env("RUST_BACKTRACE", "0")
+            .env("RUST_LOG", "info")
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
+            .stderr(Stdio::piped())
             .spawn()
             .unwrap();
-        let mut node = Node { child, addr };
-        let start = Instant::now();
-        // up, or already ended (a job that aborts its server at once)
-        while TcpStream::connect(addr).is_err() && node.child.try_wait().unwrap().is_none() {
-            assert!(start.elapsed() < Duration::from_secs(20), "the server did not come up");
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        node
+        // the log read to its end, so that the server never waits on a full pipe
+        let logs = child.stderr.take().unwrap();
+        let (found, address) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            use std::io::BufRead;
+            for line in std::io::BufReader::new(logs).lines().map_while(Result::ok) {
+                if let Some(at) = line.find("shapeflow serving").and_then(|i| line[i..].find("address=").map(|j| i + j))
+                {
+                    let addr = line[at + "address=".len()..].split_whitespace().next().unwrap_or("").to_string();
+                    let _ = found.send(addr);
+                }
+            }
+        });
+        // up, or already ended (a job that aborts its server at once: nothing
+        // listens on a freed port)
+        let addr = match address.recv_timeout(Duration::from_secs(20)) {
+            Ok(a) => a.parse().unwrap_or_else(|e| panic!("the server's address {a:?}: {e}")),
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                format!("127.0.0.1:{}", free_port()).parse().unwrap()
+            }
+            Err(e) => panic!("the server did not come up: {e}"),
+        };
+        Node { child, addr }
     }
 
     /// `VmRSS` or `VmHWM` (peak) of the server process, in bytes.

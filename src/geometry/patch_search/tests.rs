@@ -69,6 +69,34 @@ fn meeting_spheres_give_the_exhaustive_pairs() {
     }
 }
 
+/// A state searched in full is answered again from that search (a flow's trial
+/// step, searched by its contact rule and then by its check); a state moved
+/// by a hair is searched; a caller's answer is kept until forgotten.
+#[test]
+fn a_state_searched_in_full_is_answered_without_a_search() {
+    let a = icosphere([-0.95, 0.0, 0.0], 1.0, 3).unwrap();
+    let b = icosphere([0.95, 0.02, 0.0], 1.0, 3).unwrap();
+    let two = surface_union(&[a, b]).unwrap();
+    let (x, t) = (two.positions().to_vec(), two.elements().to_vec());
+    let mut search = PatchSearch::default();
+    let pairs = all_pairs(&mut search, &x, &t);
+    assert!(pairs.len() > 10, "{}", pairs.len());
+    search.tested = 0;
+    assert_eq!(search.intersections(&x, &t, usize::MAX), pairs);
+    assert_eq!(search.intersections(&x, &t, 1), pairs[..1]);
+    assert_eq!(search.tested, 0, "answered without a search");
+    let mut y = x.clone();
+    y[0][0] += 1e-9;
+    all_pairs(&mut search, &y, &t);
+    assert!(search.tested > 0, "a moved state is searched");
+    search.remember(&x, &t, vec![(1, 3)]);
+    assert_eq!(search.intersections(&x, &t, usize::MAX), [(1, 3)]);
+    search.forget();
+    let mut again = search.intersections(&x, &t, usize::MAX);
+    again.sort_unstable();
+    assert_eq!(again, pairs);
+}
+
 /// A sphere jittered by up to 0.3 to 3 mean edges (folds, triangles flipped,
 /// sheets through each other), and a flattened ellipsoid pushed through itself:
 /// the same pairs as the exhaustive search in every case.
