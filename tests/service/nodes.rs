@@ -42,7 +42,10 @@ impl Node {
         let (found, address) = std::sync::mpsc::channel();
         std::thread::spawn(move || {
             use std::io::BufRead;
-            for line in std::io::BufReader::new(logs).lines().map_while(Result::ok) {
+            let (mut logs, mut bytes) = (std::io::BufReader::new(logs), Vec::new());
+            while logs.read_until(b'\n', &mut bytes).is_ok_and(|n| n > 0) {
+                let line = String::from_utf8_lossy(&bytes).into_owned();
+                bytes.clear();
                 if let Some(at) = line.find("shapeflow serving").and_then(|i| line[i..].find("address=").map(|j| i + j))
                 {
                     let addr = line[at + "address=".len()..].split_whitespace().next().unwrap_or("").to_string();
