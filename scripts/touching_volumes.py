@@ -59,6 +59,33 @@ def pairs_volume(seed, n=64, count=8):
     return np.clip(np.round(img), 0, 255).astype(np.uint8), labels
 
 
+def singles_volume(seed, n=64, count=8):
+    """`count` single objects in an `n`³ volume, none touching another: randomly
+    turned ellipsoids (semi-axes 4.5–10 voxels, up to 2.2 to 1) and, for every
+    third, a bean (an ellipsoid with a ball cut out of one side, 1.5–3 voxels
+    deep), with the pairs' noise. Every object must stay one."""
+    rng = np.random.default_rng(1000 + seed)
+    z, y, x = np.mgrid[0:n, 0:n, 0:n] + 0.5
+    labels = np.zeros((n, n, n), np.uint16)
+    cells = [(i, j, k) for i in range(2) for j in range(2) for k in range(2)][:count]
+    cell = n / 2
+    for c, (i, j, k) in enumerate(cells):
+        axes = np.sort(rng.uniform(4.5, 10.0, 3))
+        axes[0] = max(axes[0], axes[2] / 2.2)
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        centre = np.array([(i + 0.5) * cell, (j + 0.5) * cell, (k + 0.5) * cell]) + rng.uniform(-1, 1, 3)
+        p = np.stack([x - centre[0], y - centre[1], z - centre[2]], -1) @ q
+        inside = ((p / axes) ** 2).sum(-1) < 1
+        if c % 3 == 2:
+            depth = rng.uniform(1.5, 3.0)
+            r = axes[2] * 0.6
+            dent = np.array([0.0, axes[1] + r - depth, 0.0])
+            inside &= ((p - dent) ** 2).sum(-1) > r * r
+        labels[inside] = c + 1
+    img = 60 + 110 * (labels > 0) + 30 * rng.standard_normal(labels.shape)
+    return np.clip(np.round(img), 0, 255).astype(np.uint8), labels
+
+
 def nuclei_volume():
     data = ROOT / "target" / "compare-data"
     data.mkdir(parents=True, exist_ok=True)
@@ -131,10 +158,12 @@ def main():
     ap.add_argument("--bin", default=str(ROOT / "target" / "release" / "shapeflow"))
     ap.add_argument("--seeds", default="1,2,3,4")
     ap.add_argument("--spec", default="{}", help="extra spec sections, as JSON")
+    ap.add_argument("--singles", default="", help="seeds of volumes of single objects, e.g. 1,2")
     ap.add_argument("--no-nuclei", action="store_true")
     args = ap.parse_args()
     extra = json.loads(args.spec)
     cases = [(f"8 touching pairs, seed {s} (64³)", *pairs_volume(int(s))) for s in args.seeds.split(",") if s]
+    cases += [(f"8 single objects, seed {s} (64³)", *singles_volume(int(s))) for s in args.singles.split(",") if s]
     if not args.no_nuclei:
         n = nuclei_volume()
         if n is not None:

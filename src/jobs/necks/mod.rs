@@ -17,6 +17,8 @@ use crate::imaging::rasterize_curve_window;
 
 mod surfaces;
 
+pub use surfaces::SURFACE_NECKS;
+
 /// How the contours of a 2D segmentation are split after the flow converged.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NeckSplit {
