@@ -13,13 +13,26 @@
 use crate::geometry::{curves_from_loops, segment_cycles, CurveMesh, Point};
 use crate::imaging::contours::{polygon_loop, zero_level};
 use crate::imaging::labels::{distance_transform, label_sizes, split_touching, Necks};
-use crate::imaging::rasterize_curve_window;
+use crate::imaging::{rasterize_curve_window, Grid};
 
 mod surfaces;
 
 pub use surfaces::SURFACE_NECKS;
 
-/// How the contours of a 2D segmentation are split after the flow converged.
+/// The necks that split touching objects in the initial shape
+/// ([`split_at_ridges`](crate::imaging::labels::split_at_ridges)) and the
+/// contours after convergence: at least 1.5 samples and 18 % of the smaller
+/// side's inscribed radius below it (two equal discs whose centres are at least
+/// 1.15 radii apart), between sides whose inscribed radii differ by at most 2.5
+/// times. Measured: the 20 splits of the
+/// nuclei image, all between two annotated nuclei, have depths of 21–66 % and
+/// ratios up to 1.8; the false cuts of a horse's silhouette are at depths of 6 %
+/// (its head) and 16 % (its body), and at ratios of 2.8 (its tail) and 6.6–7.6
+/// (its hooves).
+pub const NECKS: Necks = Necks { depth: 1.5, relative_depth: 0.18, size_ratio: 2.5 };
+
+/// How the contours (2D) or surfaces (3D) of a segmentation are split after the
+/// flow converged.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NeckSplit {
     /// The image's samples along `x`, `y` and `z` (1 for a 2D image).
@@ -31,6 +44,13 @@ pub struct NeckSplit {
 }
 
 impl NeckSplit {
+    /// The split on `grid`'s samples: contours by [`NECKS`], surfaces by
+    /// [`SURFACE_NECKS`] (measured on the exact distance to the surface).
+    pub fn for_grid(grid: &Grid, min_size: usize) -> Self {
+        let necks = if grid.dimension == 3 { SURFACE_NECKS } else { NECKS };
+        NeckSplit { dims: grid.dims, necks, min_size }
+    }
+
     /// `mesh` with every object that has a neck by [`NeckSplit::necks`] replaced by
     /// one traced curve per part (its holes as inner curves), or `None` where no
     /// object splits. The other objects' curves are kept as they are.
@@ -197,8 +217,6 @@ fn pinched(labels: &[u32], dist: &[f64], window: [usize; 4], dims: [usize; 2], a
 mod tests {
     use super::*;
     use crate::geometry::polygon;
-
-    const NECKS: Necks = Necks { depth: 1.5, relative_depth: 0.18, size_ratio: 2.5 };
 
     /// A closed curve `r(θ)` around `(cx, cy)` (pixels) on a 100² image, in the
     /// unit box.

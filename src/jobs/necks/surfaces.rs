@@ -2,7 +2,7 @@
 //!
 //! Each object of the converged surfaces (a component with its cavities) is
 //! sampled on the image's grid as its signed distance; its inside samples are
-//! split by the initial shape's rule ([`split_at_ridges`]), on the exact distance
+//! split by [`SURFACE_NECKS`] ([`split_at_ridges`]), on the exact distance
 //! to the surface ([`distance_inside`]: a voxel distance transform measures in
 //! steps of the grid, which can put a neck just under the rule), where the cut is a
 //! notch all around its rim ([`notched`]). An object that splits is traced again,
@@ -265,9 +265,6 @@ mod tests {
 
     const L: f64 = 64.0;
 
-    /// The initial shape's rule ([`crate::jobs::prepare`]'s `NECKS`).
-    const INITIAL_NECKS: Necks = Necks { depth: 1.5, relative_depth: 0.18, size_ratio: 2.5 };
-
     fn split_by(necks: Necks) -> NeckSplit {
         NeckSplit { dims: [64, 64, 64], necks, min_size: 64 }
     }
@@ -300,7 +297,7 @@ mod tests {
             ball(p, [25.0, 32.0, 32.0], 8.0).max(ball(p, [39.0, 32.0, 32.0], 8.0))
         });
         assert_eq!(union.component_labels().1, 1);
-        assert!(split_by(INITIAL_NECKS).split_surfaces(&union, |m| m).is_some());
+        assert!(split_by(super::super::NECKS).split_surfaces(&union, |m| m).is_some());
         let (parts, cuts) = split_by(SURFACE_NECKS).split_surfaces(&union, |m| m).expect("the union splits");
         assert_eq!(cuts.len(), 1);
         assert_eq!(cuts[0].parts, 2);
@@ -321,7 +318,7 @@ mod tests {
         let (a, b) = ([26.0, 32.0, 32.0], [35.2, 32.0, 32.0]);
         let union = traced([16.0, 22.0, 22.0], [113, 81, 81], |p| ball(p, a, 7.6).max(ball(p, b, 4.5)));
         assert_eq!(union.component_labels().1, 1);
-        assert!(split_by(INITIAL_NECKS).split_surfaces(&union, |m| m).is_none());
+        assert!(split_by(super::super::NECKS).split_surfaces(&union, |m| m).is_none());
         let (parts, cuts) = split_by(SURFACE_NECKS).split_surfaces(&union, |m| m).expect("the union splits");
         assert_eq!((cuts.len(), cuts[0].parts), (1, 2));
         // the neck's plane: 6.64 from a

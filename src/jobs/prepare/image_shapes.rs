@@ -6,21 +6,11 @@ use super::checks::{curve, positive, surface};
 use crate::geometry::AnyMesh;
 use crate::geometry::{self, Mesh, Point};
 pub(super) use crate::imaging::labels::RegionWeights;
-use crate::imaging::labels::{
-    clean_mask, components, distance_transform, reopen_holes, separate, split_at_ridges, Necks,
-};
+use crate::imaging::labels::{clean_mask, components, distance_transform, reopen_holes, separate, split_at_ridges};
 use crate::imaging::{contours, isosurface, Grid};
+use crate::jobs::necks::NECKS;
 use crate::jobs::spec::SpecError;
 
-/// The necks that split touching objects ([`split_at_ridges`]): at least 1.5
-/// samples and 18 % of the smaller side's inscribed radius below it (two equal
-/// discs whose centres are at least 1.15 radii apart), between sides whose
-/// inscribed radii differ by at most 2.5 times. Measured: the 20 splits of the
-/// nuclei image, all between two annotated nuclei, have depths of 21–66 % and
-/// ratios up to 1.8; the false cuts of a horse's silhouette are at depths of 6 %
-/// (its head) and 16 % (its body), and at ratios of 2.8 (its tail) and 6.6–7.6
-/// (its hooves).
-pub(super) const NECKS: Necks = Necks { depth: 1.5, relative_depth: 0.18, size_ratio: 2.5 };
 /// Holes of less than this fraction of the object around them are filled in the
 /// initial shape (the flow does not open new holes) unless their samples fit the
 /// background better than the object by more than the length of their boundary

@@ -5,14 +5,14 @@
 //! that the results report.
 
 use super::checks::positive;
-use super::image_shapes::{inscribed, seeds, threshold_mesh, threshold_objects, RegionWeights, NECKS};
+use super::image_shapes::{inscribed, seeds, threshold_mesh, threshold_objects, RegionWeights};
 use super::inputs::load_image;
 use super::preprocess::{preprocess, smoothed_away, Preprocessed};
 use super::ProblemKind;
 use crate::geometry::AnyMesh;
 use crate::imaging::labels::territories;
 use crate::imaging::{EdgeField, Grid, Plane};
-use crate::jobs::necks::{NeckSplit, SURFACE_NECKS};
+use crate::jobs::necks::NeckSplit;
 use crate::jobs::spec::bounds::{CHANNEL, MIN_SIZE, TIME_POINT, WEIGHT};
 use crate::jobs::spec::{
     BackgroundModel, InitialSpec, InscribedShape, MeansKind, Polarity, SeedsShape, SegmentationModel, SegmentationSpec,
@@ -162,14 +162,10 @@ pub(super) fn prepare_segmentation(
         voxel_origin: (d == 3).then_some(grid.placement.origin),
     };
     // the converged contours (surfaces) of separate objects are split where the
-    // flow brought out a neck: contours by the initial shape's rule, surfaces by
-    // theirs on the exact distance
+    // flow brought out a neck
     let separate = matches!(&problem, ProblemKind::ChanVese(cv) if cv.separate);
-    let neck_split = (separate && spec.split_touching.unwrap_or(true)).then(|| NeckSplit {
-        dims: grid.dims,
-        necks: if d == 3 { SURFACE_NECKS } else { NECKS },
-        min_size: min_size.ceil() as usize,
-    });
+    let neck_split =
+        (separate && spec.split_touching.unwrap_or(true)).then(|| NeckSplit::for_grid(&grid, min_size.ceil() as usize));
     Ok(PreparedSegmentation { grid, problem, second_stage, edges, mesh: start.mesh, setup, neck_split })
 }
 
