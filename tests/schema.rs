@@ -199,6 +199,9 @@ fn the_schema_bounds_and_rules_are_the_parser_ones() {
         (with(&segmentation, "/problem/time_point", json!(-1)), false, "problem.time_point"),
         (with(&segmentation, "/problem/time_point", json!(1_000_001)), false, "problem.time_point"),
         (with(&segmentation, "/problem/time_point", json!(0)), true, ""),
+        (with(&segmentation, "/problem/min_separation", json!(0.5)), false, "problem.min_separation"),
+        (with(&segmentation, "/problem/min_separation", json!(10_001.0)), false, "problem.min_separation"),
+        (with(&segmentation, "/problem/min_separation", json!(1.0)), true, ""),
         (with(&curve, "/output", json!({"checkpoint_every": 0})), false, "output.checkpoint_every"),
         (with(&curve, "/output", json!({"checkpoint_every": 1})), true, ""),
         // rules between fields that the schema states: only segmentation may leave

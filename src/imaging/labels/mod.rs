@@ -8,11 +8,13 @@
 
 mod distance;
 mod holes;
+mod peaks;
 mod territory;
 mod watershed;
 
 pub use distance::distance_transform;
 pub use holes::{reopen_holes, RegionWeights};
+pub use peaks::split_at_peaks;
 pub use territory::territories;
 pub use watershed::{flood_from_cores, separate, split_at_ridges, split_touching, Necks};
 

@@ -112,9 +112,18 @@ pub fn flood_from_cores(mask: &[bool], d: &[f64], dims: Dims, labels: &[u32], co
             saddle[l as usize] = saddle[l as usize].max(d[p]);
         }
     }
-    let mut out: Vec<u32> = (0..labels.len())
+    let cores: Vec<u32> = (0..labels.len())
         .map(|p| if labels[p] != 0 && d[p] > saddle[labels[p] as usize] { labels[p] } else { 0 })
         .collect();
+    flood_from_markers(mask, d, dims, cores)
+}
+
+/// The samples of `mask` flooded from the labelled samples of `out` (the
+/// markers) in order of decreasing distance `d`, every sample taking the label of
+/// the neighbour it is reached from (a marker-controlled watershed of `-d`). A
+/// component of `mask` with no marker stays 0.
+pub(super) fn flood_from_markers(mask: &[bool], d: &[f64], dims: Dims, mut out: Vec<u32>) -> Vec<u32> {
+    let mut nb = Vec::with_capacity(6);
     // a max-heap of (distance, sample) on the flood's front
     let mut front = std::collections::BinaryHeap::new();
     let key = |p: usize| (ordered(d[p]), std::cmp::Reverse(p));

@@ -6,7 +6,9 @@ use super::checks::{curve, positive, surface};
 use crate::geometry::AnyMesh;
 use crate::geometry::{self, Mesh, Point};
 pub(super) use crate::imaging::labels::RegionWeights;
-use crate::imaging::labels::{clean_mask, components, distance_transform, reopen_holes, separate, split_at_ridges};
+use crate::imaging::labels::{
+    clean_mask, components, distance_transform, reopen_holes, separate, split_at_peaks, split_at_ridges,
+};
 use crate::imaging::{contours, isosurface, Grid};
 use crate::jobs::necks::NECKS;
 use crate::jobs::spec::SpecError;
@@ -55,8 +57,21 @@ pub(super) struct ThresholdObjects {
     pub background: f64,
 }
 
+/// How the initial shape splits touching objects (`problem.split_touching`,
+/// `problem.min_separation`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum TouchingSplit {
+    /// Each component of the threshold is one object.
+    None,
+    /// At necks ([`NECKS`]).
+    Necks,
+    /// At every maximum of the distance transform this far (samples) from every
+    /// higher one of its component ([`split_at_peaks`]).
+    Peaks(f64),
+}
+
 /// The main threshold with specks dropped and small holes filled, touching objects
-/// split, and the filled holes reopened that fit `data` outside the objects
+/// split (`split`), and the filled holes reopened that fit `data` outside the objects
 /// better, by the region energy of `weights`; then the components of the dim
 /// threshold that contain no sample of the main mask (dim objects the main
 /// threshold misses entirely) as objects of their own; one sample of background
@@ -67,18 +82,18 @@ pub(super) fn threshold_objects(
     weights: RegionWeights,
     levels: &Levels,
     min_size: f64,
-    split: bool,
+    split: TouchingSplit,
 ) -> ThresholdObjects {
     let min = min_size.ceil() as usize;
     let main: Vec<bool> = s.values.iter().map(|&v| levels.inside(v, levels.main)).collect();
     let bare = clean_mask(&main, s.dims, min, 0.0);
     let main = clean_mask(&main, s.dims, min, HOLE_FRACTION);
-    let (mut labels, mut count) = if split {
-        let dist = distance_transform(&main, s.dims, [1.0; 3]);
+    let dist = || distance_transform(&main, s.dims, [1.0; 3]);
+    let (mut labels, mut count) = match split {
         // the cut along the ridge of each neck, not around the smaller side's outer layers
-        split_at_ridges(&main, &dist, s.dims, &NECKS)
-    } else {
-        components(&main, s.dims)
+        TouchingSplit::Necks => split_at_ridges(&main, &dist(), s.dims, &NECKS),
+        TouchingSplit::Peaks(separation) => split_at_peaks(&main, &dist(), s.dims, separation, min),
+        TouchingSplit::None => components(&main, s.dims),
     };
     // the holes are reopened after the split, which judges the objects whole
     let main = reopen_holes(&main, &bare, s.dims, &data.values, weights);

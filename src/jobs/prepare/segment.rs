@@ -5,7 +5,7 @@
 //! that the results report.
 
 use super::checks::positive;
-use super::image_shapes::{inscribed, seeds, threshold_mesh, threshold_objects, RegionWeights};
+use super::image_shapes::{inscribed, seeds, threshold_mesh, threshold_objects, RegionWeights, TouchingSplit};
 use super::inputs::load_image;
 use super::preprocess::{preprocess, smoothed_away, Preprocessed};
 use super::ProblemKind;
@@ -13,7 +13,7 @@ use crate::geometry::AnyMesh;
 use crate::imaging::labels::territories;
 use crate::imaging::{EdgeField, Grid, Plane};
 use crate::jobs::necks::NeckSplit;
-use crate::jobs::spec::bounds::{CHANNEL, MIN_SIZE, TIME_POINT, WEIGHT};
+use crate::jobs::spec::bounds::{CHANNEL, MIN_SEPARATION, MIN_SIZE, TIME_POINT, WEIGHT};
 use crate::jobs::spec::{
     BackgroundModel, InitialSpec, InscribedShape, MeansKind, Polarity, SeedsShape, SegmentationModel, SegmentationSpec,
     SpecError, ThresholdShape,
@@ -195,7 +195,11 @@ fn image_initial(
     let none = ImageInitial { mesh: None, objects: 0, cut: Vec::new(), background: None, territories: None };
     Ok(match initial {
         None | Some(InitialSpec::Threshold(ThresholdShape {})) => {
-            let split = spec.split_touching.unwrap_or(true);
+            let split = match (spec.split_touching.unwrap_or(true), spec.min_separation) {
+                (false, _) => TouchingSplit::None,
+                (true, None) => TouchingSplit::Necks,
+                (true, Some(s)) => TouchingSplit::Peaks(MIN_SEPARATION.check("problem.min_separation", s)?),
+            };
             let objects = threshold_objects(&pre.smoothed, &pre.data, region, &pre.levels, min_size, split);
             let territories = (grid.dimension == 3 && objects.count > 1)
                 .then(|| Territories::new(territories(&objects.labels, pre.smoothed.dims)));

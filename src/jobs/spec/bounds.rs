@@ -54,6 +54,8 @@ pub const LEVEL: Bound<f64> = Bound { min: 0.0, max: 1.0 };
 pub const PERCENTILE: Bound<f64> = Bound { min: 0.0, max: 100.0 };
 /// `problem.min_size` (pixels or voxels).
 pub const MIN_SIZE: Bound<f64> = Bound { min: 0.0, max: 1e9 };
+/// `problem.min_separation` (pixels or voxels).
+pub const MIN_SEPARATION: Bound<f64> = Bound { min: 1.0, max: 1e4 };
 
 #[cfg(test)]
 mod tests {

@@ -1,7 +1,7 @@
 //! `problem` of type `segmentation`: the image, the model and the automatic
 //! choices a user may override, with their documented defaults.
 
-use super::bounds::{CHANNEL, LEVEL, MIN_SIZE, PERCENTILE, SIGMA, TIME_POINT, WEIGHT};
+use super::bounds::{CHANNEL, LEVEL, MIN_SEPARATION, MIN_SIZE, PERCENTILE, SIGMA, TIME_POINT, WEIGHT};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -140,6 +140,19 @@ pub struct SegmentationSpec {
     /// goes on from the parts. Default true.
     #[serde(default)]
     pub split_touching: Option<bool>,
+    /// (Addition) the least distance, in pixels (voxels), between the centres of
+    /// two touching objects, for objects that touch without a clear neck (densely
+    /// packed nuclei): the automatic initial shape then puts one object at every
+    /// maximum of the thresholded image's distance transform that no higher one
+    /// of its component comes nearer than this, whatever the neck between them (a
+    /// marker watershed, as scikit-image's `peak_local_max(min_distance=…)` with
+    /// `watershed`), instead of splitting at necks. About the radius of the
+    /// smallest objects: an elongated object stays one when this is at least its
+    /// smaller radius. Default: none (split at necks). With `split_touching`
+    /// false it is not used.
+    #[serde(default)]
+    #[schemars(range(min = MIN_SEPARATION.min, max = MIN_SEPARATION.max))]
+    pub min_separation: Option<f64>,
     /// (Addition, Chan–Vese with per-object means) whether objects merge where
     /// their contours meet; default false: objects that start separate stay the
     /// objects they are (curves: a trial step that would make them overlap is
