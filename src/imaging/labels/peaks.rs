@@ -41,31 +41,30 @@ pub fn split_at_peaks(mask: &[bool], d: &[f64], dims: Dims, separation: f64, min
             markers.push(p);
         }
     }
-    // parts below the least size hand their samples to their neighbours
+    // parts below the least size hand their samples to their neighbours, all of a
+    // component's at once but its largest; the others only grow, so that this
+    // ends in a few rounds
     let mut keep = vec![true; markers.len()];
     loop {
         let (labels, count) = flood(mask, d, dims, &markers, &keep);
         let sizes = label_sizes(&labels, count);
-        let mut per_component: HashMap<u32, usize> = HashMap::new();
-        for (m, _) in markers.iter().zip(&keep).filter(|(_, &k)| k) {
-            *per_component.entry(component[*m]).or_default() += 1;
-        }
-        // the smallest part of a component with others goes first, one per component and round
-        let mut dropped: HashMap<u32, (usize, usize)> = HashMap::new();
-        for (i, &m) in markers.iter().enumerate() {
-            if !keep[i] || per_component[&component[m]] < 2 {
-                continue;
-            }
+        let mut largest: HashMap<u32, (usize, usize)> = HashMap::new();
+        for (i, &m) in markers.iter().enumerate().filter(|&(i, _)| keep[i]) {
             let size = sizes[labels[m] as usize];
-            if size < min_size && dropped.get(&component[m]).is_none_or(|&(_, s)| size < s) {
-                dropped.insert(component[m], (i, size));
+            let best = largest.entry(component[m]).or_insert((i, size));
+            if size > best.1 {
+                *best = (i, size);
             }
         }
-        if dropped.is_empty() {
-            return (labels, count);
+        let mut dropped = false;
+        for (i, &m) in markers.iter().enumerate() {
+            if keep[i] && sizes[labels[m] as usize] < min_size && largest[&component[m]].0 != i {
+                keep[i] = false;
+                dropped = true;
+            }
         }
-        for (i, _) in dropped.into_values() {
-            keep[i] = false;
+        if !dropped {
+            return (labels, count);
         }
     }
 }
@@ -82,10 +81,11 @@ fn flood(mask: &[bool], d: &[f64], dims: Dims, markers: &[usize], keep: &[bool])
 }
 
 /// The largest value of `d` within `reach` samples along each axis (a cube), by
-/// one pass per axis.
+/// one pass per axis, each a sliding maximum over a queue of decreasing values
+/// (linear in the samples whatever `reach`).
 fn max_filter(d: &[f64], dims: Dims, reach: usize) -> Vec<f64> {
     let mut out = d.to_vec();
-    let mut line = Vec::new();
+    let (mut line, mut queue) = (Vec::new(), std::collections::VecDeque::new());
     for (axis, stride) in [(0, 1), (1, dims[0]), (2, dims[0] * dims[1])] {
         let n = dims[axis];
         if n < 2 || reach == 0 {
@@ -94,9 +94,20 @@ fn max_filter(d: &[f64], dims: Dims, reach: usize) -> Vec<f64> {
         for start in (0..d.len()).filter(|&p| (p / stride) % n == 0) {
             line.clear();
             line.extend((0..n).map(|i| out[start + i * stride]));
-            for i in 0..n {
-                let (lo, hi) = (i.saturating_sub(reach), (i + reach).min(n - 1));
-                out[start + i * stride] = line[lo..=hi].iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            queue.clear();
+            // the window of sample i is [i - reach, i + reach]; j enters it at i = j - reach
+            for j in 0..n + reach {
+                if j < n {
+                    while queue.back().is_some_and(|&b: &usize| line[b] <= line[j]) {
+                        queue.pop_back();
+                    }
+                    queue.push_back(j);
+                }
+                let Some(i) = j.checked_sub(reach) else { continue };
+                while queue.front().is_some_and(|&f| f + reach < i) {
+                    queue.pop_front();
+                }
+                out[start + i * stride] = line[*queue.front().expect("the window holds sample i")];
             }
         }
     }
@@ -155,6 +166,27 @@ mod tests {
         // below it (maxima of the voxels' distance along its axis)
         assert_eq!(split_at_peaks(&ellipsoid, &d, dims, 6.0, 64).1, 1);
         assert_eq!(split_at_peaks(&ellipsoid, &d, dims, 4.0, 64).1, 2);
+    }
+
+    /// The sliding maximum is the cube's maximum, near the edges too.
+    #[test]
+    fn the_max_filter_is_the_maximum_over_the_cube() {
+        let dims = [7, 5, 4];
+        let d: Vec<f64> = (0..140).map(|p| ((p * 37 + 11) % 23) as f64).collect();
+        for reach in [1, 2, 9] {
+            let got = max_filter(&d, dims, reach);
+            for p in 0..d.len() {
+                let c = [p % 7, (p / 7) % 5, p / 35];
+                let want = (0..d.len())
+                    .filter(|&q| {
+                        let e = [q % 7, (q / 7) % 5, q / 35];
+                        (0..3).all(|a| c[a].abs_diff(e[a]) <= reach)
+                    })
+                    .map(|q| d[q])
+                    .fold(f64::NEG_INFINITY, f64::max);
+                assert_eq!(got[p], want, "sample {p}, reach {reach}");
+            }
+        }
     }
 
     /// Balls closer than the separation but not touching are each an object:
