@@ -147,9 +147,10 @@ pub struct SegmentationSpec {
     /// of its component comes nearer than this, whatever the neck between them (a
     /// marker watershed, as scikit-image's `peak_local_max(min_distance=…)` with
     /// `watershed`), instead of splitting at necks. About the radius of the
-    /// smallest objects: an elongated object stays one when this is at least its
-    /// smaller radius. Default: none (split at necks). With `split_touching`
-    /// false it is not used.
+    /// smallest objects; an elongated object is cut where its ridge has a second
+    /// maximum farther than this (a voxel ellipsoid of aspect 2.2 stayed one from
+    /// its smaller radius on). Default: none (split at necks). With
+    /// `split_touching` false it is not used.
     #[serde(default)]
     #[schemars(range(min = MIN_SEPARATION.min, max = MIN_SEPARATION.max))]
     pub min_separation: Option<f64>,
