@@ -119,16 +119,22 @@ mod tests {
     use super::super::{distance_transform, split_touching, Necks};
     use super::*;
 
-    /// The samples of an `n`³ grid whose centres are `inside`.
-    fn solid(n: usize, inside: impl Fn([f64; 3]) -> bool) -> Vec<bool> {
-        (0..n * n * n).map(|p| inside([p % n, (p / n) % n, p / (n * n)].map(|c| c as f64 + 0.5))).collect()
+    /// The tests' grid: 32³ samples.
+    const N: usize = 32;
+    const DIMS: Dims = [N, N, N];
+
+    /// The samples of the grid whose centres are `inside`, and their distance
+    /// transform.
+    fn solid(inside: impl Fn([f64; 3]) -> bool) -> (Vec<bool>, Vec<f64>) {
+        let m: Vec<bool> =
+            (0..N * N * N).map(|p| inside([p % N, (p / N) % N, p / (N * N)].map(|c| c as f64 + 0.5))).collect();
+        let d = distance_transform(&m, DIMS, [1.0; 3]);
+        (m, d)
     }
 
-    /// A mask of the union of balls `(x, y, z, r)` on an `n`³ grid.
-    fn balls(n: usize, balls: &[(f64, f64, f64, f64)]) -> Vec<bool> {
-        solid(n, |x| {
-            balls.iter().any(|b| (x[0] - b.0).powi(2) + (x[1] - b.1).powi(2) + (x[2] - b.2).powi(2) < b.3 * b.3)
-        })
+    /// The union of balls `(x, y, z, r)` on the grid, and its distance transform.
+    fn balls(balls: &[(f64, f64, f64, f64)]) -> (Vec<bool>, Vec<f64>) {
+        solid(|x| balls.iter().any(|b| (x[0] - b.0).powi(2) + (x[1] - b.1).powi(2) + (x[2] - b.2).powi(2) < b.3 * b.3))
     }
 
     /// Two balls of radius 7 whose centres are 7 apart: a neck only 13 % below
@@ -137,10 +143,8 @@ mod tests {
     /// a prolate ellipsoid stay one.
     #[test]
     fn overlapping_balls_split_at_their_maxima_and_one_ball_does_not() {
-        let n = 32;
-        let dims = [n, n, n];
-        let m = balls(n, &[(12.5, 16.0, 16.0, 7.0), (19.5, 16.0, 16.0, 7.0)]);
-        let d = distance_transform(&m, dims, [1.0; 3]);
+        let (n, dims) = (N, DIMS);
+        let (m, d) = balls(&[(12.5, 16.0, 16.0, 7.0), (19.5, 16.0, 16.0, 7.0)]);
         let (labels, count) = split_at_peaks(&m, &d, dims, 6.0, 64);
         // the initial shape's rule (`jobs::necks::NECKS`) keeps them whole
         let necks = Necks { depth: 1.5, relative_depth: 0.18, size_ratio: 2.5 };
@@ -156,12 +160,11 @@ mod tests {
         assert!(wrong * 100 < m.iter().filter(|&&v| v).count(), "{wrong}");
         // farther apart than the separation asks: one object
         assert_eq!(split_at_peaks(&m, &d, dims, 8.0, 64).1, 1);
-        let one = balls(n, &[(16.0, 16.0, 16.0, 9.0)]);
-        assert_eq!(split_at_peaks(&one, &distance_transform(&one, dims, [1.0; 3]), dims, 6.0, 64).1, 1);
-        let ellipsoid = solid(n, |x| {
+        let (one, d) = balls(&[(16.0, 16.0, 16.0, 9.0)]);
+        assert_eq!(split_at_peaks(&one, &d, dims, 6.0, 64).1, 1);
+        let (ellipsoid, d) = solid(|x| {
             ((x[0] - 16.0) / 13.0).powi(2) + ((x[1] - 16.0) / 6.0).powi(2) + ((x[2] - 16.0) / 6.0).powi(2) < 1.0
         });
-        let d = distance_transform(&ellipsoid, dims, [1.0; 3]);
         // of aspect 2.2: one object at a separation of its smaller radius, two
         // below it (maxima of the voxels' distance along its axis)
         assert_eq!(split_at_peaks(&ellipsoid, &d, dims, 6.0, 64).1, 1);
@@ -194,16 +197,12 @@ mod tests {
     /// the least size goes to its neighbour.
     #[test]
     fn every_component_keeps_an_object_and_small_parts_go() {
-        let n = 32;
-        let dims = [n, n, n];
-        let m = balls(n, &[(9.0, 16.0, 16.0, 5.0), (20.0, 16.0, 16.0, 5.0)]);
-        let d = distance_transform(&m, dims, [1.0; 3]);
-        assert_eq!(components(&m, dims).1, 2);
-        assert_eq!(split_at_peaks(&m, &d, dims, 20.0, 8).1, 2);
+        let (m, d) = balls(&[(9.0, 16.0, 16.0, 5.0), (20.0, 16.0, 16.0, 5.0)]);
+        assert_eq!(components(&m, DIMS).1, 2);
+        assert_eq!(split_at_peaks(&m, &d, DIMS, 20.0, 8).1, 2);
         // a small bump on a ball: its own maximum, a part below the least size
-        let bump = balls(n, &[(14.0, 16.0, 16.0, 8.0), (23.0, 16.0, 16.0, 2.5)]);
-        let d = distance_transform(&bump, dims, [1.0; 3]);
-        let (labels, count) = split_at_peaks(&bump, &d, dims, 3.0, 200);
+        let (bump, d) = balls(&[(14.0, 16.0, 16.0, 8.0), (23.0, 16.0, 16.0, 2.5)]);
+        let (labels, count) = split_at_peaks(&bump, &d, DIMS, 3.0, 200);
         assert_eq!(count, 1);
         assert!(labels.iter().zip(&bump).all(|(&l, &b)| (l == 1) == b));
     }
