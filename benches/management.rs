@@ -300,6 +300,21 @@ fn main() {
     row(format!("sphere, {n}, patches cut anew (a new connectivity)"), t_check, t_cut, " | | | ".into());
     let flow = format!("ellipsoid flow, {n}, mean of {} states (best of three passes)", states.len());
     row(flow, t_flow_exhaustive, t_flow, of(flow_counts));
+    // with merges (surgery), each trial's contact of the curved sheets too
+    let t_gap = time_it(0.5, || _ = black_box(shapeflow::geometry::curved_sheet_gap(&x, &t)));
+    let gap_flow =
+        states.iter().map(|state| time_it(0.1, || _ = black_box(shapeflow::geometry::curved_sheet_gap(state, &t))));
+    let t_gap_flow = gap_flow.sum::<f64>() / states.len() as f64;
+    println!();
+    println!("| merging flows, {n} vertices | curved sheets' gap (ms) | gap / step |");
+    println!("|---|---:|---:|");
+    println!("| sphere | {:.1} | {:.2} |", t_gap * 1e3, t_gap / t_step);
+    println!(
+        "| ellipsoid flow, mean of {} states | {:.1} | {:.2} |",
+        states.len(),
+        t_gap_flow * 1e3,
+        t_gap_flow / t_step
+    );
     println!();
     println!(
         "| ellipsoid flow, {n} vertices | most motion / edge | watch (ms) | watch / step | certificates drawn | \

@@ -275,28 +275,43 @@ impl<'p, const D: usize> Flow<'p, D> {
                 }
             }
             // after the conservation's correction, which moves every vertex
-            if let Some(shorter) = report.retry(rules::intersection(&self.mesh, &candidate, tau, &mut self.search)) {
-                if shorter < super::intersections::CONTACT * s.tau {
-                    // the surfaces are in contact: shorter steps would only creep
-                    // closer, each accepted. They merge if the mesh management
-                    // does merges; else the run ends on the last state before
-                    // (a merged surface that the tidying folded through itself is not taken)
-                    let merged = self.manager.as_mut().and_then(|m| m.merge(&self.mesh));
-                    if let Some(merged) =
-                        merged.filter(|m| super::intersections::surface_intersection(m, &mut self.search).is_none())
-                    {
-                        let at = super::intersections::contact_point(&self.mesh, &candidate, &mut self.search);
-                        self.take_merge(merged, at)?;
-                        report.rejected = None;
-                        report.merged = true;
-                        report.accepted = true;
-                        return Ok(report);
-                    }
+            // and, where the surfaces merge, a contact of their curved sheets
+            let verdict = rules::intersection(&self.mesh, &candidate, tau, &mut self.search);
+            let curved = (verdict == Verdict::Accept)
+                .then(|| self.manager.as_ref().and_then(|m| m.new_contact(&self.mesh, &candidate)))
+                .flatten();
+            let verdict = match curved {
+                Some(_) => Verdict::Retry { tau: 0.5 * tau, rejection: Rejection::Intersection },
+                None => verdict,
+            };
+            if let Some(shorter) = report.retry(verdict) {
+                if shorter >= super::intersections::CONTACT * s.tau {
+                    tau = shorter;
+                    continue;
+                }
+                // the surfaces are in contact: shorter steps would only creep
+                // closer, each accepted. They merge if the mesh management does
+                // merges; else the run ends on the last state before. A contact of
+                // the curved sheets alone that does not merge is taken as a step
+                // (its curved gap is below zero: the flat triangles' rule goes on)
+                // (a merged surface that the tidying folded through itself is not taken)
+                let merged = self.manager.as_mut().and_then(|m| m.merge(&self.mesh));
+                if let Some(merged) =
+                    merged.filter(|m| super::intersections::surface_intersection(m, &mut self.search).is_none())
+                {
+                    let at = curved.unwrap_or_else(|| {
+                        super::intersections::contact_point(&self.mesh, &candidate, &mut self.search)
+                    });
+                    self.take_merge(merged, at)?;
+                    report.rejected = None;
+                    report.merged = true;
+                    report.accepted = true;
+                    return Ok(report);
+                }
+                if curved.is_none() {
                     report.stop = Some(StopReason::TauMin);
                     return Ok(report);
                 }
-                tau = shorter;
-                continue;
             }
             let mut energy = self.problem.energy(&candidate).map_err(|e| FlowError::Problem(e.0))?;
             if energy.is_nan() || energy == f64::NEG_INFINITY {

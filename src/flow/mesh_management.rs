@@ -43,6 +43,15 @@ pub trait MeshManager<const D: usize>: Send {
     fn merge(&mut self, _mesh: &Mesh<D>) -> Option<Mesh<D>> {
         None
     }
+    /// If this manager does merges: where `trial` (which meets itself nowhere)
+    /// brings two sheets into contact on the curved surface that its vertex
+    /// normals describe, while they were apart on `mesh`'s
+    /// ([`crate::geometry::curved_sheet_gap`]). The flat triangles meet only
+    /// once the smooth surfaces overlap by up to the faces' depths; the flow
+    /// takes this as the contact instead.
+    fn new_contact(&self, _mesh: &Mesh<D>, _trial: &Mesh<D>) -> Option<[f64; 3]> {
+        None
+    }
 }
 
 /// Topological surgery of surfaces ([`super::surgery`]): necks cut where the

@@ -6,9 +6,9 @@ use super::mesh_management::{outcome, Managed, MeshManager, Surgery};
 use super::report::SurgeryKind;
 use super::FlowError;
 use crate::geometry::{
-    adapt_surface, adapt_surface_except, closest_facing_vertices, cut_neck, edge_statistics, freeze_around,
-    regularize_surface, revert_new_intersections, surface_union, zip_sheets, PatchSearch, Point, SurfaceMesh,
-    SurfaceRemeshSettings,
+    adapt_surface, adapt_surface_except, closest_facing_vertices, curved_sheet_gap, cut_neck, edge_statistics,
+    freeze_around, regularize_surface, revert_new_intersections, surface_union, zip_sheets, PatchSearch, Point,
+    SurfaceMesh, SurfaceRemeshSettings,
 };
 
 /// Switches and resolved parameters of surface mesh management.
@@ -141,6 +141,16 @@ impl MeshManager<3> for SurfaceManager {
         self.declined = None;
         tracing::info!(components = merged.component_labels().1, vertices = merged.num_vertices(), "surfaces merged");
         Some(merged)
+    }
+
+    fn new_contact(&self, mesh: &SurfaceMesh, trial: &SurfaceMesh) -> Option<[f64; 3]> {
+        self.surgery.filter(|s| s.merge)?;
+        let (gap, at) = curved_sheet_gap(trial.positions(), trial.elements()).filter(|&(g, _)| g < 0.0)?;
+        let before = curved_sheet_gap(mesh.positions(), mesh.elements());
+        before.is_none_or(|(g, _)| g >= 0.0).then(|| {
+            tracing::debug!(gap, ?at, "curved sheets in contact");
+            at
+        })
     }
 }
 

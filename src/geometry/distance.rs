@@ -89,6 +89,20 @@ pub fn segment_distance(p0: P, p1: P, q0: P, q1: P) -> f64 {
     dot(d, d).sqrt()
 }
 
+/// The barycentric coordinates of `q` in the plane of the triangle `t` (of its
+/// projection there; a degenerate triangle gives its first corner).
+pub fn barycentric(q: P, t: &[P; 3]) -> [f64; 3] {
+    let (ab, ac, aq) = (sub(t[1], t[0]), sub(t[2], t[0]), sub(q, t[0]));
+    let (d00, d01, d11) = (dot(ab, ab), dot(ab, ac), dot(ac, ac));
+    let (d20, d21) = (dot(aq, ab), dot(aq, ac));
+    let denom = d00 * d11 - d01 * d01;
+    if denom <= 1e-14 * d00 * d11 {
+        return [1.0, 0.0, 0.0];
+    }
+    let (v, w) = ((d11 * d20 - d01 * d21) / denom, (d00 * d21 - d01 * d20) / denom);
+    [1.0 - v - w, v, w]
+}
+
 /// The distance between two triangles that do not meet: the least of the six
 /// vertex–face and the nine edge–edge distances (two disjoint triangles are
 /// closest at a vertex of one or at a pair of edges). Triangles that meet may get

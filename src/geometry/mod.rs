@@ -24,6 +24,8 @@ mod objects;
 mod patch_search;
 pub use patch_search::PatchSearch;
 pub mod simplex;
+mod surface_gap;
+pub use surface_gap::curved_sheet_gap;
 mod surface_intersections;
 mod surface_remesh;
 mod surface_revert;
