@@ -14,7 +14,10 @@
 //!    included), so does a surface on which two triangles sharing no vertex meet
 //!    (components passing through each other, or one through itself: never
 //!    accepted), checked along the whole step too when it moves a vertex by more
-//!    than a quarter of the mean edge ([`super::intersections`]);
+//!    than a quarter of the mean edge ([`super::intersections`]); where the
+//!    mesh management merges, so does a step that brings two sheets into
+//!    contact on the curved surface of the vertex normals
+//!    ([`MeshManager::new_contact`]), and the sheets merge at the contact;
 //! 3. *backtracking* (paper §3.2): while `J(Γ_{n+1}) > J(Γ_n)`, halve `τ`;
 //! 4. *contact* (paper §4.1, topological changes): a trial step in which two
 //!    curves cross ([`Problem::merges`]) and whose merged shape has a higher energy
@@ -291,10 +294,11 @@ impl<'p, const D: usize> Flow<'p, D> {
                 }
                 // the surfaces are in contact: shorter steps would only creep
                 // closer, each accepted. They merge if the mesh management does
-                // merges; else the run ends on the last state before. A contact of
-                // the curved sheets alone that does not merge is taken as a step
-                // (its curved gap is below zero: the flat triangles' rule goes on)
-                // (a merged surface that the tidying folded through itself is not taken)
+                // merges (a merged surface that the tidying folded through itself
+                // is not taken); else the run ends on the last state before. A
+                // contact of the curved sheets alone that does not merge is taken
+                // as a step (its curved gap is below zero: the flat triangles'
+                // rule goes on)
                 let merged = self.manager.as_mut().and_then(|m| m.merge(&self.mesh));
                 if let Some(merged) =
                     merged.filter(|m| super::intersections::surface_intersection(m, &mut self.search).is_none())
