@@ -1,18 +1,40 @@
 //! Contact (paper §4.1, topological changes): a trial step in which two curves
 //! cross ([`Problem::merges`]) and whose merged shape has a higher energy is not
 //! backtracked away from the contact; `τ` is bisected down to just past the first
-//! contact and that step is taken (see [`super::driver`], item 4).
+//! contact and that step is taken (see [`super::driver`], item 4). Surfaces are
+//! in contact where their triangles would meet or, where they merge, their curved
+//! sheets ([`surface_contact`]).
 
-use super::acceptance::tangled;
+use super::acceptance::{self as rules, tangled, Verdict};
+use super::mesh_management::MeshManager;
 use super::problem::Problem;
+use super::report::Rejection;
 use super::step::SemiImplicitStep;
 use super::system::LinearSystem;
 use super::FlowError;
-use crate::geometry::{Mesh, Point};
+use crate::geometry::{Mesh, PatchSearch, Point};
 
 /// `Γ_n` moved by `τ V⃗`.
 pub(super) fn advanced<const D: usize>(mesh: &Mesh<D>, velocity: &[Point<D>], tau: f64) -> Mesh<D> {
     mesh.with_positions(mesh.positions().iter().zip(velocity).map(|(x, v)| x + v * tau).collect())
+}
+
+/// The intersection rule's verdict on `trial` and, where `manager` merges and
+/// the triangles pass it, a new contact of the curved sheets
+/// ([`MeshManager::new_contact`]): retried as an intersection is, with its place.
+pub(super) fn surface_contact<const D: usize>(
+    mesh: &Mesh<D>,
+    trial: &Mesh<D>,
+    tau: f64,
+    search: &mut PatchSearch,
+    manager: Option<&dyn MeshManager<D>>,
+) -> (Verdict, Option<[f64; 3]>) {
+    let verdict = rules::intersection(mesh, trial, tau, search);
+    let curved = (verdict == Verdict::Accept).then(|| manager.and_then(|m| m.new_contact(mesh, trial))).flatten();
+    match curved {
+        Some(_) => (Verdict::Retry { tau: 0.5 * tau, rejection: Rejection::Intersection }, curved),
+        None => (verdict, None),
+    }
 }
 
 /// Bisections of `τ` that locate a first contact (to `2⁻¹⁰` of the trial step).

@@ -14,10 +14,8 @@
 //!    included), so does a surface on which two triangles sharing no vertex meet
 //!    (components passing through each other, or one through itself: never
 //!    accepted), checked along the whole step too when it moves a vertex by more
-//!    than a quarter of the mean edge ([`super::intersections`]); where the
-//!    mesh management merges, so does a step that brings two sheets into
-//!    contact on the curved surface of the vertex normals
-//!    ([`MeshManager::new_contact`]), and the sheets merge at the contact;
+//!    than a quarter of the mean edge ([`super::intersections`]); where surfaces
+//!    merge, so does a contact of their curved sheets ([`surface_contact`]);
 //! 3. *backtracking* (paper §3.2): while `J(Γ_{n+1}) > J(Γ_n)`, halve `τ`;
 //! 4. *contact* (paper §4.1, topological changes): a trial step in which two
 //!    curves cross ([`Problem::merges`]) and whose merged shape has a higher energy
@@ -49,7 +47,7 @@
 //! short, not because the state is stationary.
 
 use super::acceptance::{self as rules, Verdict};
-use super::contact::{advanced, first_contact};
+use super::contact::{advanced, first_contact, surface_contact};
 use super::mesh_management::MeshManager;
 use super::problem::Problem;
 use super::report::{Progress, Rejection, StepReport, StopReason, SurgeryRecord};
@@ -279,26 +277,17 @@ impl<'p, const D: usize> Flow<'p, D> {
             }
             // after the conservation's correction, which moves every vertex
             // and, where the surfaces merge, a contact of their curved sheets
-            let verdict = rules::intersection(&self.mesh, &candidate, tau, &mut self.search);
-            let curved = (verdict == Verdict::Accept)
-                .then(|| self.manager.as_ref().and_then(|m| m.new_contact(&self.mesh, &candidate)))
-                .flatten();
-            let verdict = match curved {
-                Some(_) => Verdict::Retry { tau: 0.5 * tau, rejection: Rejection::Intersection },
-                None => verdict,
-            };
+            let (verdict, curved) =
+                surface_contact(&self.mesh, &candidate, tau, &mut self.search, self.manager.as_deref());
             if let Some(shorter) = report.retry(verdict) {
                 if shorter >= super::intersections::CONTACT * s.tau {
                     tau = shorter;
                     continue;
                 }
-                // the surfaces are in contact: shorter steps would only creep
-                // closer, each accepted. They merge if the mesh management does
-                // merges (a merged surface that the tidying folded through itself
-                // is not taken); else the run ends on the last state before. A
-                // contact of the curved sheets alone that does not merge is taken
-                // as a step (its curved gap is below zero: the flat triangles'
-                // rule goes on)
+                // in contact: shorter steps would only creep closer. A merge if the
+                // management merges (not one folded through itself); else the run
+                // ends on the last state, or a curved contact alone is taken as a
+                // step (its curved gap is below zero: the triangles' rule goes on)
                 let merged = self.manager.as_mut().and_then(|m| m.merge(&self.mesh));
                 if let Some(merged) =
                     merged.filter(|m| super::intersections::surface_intersection(m, &mut self.search).is_none())
