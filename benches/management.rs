@@ -305,6 +305,14 @@ fn main() {
     let gap_flow =
         states.iter().map(|state| time_it(0.1, || _ = black_box(shapeflow::geometry::curved_sheet_gap(state, &t))));
     let t_gap_flow = gap_flow.sum::<f64>() / states.len() as f64;
+    // two spheres whose facing sheets are close: the patches there are measured
+    let facing = shapeflow::geometry::surface_union(&[
+        shapeflow::geometry::icosphere([-1.0005, 0.0, 0.0], 1.0, 5).unwrap(),
+        shapeflow::geometry::icosphere([1.0005, 0.0, 0.0], 1.0, 5).unwrap(),
+    ])
+    .unwrap();
+    let t_gap_facing =
+        time_it(0.5, || _ = black_box(shapeflow::geometry::curved_sheet_gap(facing.positions(), facing.elements())));
     println!();
     println!("| merging flows, {n} vertices | curved sheets' gap (ms) | gap / step |");
     println!("|---|---:|---:|");
@@ -314,6 +322,12 @@ fn main() {
         states.len(),
         t_gap_flow * 1e3,
         t_gap_flow / t_step
+    );
+    println!(
+        "| two spheres of {} vertices together, 0.001 apart | {:.1} | {:.2} |",
+        facing.num_vertices(),
+        t_gap_facing * 1e3,
+        t_gap_facing / t_step
     );
     println!();
     println!(
