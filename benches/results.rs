@@ -21,7 +21,7 @@ struct History(Vec<Progress>);
 
 impl RunEvents for History {
     fn progress(&mut self, p: &Progress) {
-        self.0.push(p.clone());
+        self.0.push(*p);
     }
 }
 

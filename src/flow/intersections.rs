@@ -36,7 +36,7 @@ pub(super) fn new_intersection<const D: usize>(
     let swept = sweeps(&x0, &x1, &t);
     // the common case, no intersection, at the cost of one search
     if search.intersections(&x1, &t, 1).is_empty()
-        && !(swept && !swept_surface_intersections(&x0, &x1, &t, 1).is_empty())
+        && (!swept || swept_surface_intersections(&x0, &x1, &t, 1).is_empty())
     {
         return None;
     }

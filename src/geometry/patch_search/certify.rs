@@ -34,6 +34,9 @@ pub(super) fn embedded(
     (n[k] != 0.0 && plane != preferred && over(plane)).then_some(plane)
 }
 
+/// An edge of a loop: its index, its ends and its extent along x.
+type Edge = (usize, Coord<f64>, Coord<f64>, f64, f64);
+
 /// Whether the loop `lp` (vertices of `x`) projects along axis `k` to a simple
 /// loop; `ccw`: the orientation it should have, tried first by a cheaper test.
 pub(super) fn loop_projects_simple(x: &[Point<3>], lp: &[usize], k: usize, ccw: bool) -> bool {
@@ -81,7 +84,7 @@ pub(super) fn simple_loop(pts: &[Coord<f64>]) -> bool {
     }
     let next = |i: usize| if i + 1 == b { 0 } else { i + 1 };
     // the edges (index, ends, extent along x), by their left end
-    let mut edges: Vec<(usize, Coord<f64>, Coord<f64>, f64, f64)> = (0..b)
+    let mut edges: Vec<Edge> = (0..b)
         .map(|i| {
             let (p, q) = (pts[i], pts[next(i)]);
             (i, p, q, p.x.min(q.x), p.x.max(q.x))
