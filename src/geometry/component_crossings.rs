@@ -182,18 +182,9 @@ mod tests {
             .collect();
         let swept = SweptSegments::new(from.elements(), from.positions(), &to);
         let mut mesh = from.clone();
-        let (mut seed, mut crossed) = (7u64, 0);
+        let (mut next, mut crossed) = (crate::geometry::test_numbers::numbers(7), 0);
         for _ in 0..20 {
-            let x: Vec<Point<2>> = from
-                .positions()
-                .iter()
-                .zip(&to)
-                .map(|(a, b)| {
-                    seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                    let t = (seed >> 11) as f64 / (1u64 << 53) as f64;
-                    *a + (*b - *a) * t
-                })
-                .collect();
+            let x: Vec<Point<2>> = from.positions().iter().zip(&to).map(|(a, b)| *a + (*b - *a) * next()).collect();
             mesh.set_positions(x);
             let full: Vec<(usize, usize)> = mesh.component_crossings().iter().map(|h| (h.a, h.b)).collect();
             let found: Vec<(usize, usize)> =

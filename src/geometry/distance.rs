@@ -173,14 +173,7 @@ pub fn sweep_apart(a0: &[P; 3], a1: &[P; 3], b0: &[P; 3], b1: &[P; 3], slack: f6
 mod tests {
     use super::*;
 
-    /// A deterministic sequence in [0, 1).
-    fn numbers(seed: u64) -> impl FnMut() -> f64 {
-        let mut state = seed;
-        move || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    use crate::geometry::test_numbers::numbers;
 
     /// The distances are those of the closest pair of points over dense samples of
     /// both simplices (never more, and within the samples' spacing).

@@ -34,6 +34,8 @@ mod surface_zip;
 pub use surface_watch::{swept_surface_intersections, SurfaceWatch};
 pub use surface_zip::{closest_facing_vertices, zip_sheets};
 mod surfaces;
+#[cfg(test)]
+mod test_numbers;
 mod unions;
 mod validate;
 mod winding;

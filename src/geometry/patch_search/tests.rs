@@ -4,13 +4,7 @@ use crate::geometry::surface_intersections::mean_edge;
 use crate::geometry::{box_surface, ellipsoid, icosphere, surface_intersections, surface_union, torus};
 use robust::Coord;
 
-fn numbers(seed: u64) -> impl FnMut() -> f64 {
-    let mut state = seed;
-    move || {
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use crate::geometry::test_numbers::numbers;
 
 fn all_pairs(search: &mut PatchSearch, x: &[Point<3>], t: &[[usize; 3]]) -> Vec<(usize, usize)> {
     let mut found = search.intersections(x, t, usize::MAX);

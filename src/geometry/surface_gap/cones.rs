@@ -211,11 +211,8 @@ mod tests {
     /// [`Cones::may_face`] both ways.
     #[test]
     fn no_pair_of_facing_triangles_is_pruned() {
-        let mut seed = 11_u64;
-        let mut jitter = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut next = crate::geometry::test_numbers::numbers(11);
+        let mut jitter = || next() - 0.5;
         let mut checked = 0;
         let surfaces = [(0.3, 1.0, 2), (0.6, 1.0, 3), (1.0, 1.0, 3), (0.05, 1.0, 4), (0.0, 0.06, 0), (0.0, 0.1, 0)];
         for (noise, minor, level) in surfaces {

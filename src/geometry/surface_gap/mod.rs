@@ -275,11 +275,8 @@ mod tests {
     /// whose hole has almost closed (sheets of one component facing).
     #[test]
     fn the_patches_skip_no_pair_that_faces_another() {
-        let mut seed = 7_u64;
-        let mut jitter = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut next = crate::geometry::test_numbers::numbers(7);
+        let mut jitter = || next() - 0.5;
         let mut cases = Vec::new();
         for (level, noise) in [(1, 0.0), (2, 0.1), (3, 0.0), (3, 0.15)] {
             for gap in [0.003, 0.0, -0.001] {

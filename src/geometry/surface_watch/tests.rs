@@ -1,13 +1,7 @@
 use super::*;
 use crate::geometry::{box_surface, icosphere, surface_intersections, surface_union};
 
-fn numbers(seed: u64) -> impl FnMut() -> f64 {
-    let mut state = seed;
-    move || {
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use crate::geometry::test_numbers::numbers;
 
 /// Two spheres of radius 1 at `±(1 + gap/2)` on the x axis.
 fn two_spheres(gap: f64, level: u32) -> (Vec<Point<3>>, Vec<[usize; 3]>) {
