@@ -12,7 +12,7 @@
 
 use crate::geometry::{curves_from_loops, segment_cycles, CurveMesh, Point};
 use crate::imaging::contours::{polygon_loop, zero_level};
-use crate::imaging::labels::{distance_transform, label_sizes, split_touching, Necks};
+use crate::imaging::labels::{distance_transform, label_sizes, split_at_peaks, split_touching, Dims, Necks};
 use crate::imaging::{rasterize_curve_window, Grid};
 
 mod surfaces;
@@ -41,14 +41,41 @@ pub struct NeckSplit {
     pub necks: Necks,
     /// A part of fewer samples than this keeps its object whole.
     pub min_size: usize,
+    /// `problem.min_separation` (samples): objects are split at the maxima of
+    /// their distance to the boundary at least this far apart ([`split_at_peaks`],
+    /// the initial shape's rule with it), whatever their necks; `None`: at necks.
+    pub separation: Option<f64>,
 }
 
 impl NeckSplit {
-    /// The split on `grid`'s samples: contours by [`NECKS`], surfaces by
-    /// [`SURFACE_NECKS`] (measured on the exact distance to the surface).
-    pub fn for_grid(grid: &Grid, min_size: usize) -> Self {
+    /// The split on `grid`'s samples: at the maxima `separation` apart where it is
+    /// given, else contours by [`NECKS`] and surfaces by [`SURFACE_NECKS`]
+    /// (measured on the exact distance to the surface).
+    pub fn for_grid(grid: &Grid, min_size: usize, separation: Option<f64>) -> Self {
         let necks = if grid.dimension == 3 { SURFACE_NECKS } else { NECKS };
-        NeckSplit { dims: grid.dims, necks, min_size }
+        NeckSplit { dims: grid.dims, necks, min_size, separation }
+    }
+
+    /// The parts of `mask`, and whether they were cut at necks (which must then be
+    /// notches): at the maxima of `peaks_d` [`NeckSplit::separation`] apart where
+    /// that gives two or more, else by `at_necks` on `necks_d` with
+    /// [`NeckSplit::necks`] (two objects whose maxima are closer can still meet at
+    /// a neck).
+    fn parts(
+        &self,
+        mask: &[bool],
+        [peaks_d, necks_d]: [&[f64]; 2],
+        dims: Dims,
+        at_necks: fn(&[bool], &[f64], Dims, &Necks) -> (Vec<u32>, usize),
+    ) -> (Vec<u32>, usize, bool) {
+        if let Some(s) = self.separation {
+            let (labels, count) = split_at_peaks(mask, peaks_d, dims, s, self.min_size);
+            if count > 1 {
+                return (labels, count, false);
+            }
+        }
+        let (labels, count) = at_necks(mask, necks_d, dims, &self.necks);
+        (labels, count, true)
     }
 
     /// `mesh` with every object that has a neck by [`NeckSplit::necks`] replaced by
@@ -112,7 +139,7 @@ impl NeckSplit {
         let mask = rasterize_curve_window(mesh.positions(), &segments, l, window);
         let dims = [w, h, 1];
         let dist = distance_transform(&mask, dims, [1.0; 3]);
-        let (labels, count) = split_touching(&mask, &dist, dims, &self.necks);
+        let (labels, count, at_necks) = self.parts(&mask, [&dist, &dist], dims, split_touching);
         if count < 2 {
             return None;
         }
@@ -121,7 +148,7 @@ impl NeckSplit {
         }
         for a in 1..count as u32 {
             for b in a + 1..=count as u32 {
-                if !pinched(&labels, &dist, window, [nx, ny], a, b) {
+                if at_necks && !pinched(&labels, &dist, window, [nx, ny], a, b) {
                     return None;
                 }
             }
@@ -232,7 +259,7 @@ mod tests {
 
     #[test]
     fn a_peanut_splits_in_two_and_an_ellipse_does_not() {
-        let split = NeckSplit { dims: [100, 100, 1], necks: NECKS, min_size: 16 };
+        let split = NeckSplit { dims: [100, 100, 1], necks: NECKS, min_size: 16, separation: None };
         // lobes of inscribed radius about 12 px joined by a waist of half-width 5
         let peanut = polar(50.0, 50.0, |t| 30.0 * (0.58 + 0.42 * (2.0 * t).cos()).max(0.17));
         let parts = split.split(&peanut).expect("the peanut splits");

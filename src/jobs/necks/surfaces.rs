@@ -50,48 +50,46 @@ pub struct SurfaceCut {
 }
 
 impl NeckSplit {
-    /// `mesh` with every object that has a neck by [`NeckSplit::necks`] replaced by
-    /// its traced parts, each passed through `tidy`, and the cuts made; `None` if
-    /// no object splits (or the result would meet itself). The other objects keep
-    /// their triangles.
+    /// `mesh` with every object that splits (by [`NeckSplit::necks`], or at
+    /// the maxima [`NeckSplit::separation`] apart) replaced by its traced parts,
+    /// each passed through `tidy`, and the cuts made; `None` if no object splits.
+    /// An object whose parts would meet another surface (tidied, and as traced)
+    /// stays whole; the other objects keep their triangles.
     pub fn split_surfaces(
         &self,
         mesh: &SurfaceMesh,
         tidy: impl Fn(SurfaceMesh) -> SurfaceMesh,
     ) -> Option<(SurfaceMesh, Vec<SurfaceCut>)> {
         let objects = mesh.objects();
-        let count = objects.owner.len();
         let root_of = |c: usize| objects.owner[c];
-        let mut keep = vec![true; count];
-        let mut parts = Vec::new();
+        let mut keep = vec![true; objects.owner.len()];
+        let mut parts: Vec<SurfaceMesh> = Vec::new();
         let mut cuts = Vec::new();
+        let mut result = None;
         for root in objects.roots() {
             let triangles: Vec<[usize; 3]> =
                 mesh.elements().iter().filter(|t| root_of(objects.vertex_component[t[0]]) == root).copied().collect();
             let Some((traced, cut)) = self.split_surface_object(mesh, &triangles) else { continue };
-            for (c, k) in keep.iter_mut().enumerate() {
-                if root_of(c) == root {
-                    *k = false;
-                }
-            }
-            parts.extend(traced);
+            let without: Vec<bool> = keep.iter().enumerate().map(|(c, &k)| k && root_of(c) != root).collect();
+            let kept = mesh.with_components(&without);
+            // the surfaces with this object's parts instead of it, if they meet nothing
+            let union = |own: &[SurfaceMesh]| {
+                let all: Vec<SurfaceMesh> = kept.iter().chain(&parts).chain(own).cloned().collect();
+                let union = surface_union(&all).inspect_err(|e| tracing::debug!("neck split: {e}")).ok()?;
+                first_surface_intersection(union.positions(), union.elements()).is_none().then_some(union)
+            };
+            // tidied; where the tidying brought a part into contact with another
+            // surface, as traced (the flow's mesh management tidies them then)
+            let tidied: Vec<SurfaceMesh> = traced.iter().cloned().map(&tidy).collect();
+            let accepted = union(&tidied).map(|u| (u, tidied)).or_else(|| union(&traced).map(|u| (u, traced)));
+            let Some((union, own)) = accepted else {
+                tracing::debug!(at = ?cut.at, "the parts of a split would meet another surface: not split");
+                continue;
+            };
+            keep = without;
+            parts.extend(own);
             cuts.push(cut);
-        }
-        if cuts.is_empty() {
-            return None;
-        }
-        let kept: Vec<SurfaceMesh> = mesh.with_components(&keep).into_iter().collect();
-        let union = |parts: Vec<SurfaceMesh>| {
-            let all: Vec<SurfaceMesh> = kept.iter().cloned().chain(parts).collect();
-            let result = surface_union(&all).inspect_err(|e| tracing::debug!("neck split: {e}")).ok()?;
-            first_surface_intersection(result.positions(), result.elements()).is_none().then_some(result)
-        };
-        // tidied; where the tidying brought two parts into contact across their
-        // cut, as traced (the flow's mesh management tidies them then)
-        let tidied = union(parts.iter().cloned().map(&tidy).collect());
-        let result = tidied.or_else(|| union(parts));
-        if result.is_none() {
-            tracing::debug!("the parts of a neck split meet: not split");
+            result = Some(union);
         }
         Some((result?, cuts))
     }
@@ -128,7 +126,8 @@ impl NeckSplit {
         let sd: Vec<f64> = sd.iter().map(|d| d * l).collect();
         let mask: Vec<bool> = sd.iter().map(|&d| d > 0.0).collect();
         let dist = distance_transform(&mask, dims, [1.0; 3]);
-        let (labels, count) = split_at_ridges(&mask, &exact, dims, &self.necks);
+        // the maxima on the voxel distance, as the initial shape's
+        let (labels, count, at_necks) = self.parts(&mask, [&dist, &exact], dims, split_at_ridges);
         tracing::debug!(count, sizes = ?label_sizes(&labels, count), "neck split of a surface's object");
         if count < 2 || label_sizes(&labels, count).iter().skip(1).any(|&n| n < self.min_size) {
             return None;
@@ -137,7 +136,7 @@ impl NeckSplit {
         for a in 1..count as u32 {
             for b in a + 1..=count as u32 {
                 let (notch, at) = notched(&labels, &dist, dims, start, self.dims, a, b);
-                if !notch {
+                if !notch && at_necks {
                     tracing::debug!(a, b, "a cut that is not a notch all around: no split");
                     return None;
                 }
@@ -266,7 +265,7 @@ mod tests {
     const L: f64 = 64.0;
 
     fn split_by(necks: Necks) -> NeckSplit {
-        NeckSplit { dims: [64, 64, 64], necks, min_size: 64 }
+        NeckSplit { dims: [64, 64, 64], necks, min_size: 64, separation: None }
     }
 
     /// The zero level of `value` (sample units of the 64³ image) traced on a grid
@@ -327,6 +326,66 @@ mod tests {
         volumes.sort_by(f64::total_cmp);
         let small = 4.0 / 3.0 * std::f64::consts::PI * (4.5 / L).powi(3);
         assert!(volumes[0] > 0.5 * small && volumes[0] < 1.1 * small, "{} of the small ball", volumes[0] / small);
+    }
+
+    /// Two balls of radius 8 samples, 7 apart: their union's neck is 0.8 samples
+    /// (10 %) below their radius, which the surfaces' neck rule keeps whole. With
+    /// `separation` 6 it splits at the maxima of its distance, one part at each
+    /// ball, each about half of the union; a prolate ellipsoid (semi-axes 12, 6
+    /// and 6 samples) stays whole at its smaller radius (its voxels' distance has
+    /// maxima along its axis below that, as for the initial shape). Where the
+    /// maxima are closer than `separation` (two balls 14 apart, separation 16) the
+    /// neck rule still splits.
+    #[test]
+    fn balls_without_a_neck_split_at_their_maxima_and_an_ellipsoid_does_not() {
+        let peaks = |s: f64| NeckSplit { separation: Some(s), ..split_by(SURFACE_NECKS) };
+        let blob = traced([16.0, 20.0, 20.0], [145, 97, 97], |p| {
+            ball(p, [28.5, 32.0, 32.0], 8.0).max(ball(p, [35.5, 32.0, 32.0], 8.0))
+        });
+        assert_eq!(blob.component_labels().1, 1);
+        assert!(split_by(SURFACE_NECKS).split_surfaces(&blob, |m| m).is_none());
+        let (parts, cuts) = peaks(6.0).split_surfaces(&blob, |m| m).expect("the blob splits at its maxima");
+        assert_eq!((cuts.len(), cuts[0].parts), (1, 2));
+        assert!((cuts[0].at[0] * L - 32.0).abs() < 1.5, "{:?}", cuts[0]);
+        assert_eq!(parts.component_labels().1, 2);
+        let whole = blob.component_measures()[0];
+        for v in parts.component_measures() {
+            assert!((v / whole - 0.47).abs() < 0.06, "{} of the blob", v / whole);
+        }
+        let c = [32.0, 32.0, 32.0];
+        let ellipsoid = traced([18.0, 24.0, 24.0], [113, 65, 65], |p| {
+            let axes = [12.0, 6.0, 6.0];
+            (1.0 - (0..3).map(|i| ((p[i] - c[i]) / axes[i]).powi(2)).sum::<f64>().sqrt()) * 6.0
+        });
+        // as the initial shape's rule: an elongated object stays one from a
+        // separation of its smaller radius on, and is cut below it
+        assert!(peaks(6.0).split_surfaces(&ellipsoid, |m| m).is_none());
+        assert!(peaks(4.0).split_surfaces(&ellipsoid, |m| m).is_some());
+        let pair = traced([10.0, 20.0, 20.0], [177, 97, 97], |p| {
+            ball(p, [25.0, 32.0, 32.0], 8.0).max(ball(p, [39.0, 32.0, 32.0], 8.0))
+        });
+        let (_, cuts) = peaks(16.0).split_surfaces(&pair, |m| m).expect("the pair splits at its neck");
+        assert_eq!(cuts[0].parts, 2);
+    }
+
+    /// Two such blobs, one with a small ball inside it across its cut: that
+    /// blob's parts would meet the ball, so it stays whole, and the other blob
+    /// still splits.
+    #[test]
+    fn a_split_whose_parts_would_meet_another_surface_leaves_only_that_object_whole() {
+        let blob = |y: f64| {
+            traced([16.0, y - 12.0, 20.0], [145, 97, 97], |p| {
+                ball(p, [28.5, y, 32.0], 8.0).max(ball(p, [35.5, y, 32.0], 8.0))
+            })
+        };
+        let inner = icosphere([32.0 / L, 20.0 / L, 32.0 / L], 2.0 / L, 2).unwrap();
+        let all = surface_union(&[blob(20.0), inner, blob(44.0)]).unwrap();
+        assert!(first_surface_intersection(all.positions(), all.elements()).is_none());
+        let split = NeckSplit { separation: Some(6.0), ..split_by(SURFACE_NECKS) };
+        let (parts, cuts) = split.split_surfaces(&all, |m| m).expect("one blob splits");
+        assert_eq!(cuts.len(), 1);
+        assert!((cuts[0].at[1] * L - 44.0).abs() < 2.0, "{:?}", cuts[0]);
+        assert_eq!(parts.component_labels().1, 4);
     }
 
     /// Single objects with saddles of their own do not split by the surfaces'

@@ -164,8 +164,9 @@ pub(super) fn prepare_segmentation(
     // the converged contours (surfaces) of separate objects are split where the
     // flow brought out a neck
     let separate = matches!(&problem, ProblemKind::ChanVese(cv) if cv.separate);
-    let neck_split =
-        (separate && spec.split_touching.unwrap_or(true)).then(|| NeckSplit::for_grid(&grid, min_size.ceil() as usize));
+    let separation = spec.min_separation.map(|s| MIN_SEPARATION.check("problem.min_separation", s)).transpose()?;
+    let neck_split = (separate && spec.split_touching.unwrap_or(true))
+        .then(|| NeckSplit::for_grid(&grid, min_size.ceil() as usize, separation));
     Ok(PreparedSegmentation { grid, problem, second_stage, edges, mesh: start.mesh, setup, neck_split })
 }
 
