@@ -15,6 +15,7 @@ use crate::imaging::contours::{polygon_loop, zero_level};
 use crate::imaging::labels::{distance_transform, label_sizes, split_at_peaks, split_touching, Dims, Necks};
 use crate::imaging::{rasterize_curve_window, Grid};
 
+mod notch;
 mod surfaces;
 
 pub use surfaces::SURFACE_NECKS;
@@ -47,6 +48,10 @@ pub struct NeckSplit {
     pub separation: Option<f64>,
 }
 
+/// A split at necks: labels `1..=count` of a mask by its distance ([`split_touching`],
+/// [`split_at_ridges`](crate::imaging::labels::split_at_ridges)).
+type NeckRule = fn(&[bool], &[f64], Dims, &Necks) -> (Vec<u32>, usize);
+
 impl NeckSplit {
     /// The split on `grid`'s samples: at the maxima `separation` apart where it is
     /// given, else contours by [`NECKS`] and surfaces by [`SURFACE_NECKS`]
@@ -66,7 +71,7 @@ impl NeckSplit {
         mask: &[bool],
         [peaks_d, necks_d]: [&[f64]; 2],
         dims: Dims,
-        at_necks: fn(&[bool], &[f64], Dims, &Necks) -> (Vec<u32>, usize),
+        at_necks: NeckRule,
     ) -> (Vec<u32>, usize, bool) {
         if let Some(s) = self.separation {
             let (labels, count) = split_at_peaks(mask, peaks_d, dims, s, self.min_size);
