@@ -8,7 +8,10 @@
 //! cut is a notch at both of its ends ([`PINCH`]); an object that splits is traced
 //! again, one closed curve per part along the boundary of its samples, and the
 //! flow goes on from there. The parts then stay separate objects (the curves'
-//! contact rule), as the initial shape's do.
+//! contact rule), as the initial shape's do. With `problem.min_separation` an
+//! object is first split at the maxima of its distance transform, as the initial
+//! shape's objects are ([`NeckSplit::separation`]), and at necks only where
+//! those give one part.
 
 use crate::geometry::{curves_from_loops, segment_cycles, CurveMesh, Point};
 use crate::imaging::contours::{polygon_loop, zero_level};
