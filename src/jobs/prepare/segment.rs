@@ -134,7 +134,14 @@ pub(super) fn prepare_segmentation(
     let means = spec.means.unwrap_or(MeansKind::PerObject);
     let merge = spec.merge.unwrap_or(false);
     let region = RegionWeights { mu, lambda_in, lambda_out };
-    let start = image_initial(spec, initial, &grid, &pre, region, min_size)?;
+    let split_touching = spec.split_touching.unwrap_or(true);
+    let separation = spec.min_separation.map(|s| MIN_SEPARATION.check("problem.min_separation", s)).transpose()?;
+    let split = match (split_touching, separation) {
+        (false, _) => TouchingSplit::None,
+        (true, None) => TouchingSplit::Necks,
+        (true, Some(s)) => TouchingSplit::Peaks(s),
+    };
+    let start = image_initial(initial, &grid, &pre, region, min_size, split)?;
     let weights = ChanVeseWeights { region, per_object: means == MeansKind::PerObject, merge };
     let (problem, second_stage, edges, edge_contrast) =
         functional(spec, model, &grid, &pre.data, &start, &weights, pre.sigma)?;
@@ -164,9 +171,8 @@ pub(super) fn prepare_segmentation(
     // the converged contours (surfaces) of separate objects are split where the
     // flow brought out a neck
     let separate = matches!(&problem, ProblemKind::ChanVese(cv) if cv.separate);
-    let separation = spec.min_separation.map(|s| MIN_SEPARATION.check("problem.min_separation", s)).transpose()?;
-    let neck_split = (separate && spec.split_touching.unwrap_or(true))
-        .then(|| NeckSplit::for_grid(&grid, min_size.ceil() as usize, separation));
+    let neck_split =
+        (separate && split_touching).then(|| NeckSplit::for_grid(&grid, min_size.ceil() as usize, separation));
     Ok(PreparedSegmentation { grid, problem, second_stage, edges, mesh: start.mesh, setup, neck_split })
 }
 
@@ -184,23 +190,19 @@ struct ImageInitial {
 }
 
 /// The initial shape from the image (`initial` omitted, `threshold`, `seeds` or
-/// `inscribed`), and the samples that separate its objects.
+/// `inscribed`; the threshold's touching objects split by `split`), and the
+/// samples that separate its objects.
 fn image_initial(
-    spec: &SegmentationSpec,
     initial: Option<&InitialSpec>,
     grid: &Grid,
     pre: &Preprocessed,
     region: RegionWeights,
     min_size: f64,
+    split: TouchingSplit,
 ) -> Result<ImageInitial, SpecError> {
     let none = ImageInitial { mesh: None, objects: 0, cut: Vec::new(), background: None, territories: None };
     Ok(match initial {
         None | Some(InitialSpec::Threshold(ThresholdShape {})) => {
-            let split = match (spec.split_touching.unwrap_or(true), spec.min_separation) {
-                (false, _) => TouchingSplit::None,
-                (true, None) => TouchingSplit::Necks,
-                (true, Some(s)) => TouchingSplit::Peaks(MIN_SEPARATION.check("problem.min_separation", s)?),
-            };
             let objects = threshold_objects(&pre.smoothed, &pre.data, region, &pre.levels, min_size, split);
             let territories = (grid.dimension == 3 && objects.count > 1)
                 .then(|| Territories::new(territories(&objects.labels, pre.smoothed.dims)));
